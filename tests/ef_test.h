@@ -9,6 +9,10 @@
 #include <stdio.h>
 #include <stdlib.h>
 
+#ifndef M_PI /* strict C11 headers do not define it */
+#define M_PI 3.14159265358979323846
+#endif
+
 static int ef_t_pass, ef_t_fail;
 
 #define EF_CHECK(cond)                                                                         \

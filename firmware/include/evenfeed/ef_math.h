@@ -87,7 +87,7 @@ static inline float ef_v3_norm(ef_vec3_t a)
 }
 
 /**
- * @brief atan2 with a fixed instruction count; max error about 2e-7 rad over all finite
+ * @brief atan2 with a fixed instruction count; max error below 4e-7 rad over all finite
  * input. atan2(0, 0) returns 0.
  */
 float ef_atan2f(float y, float x);

@@ -1,0 +1,130 @@
+/* End-data validation and normalization into table coordinates. */
+#include "evenfeed/ef_endpoint.h"
+#include "evenfeed/ef_config.h"
+#include "evenfeed/ef_err.h"
+
+/* Finite test without libm: NaN fails x == x, inf fails x - x == 0. */
+static int ef_finite(float x)
+{
+    return (x == x) & (x - x == 0.0f);
+}
+
+/* A vector is usable if every component is finite and bounded by EF_MAX_COORD. */
+static int ef_v3_ok(ef_vec3_t v)
+{
+    return ef_finite(v.x) & ef_finite(v.y) & ef_finite(v.z) & (ef_fabsf(v.x) <= EF_MAX_COORD) &
+           (ef_fabsf(v.y) <= EF_MAX_COORD) & (ef_fabsf(v.z) <= EF_MAX_COORD);
+}
+
+/* Checks combine with & rather than && so valid input always runs the same instructions. */
+int ef_endpoint_check(const ef_endpoint_t *e, int g2)
+{
+    if (!e)
+        return EF_ERR_ARG;
+    int finite = ef_v3_ok(e->p) & ef_v3_ok(e->t);
+    if (g2)
+        finite &= ef_v3_ok(e->n) & ef_finite(e->kappa);
+    if (!finite)
+        return EF_ERR_NONFINITE;
+    float tt = ef_v3_dot(e->t, e->t);
+    if (!(ef_fabsf(tt - 1.0f) <= 2.0f * EF_UNIT_TOL))
+        return EF_ERR_TANGENT;
+    if (g2) {
+        float nn = ef_v3_dot(e->n, e->n);
+        int curved = e->kappa != 0.0f;
+        int bad_n = !(ef_fabsf(nn - 1.0f) <= 2.0f * EF_UNIT_TOL) |
+                    !(ef_fabsf(ef_v3_dot(e->n, e->t)) <= EF_UNIT_TOL);
+        if (curved & bad_n)
+            return EF_ERR_NORMAL;
+    }
+    return EF_OK;
+}
+
+/* v / |v|, or the zero vector when |v| is 0 (callers select away from that case). */
+static ef_vec3_t ef_v3_unit_or_zero(ef_vec3_t v)
+{
+    float l2 = ef_v3_dot(v, v);
+    return ef_v3_scale(v, 1.0f / ef_sqrtf(ef_selectf(l2 > 0.0f, l2, 1.0f)));
+}
+
+/* Component-wise select between two vectors. */
+static ef_vec3_t ef_v3_select(int c, ef_vec3_t a, ef_vec3_t b)
+{
+    return ef_v3(ef_selectf(c, a.x, b.x), ef_selectf(c, a.y, b.y), ef_selectf(c, a.z, b.z));
+}
+
+/* m0 + sigma m1 with sigma = +-1 making the two terms agree, so opposite normals of a
+ * C-shaped configuration add rather than cancel. */
+static ef_vec3_t ef_v3_agree_sum(ef_vec3_t m0, ef_vec3_t m1, float *sigma)
+{
+    *sigma = ef_selectf(ef_v3_dot(m0, m1) >= 0.0f, 1.0f, -1.0f);
+    return ef_v3_axpy(m0, *sigma, m1);
+}
+
+/*
+ * The reference plane's normal e3 is chosen, in order, from: the tangents (their normals to
+ * the chord, made to agree), the curvature vectors (G2 with both tangents along the chord),
+ * then z and y projected off the chord. Every candidate is computed and one is selected, so
+ * the instruction count does not depend on which applies. The sign is fixed so that e3.z > 0
+ * (then e3.y, e3.x): planar data in z = 0 gets e3 = +z and the usual signed angles.
+ */
+int ef_normalize(const ef_endpoint_t *e0, const ef_endpoint_t *e1, int g2, ef_norm_t *out)
+{
+    if (!e0 || !e1 || !out)
+        return EF_ERR_ARG;
+    int rc = ef_endpoint_check(e0, g2);
+    if (rc == EF_OK)
+        rc = ef_endpoint_check(e1, g2);
+    if (rc != EF_OK)
+        return rc;
+
+    ef_vec3_t d = ef_v3_sub(e1->p, e0->p);
+    float s = ef_v3_norm(d);
+    float scale = ef_maxf(ef_maxf(ef_maxf(ef_fabsf(e0->p.x), ef_fabsf(e0->p.y)),
+                                  ef_maxf(ef_fabsf(e0->p.z), ef_fabsf(e1->p.x))),
+                          ef_maxf(ef_fabsf(e1->p.y), ef_fabsf(e1->p.z)));
+    if (!(s >= EF_MIN_CHORD) | !(s >= EF_MIN_CHORD_REL * scale))
+        return EF_ERR_DEGENERATE;
+
+    ef_vec3_t ex = ef_v3_scale(d, 1.0f / s);
+    ef_vec3_t t0 = ef_v3_unit_or_zero(e0->t), t1 = ef_v3_unit_or_zero(e1->t);
+    ef_vec3_t m0 = ef_v3_cross(ex, t0), m1 = ef_v3_cross(ex, t1);
+    float sigma, sigma_k;
+    ef_vec3_t cand_t = ef_v3_agree_sum(m0, m1, &sigma);
+    ef_vec3_t cand_k = ef_v3_agree_sum(ef_v3_cross(ex, ef_v3_scale(e0->n, e0->kappa * s)),
+                                       ef_v3_cross(ex, ef_v3_scale(e1->n, e1->kappa * s)),
+                                       &sigma_k);
+    ef_vec3_t cand_z = ef_v3_axpy(ef_v3(0.0f, 0.0f, 1.0f), -ex.z, ex);
+    ef_vec3_t cand_y = ef_v3_axpy(ef_v3(0.0f, 1.0f, 0.0f), -ex.y, ex);
+    const float tiny = 1e-10f;
+    int use_k = (ef_v3_dot(cand_t, cand_t) < tiny) & (g2 != 0) & (ef_v3_dot(cand_k, cand_k) >= tiny);
+    ef_vec3_t m = ef_v3_select(use_k, cand_k, cand_t);
+    int use_z = ef_v3_dot(m, m) < tiny;
+    m = ef_v3_select(use_z, cand_z, m);
+    int use_y = ef_v3_dot(m, m) < tiny;
+    m = ef_v3_select(use_y, cand_y, m);
+    ef_vec3_t ez = ef_v3_unit_or_zero(m);
+    int flip = (ez.z < 0.0f) | ((ez.z == 0.0f) & (ez.y < 0.0f)) |
+               ((ez.z == 0.0f) & (ez.y == 0.0f) & (ez.x < 0.0f));
+    ez = ef_v3_scale(ez, ef_selectf(flip, -1.0f, 1.0f));
+    ef_vec3_t ey = ef_v3_cross(ez, ex);
+
+    /* True angle to the chord, signed by the side of the chord the tangent leans to. */
+    float a0 = ef_atan2f(ef_v3_norm(m0), ef_v3_dot(t0, ex));
+    float a1 = ef_atan2f(ef_v3_norm(m1), ef_v3_dot(t1, ex));
+    out->alpha = ef_selectf(ef_v3_dot(t0, ey) < 0.0f, -a0, a0);
+    out->beta = ef_selectf(ef_v3_dot(t1, ey) < 0.0f, -a1, a1);
+    out->k0 = e0->kappa * s * ef_v3_dot(e0->n, ef_v3_cross(ez, t0));
+    out->k1 = e1->kappa * s * ef_v3_dot(e1->n, ef_v3_cross(ez, t1));
+    ef_vec3_t m1s = ef_v3_scale(m1, sigma);
+    out->twist = ef_atan2f(ef_v3_norm(ef_v3_cross(m0, m1s)), ef_v3_dot(m0, m1s));
+    out->chord = s;
+    out->e1 = ex;
+    out->e2 = ey;
+    out->e3 = ez;
+    if (g2 && !((ef_fabsf(e0->kappa * s) <= EF_MAX_NORM_CURVATURE) &
+                (ef_fabsf(e1->kappa * s) <= EF_MAX_NORM_CURVATURE)))
+        return EF_ERR_DOMAIN;
+    (void)sigma_k;
+    return EF_OK;
+}
