@@ -1,0 +1,24 @@
+/* Shared pieces of the evenfeed command line. */
+#ifndef EF_CLI_H
+#define EF_CLI_H
+
+#include <stdio.h>
+#include "evenfeed/ef_table.h"
+#include "evenfeed/host/ef_host.h"
+
+/* Exit status: the negated ef_err code (usage errors are EF_ERR_ARG, exit 1). */
+int ef_cli_exit(int code);
+/* Print "evenfeed: error: <text>" to stderr and return the exit status for code. */
+int ef_cli_error(int code, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+/* Parse a finite double; on failure prints which option was bad. */
+int ef_cli_double(const char *opt, const char *s, double *out);
+/* The built-in table of a kind, or NULL when this binary has none. */
+const ef_table_t *ef_cli_default_table(int kind);
+/* Print a double for JSON (null for non-finite, which JSON cannot hold). */
+void ef_cli_json_num(FILE *f, double v);
+
+int ef_cmd_segment(int argc, char **argv);
+int ef_cmd_table(int argc, char **argv);
+int ef_cmd_demo(int argc, char **argv);
+
+#endif
