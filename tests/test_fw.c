@@ -204,7 +204,7 @@ static void test_normalize(void)
             fprintf(stderr, "a %g->%g b %g->%g k0 %g->%g k1 %g->%g s %g->%g\n", a, nm.alpha, bt,
                     nm.beta, k0, nm.k0, k1, nm.k1, s, nm.chord);
         }
-        EF_CHECK(nm.twist < 1e-3f);
+        EF_CHECK(ef_norm_twist(&nm, &e0, &e1) < 1e-3f);
         /* The same segment placed in 3-D: same configuration up to the mirror symmetry. */
         ef_vec3_t ax = ef_v3_scale(ef_v3(0.3f, -0.5f, 0.8f), 1.0f / sqrtf(0.98f));
         float th = (float)ef_t_uniform(&rng, 0.1, 3.0);
@@ -231,11 +231,29 @@ static void test_normalize(void)
     EF_CHECK_EQ(ef_normalize(&a0, &a1, 0, &nm), EF_OK);
     EF_CHECK_NEAR(fabs(nm.alpha), M_PI / 2, 1e-5);
     EF_CHECK_NEAR(fabs(nm.beta), M_PI / 2, 1e-5);
-    EF_CHECK_NEAR(nm.twist, M_PI / 2, 1e-5);
-    /* Straight data in the plane: e3 = +z. */
-    EF_CHECK_EQ(ef_normalize(&(ef_endpoint_t){.t = {1, 0, 0}}, &(ef_endpoint_t){.p = {2, 0, 0}, .t = {1, 0, 0}}, 0, &nm), EF_OK);
-    EF_CHECK_NEAR(nm.e3.z, 1, 0);
-    EF_CHECK_NEAR(nm.alpha, 0, 0);
+    EF_CHECK_NEAR(ef_norm_twist(&nm, &a0, &a1), M_PI / 2, 1e-5);
+    /* Straight data: both angles 0, for G1 and for G2 (which falls back to z for its plane). */
+    ef_endpoint_t s0 = {.t = {1, 0, 0}}, s1 = {.p = {2, 0, 0}, .t = {1, 0, 0}};
+    EF_CHECK_EQ(ef_normalize(&s0, &s1, 0, &nm), EF_OK);
+    EF_CHECK(nm.alpha == 0 && nm.beta == 0);
+    EF_CHECK_EQ(ef_normalize(&s0, &s1, 1, &nm), EF_OK);
+    EF_CHECK(nm.alpha == 0 && nm.beta == 0 && nm.k0 == 0);
+    /* Straight tangents with curvature (G2): the curvature vectors give the plane, and the
+     * signed curvatures agree with the planar convention. */
+    ef_endpoint_t c0 = {.t = {1, 0, 0}, .n = {0, 1, 0}, .kappa = 0.5f};
+    ef_endpoint_t c1 = {.p = {2, 0, 0}, .t = {1, 0, 0}, .n = {0, -1, 0}, .kappa = 0.25f};
+    EF_CHECK_EQ(ef_normalize(&c0, &c1, 1, &nm), EF_OK);
+    EF_CHECK_NEAR(nm.k0, 1.0, 1e-6);
+    EF_CHECK_NEAR(nm.k1, -0.5, 1e-6);
+    /* G1 and G2 give the same angles on the same planar data. */
+    for (int rep = 0; rep < 1000; rep++) {
+        float a = (float)ef_t_uniform(&rng, -M_PI, M_PI), b = (float)ef_t_uniform(&rng, -M_PI, M_PI);
+        ef_endpoint_t p0 = ep2(0, 0, a, 0), p1 = ep2(1, 0, b, 0);
+        ef_norm_t n1, n2;
+        ef_normalize(&p0, &p1, 0, &n1);
+        ef_normalize(&p0, &p1, 1, &n2);
+        EF_CHECK(n1.alpha == n2.alpha && n1.beta == n2.beta);
+    }
 }
 
 static void test_bad_input(void)

@@ -14,8 +14,7 @@ static int ef_seg_fail(ef_seg_t *out, int rc)
 static void ef_seg_cubic(const ef_endpoint_t *e0, const ef_endpoint_t *e1, const ef_norm_t *nm,
                          ef_seg_t *out)
 {
-    ef_vec3_t t0 = ef_v3_scale(e0->t, 1.0f / ef_v3_norm(e0->t));
-    ef_vec3_t t1 = ef_v3_scale(e1->t, 1.0f / ef_v3_norm(e1->t));
+    ef_vec3_t t0 = nm->t0, t1 = nm->t1;
     out->b[0] = e0->p;
     out->b[1] = ef_v3_axpy(e0->p, out->dof[0] * (1.0f / 3.0f), t0);
     out->b[2] = ef_v3_axpy(e1->p, -out->dof[1] * (1.0f / 3.0f), t1);
@@ -30,8 +29,7 @@ static void ef_seg_cubic(const ef_endpoint_t *e0, const ef_endpoint_t *e1, const
 static void ef_seg_quintic(const ef_endpoint_t *e0, const ef_endpoint_t *e1, const ef_norm_t *nm,
                            ef_seg_t *out)
 {
-    ef_vec3_t t0 = ef_v3_scale(e0->t, 1.0f / ef_v3_norm(e0->t));
-    ef_vec3_t t1 = ef_v3_scale(e1->t, 1.0f / ef_v3_norm(e1->t));
+    ef_vec3_t t0 = nm->t0, t1 = nm->t1;
     float x10 = out->dof[0], x20 = out->dof[1], x11 = out->dof[2], x21 = out->dof[3];
     ef_vec3_t d1a = ef_v3_scale(t0, x10);
     ef_vec3_t d2a = ef_v3_axpy(ef_v3_scale(t0, x20), e0->kappa * x10 * x10, e0->n);

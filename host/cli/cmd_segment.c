@@ -176,6 +176,8 @@ static void ef_segment_print(const ef_seg_args_t *a, const char *source, const d
                              int ndof, const ef_dvec3_t *b, int degree, double C,
                              uint32_t clamp, const ef_norm_t *nm, int json)
 {
+    ef_endpoint_t f0 = ef_fw_end(&a->e0), f1 = ef_fw_end(&a->e1);
+    float twist = ef_norm_twist(nm, &f0, &f1);
     static const char *names_g1[] = {"x1_0", "x1_1"};
     static const char *names_g2[] = {"x1_0", "x2_0", "x1_1", "x2_1"};
     static const char *names_q[] = {"x1_0", "x1_1", "b2_x", "b2_y", "b2_z"};
@@ -198,7 +200,7 @@ static void ef_segment_print(const ef_seg_args_t *a, const char *source, const d
         printf(", \"chord\": ");
         ef_cli_json_num(stdout, nm->chord);
         printf(", \"twist\": ");
-        ef_cli_json_num(stdout, nm->twist);
+        ef_cli_json_num(stdout, twist);
         printf("},\n \"dof_names\": [");
         for (int k = 0; k < ndof; k++)
             printf("%s\"%s\"", k ? ", " : "", names[k]);
@@ -236,7 +238,7 @@ static void ef_segment_print(const ef_seg_args_t *a, const char *source, const d
         printf("  k0 %.6f  k1 %.6f", nm->k0, nm->k1);
     printf("  chord %.6g", nm->chord);
     if (a->dim == 3)
-        printf("  twist %.4f rad", nm->twist);
+        printf("  twist %.4f rad", twist);
     printf("\n  dofs:");
     for (int k = 0; k < ndof; k++)
         printf("  %s = %.6f", names[k], dof[k]);

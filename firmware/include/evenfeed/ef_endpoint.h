@@ -13,7 +13,7 @@
  * positive, seen from +z). For 3-D data the reference plane contains the chord and is
  * chosen so both tangents lean into it as far as possible: alpha and beta are then the
  * true angles between each tangent and the chord, signed by which side of the chord
- * each tangent points to, and `twist` (0 for planar data) says how far the tangents are
+ * each tangent points to; ef_norm_twist() (0 for planar data) says how far the tangents are
  * from coplanar. Curvatures are projected onto the plane. The tables are planar, so the
  * twist is ignored by the lookup; docs/math.md gives what that costs in C.
  */
@@ -42,11 +42,9 @@ typedef struct {
     float k0;     /**< signed curvature at e0 times chord (G2) */
     float k1;     /**< signed curvature at e1 times chord (G2) */
     float chord;  /**< s = |p1 - p0| */
-    float twist;  /**< angle (rad, [0, pi/2]) between the tangents' planes through the chord;
-                       0 for planar data */
     ef_vec3_t e1; /**< unit chord direction */
-    ef_vec3_t e2; /**< unit in-plane normal to the chord (e3 x e1) */
-    ef_vec3_t e3; /**< unit normal of the reference plane */
+    ef_vec3_t t0; /**< unit tangent at e0 (the input tangent scaled to length 1) */
+    ef_vec3_t t1; /**< unit tangent at e1 */
 } ef_norm_t;
 
 /**
@@ -72,6 +70,15 @@ int ef_endpoint_check(const ef_endpoint_t *e, int g2);
  * @retval EF_ERR_DOMAIN     |kappa| * chord > EF_MAX_NORM_CURVATURE (G2)
  */
 int ef_normalize(const ef_endpoint_t *e0, const ef_endpoint_t *e1, int g2, ef_norm_t *out);
+
+/**
+ * @brief Twist of a normalized segment: the angle (rad, [0, pi/2]) between the planes
+ * (chord, t0) and (chord, t1); 0 for planar data. Diagnostic, kept off the constant-time
+ * path (the tables do not use it).
+ * @param nm    the result of ef_normalize() for e0, e1
+ * @return the twist; 0 for NULL arguments
+ */
+float ef_norm_twist(const ef_norm_t *nm, const ef_endpoint_t *e0, const ef_endpoint_t *e1);
 
 #ifdef __cplusplus
 }

@@ -64,7 +64,7 @@ static inline float ef_fabsf(float x)
 /** Branch-free select: c ? a : b, for c in {0,1}. */
 static inline float ef_selectf(int c, float a, float b)
 {
-    float m = (float)c;
+    float m = (float)c; /* exact: 1*a + 0*b == a, unlike b + c*(a-b) */
     return m * a + (1.0f - m) * b;
 }
 static inline float ef_minf(float a, float b)

@@ -1,0 +1,149 @@
+/*
+ * Cortex-M4F link check: a complete freestanding image (own vector table and reset code,
+ * no C runtime start files) that builds one G1 cubic and one G2 quintic segment through
+ * small tables defined here. firmware/arm/build.sh links it against libef_fw.a with
+ * --gc-sections and inspects the result: whatever the library drags in shows up there
+ * (heap, stdio, double-precision soft-float helpers would all be failures).
+ *
+ * It is not meant to be flashed as an application, but it is a valid one: the reset code
+ * sets up .data/.bss and the FPU before main, as a real board's startup must.
+ */
+#include <stdint.h>
+#include "evenfeed/ef_err.h"
+#include "evenfeed/ef_seg.h"
+#include "evenfeed/ef_table.h"
+
+#define LC_PI 3.14159265f
+
+/* G1 fold table, 3 x 5 nodes over (u, v) in [0, pi/2] x [0, pi]: DOFs (x1_0, x1_1). */
+static const float lc_g1_data[3 * 5 * 2] = {
+    1.0f, 1.0f, 1.1f, 0.9f, 1.2f, 0.8f, 0.9f, 1.1f, 1.0f, 1.0f, 1.1f, 0.9f,
+    0.8f, 1.2f, 0.9f, 1.1f, 1.0f, 1.0f, 0.7f, 1.3f, 0.8f, 1.2f, 0.9f, 1.1f,
+    0.6f, 1.4f, 0.7f, 1.3f, 0.8f, 1.2f,
+};
+
+static const ef_table_t lc_g1 = {
+    .kind = EF_TABLE_G1_CUBIC,
+    .symmetry = EF_SYM_G1_FOLD,
+    .naxes = 2,
+    .ndof = 2,
+    .quad_nodes = 16,
+    .nodes = 15,
+    .x1_min = 0.1f,
+    .x1_max = 4.0f,
+    .x2_max = 0.0f,
+    .axis = {{0.0f, 0.5f * LC_PI, 2.0f / (0.5f * LC_PI), 3, 1, 0},
+             {0.0f, LC_PI, 4.0f / LC_PI, 5, 3, 0}},
+    .data = lc_g1_data,
+};
+
+/* G2 mirror table, 2 x 3 x 3 x 3 nodes over alpha in [0, pi/2], beta in [-pi/2, pi/2],
+ * k0, k1 in [-2, 2]: DOFs (x1_0, x2_0, x1_1, x2_1), here the same at every node. */
+#define LC_G2_NODE 1.0f, 0.5f, 1.0f, -0.5f
+#define LC_G2_ROW3 LC_G2_NODE, LC_G2_NODE, LC_G2_NODE
+#define LC_G2_ROW9 LC_G2_ROW3, LC_G2_ROW3, LC_G2_ROW3
+static const float lc_g2_data[2 * 3 * 3 * 3 * 4] = {
+    LC_G2_ROW9, LC_G2_ROW9, LC_G2_ROW9, LC_G2_ROW9, LC_G2_ROW9, LC_G2_ROW9,
+};
+
+static const ef_table_t lc_g2 = {
+    .kind = EF_TABLE_G2_QUINTIC,
+    .symmetry = EF_SYM_G2_MIRROR,
+    .naxes = 4,
+    .ndof = 4,
+    .quad_nodes = 16,
+    .nodes = 54,
+    .x1_min = 0.1f,
+    .x1_max = 4.0f,
+    .x2_max = 50.0f,
+    .axis = {{0.0f, 0.5f * LC_PI, 1.0f / (0.5f * LC_PI), 2, 1, 0},
+             {-0.5f * LC_PI, 0.5f * LC_PI, 2.0f / LC_PI, 3, 2, 0},
+             {-2.0f, 2.0f, 0.5f, 3, 6, 0},
+             {-2.0f, 2.0f, 0.5f, 3, 18, 0}},
+    .data = lc_g2_data,
+};
+
+/* End data in RAM (.data) and results in .bss, volatile so nothing is folded away. */
+static volatile ef_endpoint_t lc_e0 = {{0.0f, 0.0f, 0.0f}, {0.8f, 0.6f, 0.0f},
+                                       {-0.6f, 0.8f, 0.0f}, 0.5f};
+static volatile ef_endpoint_t lc_e1 = {{10.0f, 2.0f, 1.0f}, {0.6f, 0.0f, 0.8f},
+                                       {0.0f, 1.0f, 0.0f}, -0.25f};
+static volatile float lc_sink[2 * 6 * 3];
+static volatile int lc_status;
+
+int main(void);
+void Reset_Handler(void);
+void Default_Handler(void);
+
+/* Copy the volatile end data into a plain struct for the library calls. */
+static ef_endpoint_t lc_load(const volatile ef_endpoint_t *v)
+{
+    ef_endpoint_t e;
+    e.p = ef_v3(v->p.x, v->p.y, v->p.z);
+    e.t = ef_v3(v->t.x, v->t.y, v->t.z);
+    e.n = ef_v3(v->n.x, v->n.y, v->n.z);
+    e.kappa = v->kappa;
+    return e;
+}
+
+/* Build both segments and publish their control points. */
+int main(void)
+{
+    ef_endpoint_t e0 = lc_load(&lc_e0), e1 = lc_load(&lc_e1);
+    ef_seg_t s3, s5;
+    int rc3 = ef_seg_g1_cubic(&lc_g1, &e0, &e1, &s3);
+    int rc5 = ef_seg_g2_quintic(&lc_g2, &e0, &e1, &s5);
+    for (int i = 0; i < 6; i++) {
+        lc_sink[3 * i] = s3.b[i].x;
+        lc_sink[3 * i + 1] = s3.b[i].y;
+        lc_sink[3 * i + 2] = s3.b[i].z;
+        lc_sink[18 + 3 * i] = s5.b[i].x;
+        lc_sink[18 + 3 * i + 1] = s5.b[i].y;
+        lc_sink[18 + 3 * i + 2] = s5.b[i].z;
+    }
+    lc_status = (rc3 == EF_OK && rc5 == EF_OK) ? 0 : 1;
+    return lc_status;
+}
+
+/* Symbols from link_check.ld. */
+extern uint32_t _estack, _sidata, _sdata, _edata, _sbss, _ebss;
+
+/* Copy .data from flash, zero .bss, enable the FPU (CP10/CP11 full access in CPACR, which
+ * must precede any floating-point instruction), run main, then stay put. */
+void Reset_Handler(void)
+{
+    const uint32_t *src = &_sidata;
+    for (uint32_t *dst = &_sdata; dst < &_edata;)
+        *dst++ = *src++;
+    for (uint32_t *dst = &_sbss; dst < &_ebss;)
+        *dst++ = 0u;
+    volatile uint32_t *cpacr = (volatile uint32_t *)0xE000ED88u;
+    *cpacr |= 0xFu << 20;
+    __asm__ volatile("dsb\n\tisb" ::: "memory");
+    (void)main();
+    for (;;) {
+    }
+}
+
+/* Any unexpected exception parks the core here. */
+void Default_Handler(void)
+{
+    for (;;) {
+    }
+}
+
+/* One entry of the vector table: the initial stack pointer, then handlers. */
+typedef union {
+    uint32_t *stack;
+    void (*handler)(void);
+} lc_vector_t;
+
+/* The 16 Cortex-M system vectors; a board would append its interrupt lines. */
+__attribute__((section(".isr_vector"), used)) static const lc_vector_t lc_vectors[16] = {
+    {.stack = &_estack},          {.handler = Reset_Handler},   {.handler = Default_Handler},
+    {.handler = Default_Handler}, {.handler = Default_Handler}, {.handler = Default_Handler},
+    {.handler = Default_Handler}, {.stack = 0},                 {.stack = 0},
+    {.stack = 0},                 {.stack = 0},                 {.handler = Default_Handler},
+    {.handler = Default_Handler}, {.stack = 0},                 {.handler = Default_Handler},
+    {.handler = Default_Handler},
+};

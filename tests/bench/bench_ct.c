@@ -1,0 +1,351 @@
+/*
+ * Constant-time benchmark driver for ef_seg_g1_cubic / ef_seg_g2_quintic.
+ *
+ * For each of N random valid configurations it makes exactly one call, bracketed by
+ * CALLGRIND_ZERO_STATS / CALLGRIND_DUMP_STATS, so that run under
+ *   valgrind --tool=callgrind --collect-atstart=no --toggle-collect=ef_seg_g1_cubic ...
+ * every dump holds the instruction count of one call, callees included. tests/bench/
+ * ct_bench.sh runs it and reduces the dumps to min / median / max. Outside valgrind the
+ * client requests are no-ops and the program only checks that every call succeeds.
+ *
+ * Usage: bench_ct g1|g2 N [dump|nodump] [seed]
+ *   nodump leaves out the client requests, so a single end-of-run dump holds the sum over
+ *   all calls: ct_bench.sh --verify compares it with the sum of the per-call dumps.
+ *
+ * The configurations cover everything the firmware accepts: planar data (in z = 0 and in
+ * rotated planes), twisted 3-D tangents, tangents exactly and nearly along the chord,
+ * near-reversals, chords 1e-3..1e3, coordinates up to 1e4, and for G2 curvatures of
+ * either sign including 0 with a zero normal, inside and far outside the table domain.
+ * Every call must return EF_OK: the benchmark measures the valid-input path only.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+/* The header comes with valgrind; without it the bench still builds (and ct_bench.sh then
+ * skips, having no valgrind to run it under). */
+#if defined(__has_include)
+#if __has_include(<valgrind/callgrind.h>)
+#include <valgrind/callgrind.h>
+#endif
+#endif
+#ifndef CALLGRIND_ZERO_STATS
+#define CALLGRIND_ZERO_STATS ((void)0)
+#define CALLGRIND_DUMP_STATS ((void)0)
+#endif
+#include "ef_test.h"
+#include "evenfeed/ef_err.h"
+#include "evenfeed/ef_seg.h"
+#include "evenfeed/ef_table.h"
+
+#ifdef EF_BENCH_DEFAULT_TABLES
+/* The generated default tables, linked in (tables/). */
+extern const ef_table_t ef_tbl_g1_default;
+extern const ef_table_t ef_tbl_g2_default;
+#define EF_BENCH_G1 (&ef_tbl_g1_default)
+#define EF_BENCH_G2 (&ef_tbl_g2_default)
+#else
+/* Synthetic tables of the default shapes. Instruction counts do not depend on the stored
+ * values (the lookup reads a fixed set of nodes and blends them), only on the shape, so
+ * arbitrary in-bounds values give the figures a real table will give. */
+#define EF_G1_NU 33u
+#define EF_G1_NV 65u
+#define EF_G2_NA 7u
+#define EF_G2_NB 13u
+#define EF_G2_NK 9u
+static float g1_data[EF_G1_NU * EF_G1_NV * 2];
+static float g2_data[EF_G2_NA * EF_G2_NB * EF_G2_NK * EF_G2_NK * 4];
+static ef_table_t g1_syn, g2_syn;
+#define EF_BENCH_G1 (&g1_syn)
+#define EF_BENCH_G2 (&g2_syn)
+
+/* Fill a view the way generated sources do: strides axis 0 fastest, inv_step derived. */
+static void syn_table(ef_table_t *t, int kind, int sym, int naxes, const float *lo,
+                      const float *hi, const uint32_t *n, float *data, unsigned long long *rs)
+{
+    memset(t, 0, sizeof *t);
+    t->kind = (uint16_t)kind;
+    t->symmetry = (uint16_t)sym;
+    t->naxes = t->ndof = (uint8_t)naxes;
+    t->quad_nodes = 16;
+    t->x1_min = 0.05f;
+    t->x1_max = 4.0f;
+    t->x2_max = kind == EF_TABLE_G2_QUINTIC ? 50.0f : 0.0f;
+    uint32_t stride = 1;
+    for (int a = 0; a < naxes; a++) {
+        t->axis[a].lo = lo[a];
+        t->axis[a].hi = hi[a];
+        t->axis[a].nodes = n[a];
+        t->axis[a].inv_step = (float)(n[a] - 1) / (hi[a] - lo[a]);
+        t->axis[a].stride = stride;
+        stride *= n[a];
+    }
+    t->nodes = stride;
+    /* x1 values inside [x1_min, x1_max], x2 values inside +-x2_max. */
+    for (uint32_t i = 0; i < stride * (uint32_t)naxes; i++) {
+        int is_x2 = kind == EF_TABLE_G2_QUINTIC && (i % 2u) == 1u;
+        data[i] = is_x2 ? (float)ef_t_uniform(rs, -10, 10) : (float)ef_t_uniform(rs, 0.2, 2.5);
+    }
+    t->data = data;
+}
+
+/* The default table shapes: G1 fold 33x65 over [0,pi/2]x[0,pi], G2 mirror 7x13x9x9. */
+static void syn_tables(void)
+{
+    unsigned long long rs = 99;
+    const float g1lo[2] = {0.0f, 0.0f}, g1hi[2] = {(float)(M_PI / 2), (float)M_PI};
+    const uint32_t g1n[2] = {EF_G1_NU, EF_G1_NV};
+    syn_table(&g1_syn, EF_TABLE_G1_CUBIC, EF_SYM_G1_FOLD, 2, g1lo, g1hi, g1n, g1_data, &rs);
+    const float g2lo[4] = {0.0f, (float)(-M_PI / 2), -2.0f, -2.0f};
+    const float g2hi[4] = {(float)(M_PI / 2), (float)(M_PI / 2), 2.0f, 2.0f};
+    const uint32_t g2n[4] = {EF_G2_NA, EF_G2_NB, EF_G2_NK, EF_G2_NK};
+    syn_table(&g2_syn, EF_TABLE_G2_QUINTIC, EF_SYM_G2_MIRROR, 4, g2lo, g2hi, g2n, g2_data, &rs);
+}
+#endif
+
+/* Kinds of configuration, visited in turn so each gets N / BC_COUNT calls. */
+enum {
+    BC_PLANAR_XY,  /* data in z = 0, chord in any direction */
+    BC_PLANAR_ROT, /* planar data in a randomly rotated plane */
+    BC_TWISTED,    /* t1 turned out of t0's plane about the chord */
+    BC_GENERAL,    /* independent random tangents in 3-D */
+    BC_ALONG_AXIS, /* tangents exactly +-chord, chord exactly along x (exact zeros) */
+    BC_ALONG_ROT,  /* tangents +-chord in a rotated frame (zeros up to rounding) */
+    BC_NEAR_ALONG, /* angles within 1e-6..1e-2 of 0 or pi */
+    BC_REVERSAL,   /* both angles near +-pi (the tangents point back along the chord) */
+    BC_COUNT
+};
+
+typedef struct {
+    double m[3][3];
+} rot3_t;
+
+/* 3x3 rotation applied to a canonical-frame vector. */
+static ef_vec3_t rot_apply(const rot3_t *r, const double v[3])
+{
+    double o[3];
+    for (int i = 0; i < 3; i++)
+        o[i] = r->m[i][0] * v[0] + r->m[i][1] * v[1] + r->m[i][2] * v[2];
+    return ef_v3((float)o[0], (float)o[1], (float)o[2]);
+}
+
+/* Rotation about z by phi: keeps planar data in z = 0. */
+static rot3_t rot_z(double phi)
+{
+    rot3_t r = {{{cos(phi), -sin(phi), 0}, {sin(phi), cos(phi), 0}, {0, 0, 1}}};
+    return r;
+}
+
+/* Uniformly random rotation, from a random unit quaternion. */
+static rot3_t rot_random(unsigned long long *rs)
+{
+    double q[4], n = 0;
+    do {
+        n = 0;
+        for (int i = 0; i < 4; i++) {
+            q[i] = ef_t_uniform(rs, -1, 1);
+            n += q[i] * q[i];
+        }
+    } while (n > 1 || n < 1e-6);
+    n = sqrt(n);
+    double w = q[0] / n, x = q[1] / n, y = q[2] / n, z = q[3] / n;
+    rot3_t r = {{{1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)},
+                 {2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)},
+                 {2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)}}};
+    return r;
+}
+
+/* Random unit vector (canonical frame). */
+static void unit_random(unsigned long long *rs, double v[3])
+{
+    double n;
+    do {
+        for (int i = 0; i < 3; i++)
+            v[i] = ef_t_uniform(rs, -1, 1);
+        n = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+    } while (n > 1 || n < 1e-6);
+    n = sqrt(n);
+    for (int i = 0; i < 3; i++)
+        v[i] /= n;
+}
+
+/* A unit vector perpendicular to unit t: a random one, or the in-plane normal when planar. */
+static void normal_for(unsigned long long *rs, const double t[3], int planar, double n[3])
+{
+    if (planar) {
+        n[0] = -t[1];
+        n[1] = t[0];
+        n[2] = 0;
+        double l = sqrt(n[0] * n[0] + n[1] * n[1]);
+        if (l < 1e-12) { /* t along z cannot happen for planar data; keep n defined */
+            n[0] = 1, n[1] = 0, l = 1;
+        }
+        for (int i = 0; i < 3; i++)
+            n[i] /= l;
+        return;
+    }
+    double r[3];
+    for (;;) {
+        unit_random(rs, r);
+        double d = r[0] * t[0] + r[1] * t[1] + r[2] * t[2];
+        for (int i = 0; i < 3; i++)
+            n[i] = r[i] - d * t[i];
+        double l = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        if (l > 0.1) {
+            for (int i = 0; i < 3; i++)
+                n[i] /= l;
+            return;
+        }
+    }
+}
+
+/* Curvature x chord for one end: zero, inside the table's [-2, 2], or outside it (up to
+ * 900, below EF_MAX_NORM_CURVATURE = 1e3). */
+static double norm_curvature(unsigned long long *rs, int *zero)
+{
+    int c = (int)(ef_t_rng(rs) % 6u);
+    *zero = c == 0;
+    switch (c) {
+    case 0: return 0;
+    case 1:
+    case 2: return ef_t_uniform(rs, -2, 2);
+    case 3: return ef_t_uniform(rs, -10, 10);
+    case 4: return (ef_t_rng(rs) & 1u ? 1 : -1) * exp(ef_t_uniform(rs, log(2.0), log(900.0)));
+    default: return ef_t_uniform(rs, -0.1, 0.1);
+    }
+}
+
+/* Angle near 0 or pi, either sign, at a log-uniform distance 1e-6..1e-2. */
+static double near_axis_angle(unsigned long long *rs, int at_pi)
+{
+    double eps = exp(ef_t_uniform(rs, log(1e-6), log(1e-2)));
+    double a = at_pi ? M_PI - eps : eps;
+    return ef_t_rng(rs) & 1u ? a : -a;
+}
+
+/* One random valid configuration of the given kind; g2 also fills n and kappa. */
+static void make_config(unsigned long long *rs, int kind, int g2, ef_endpoint_t *e0,
+                        ef_endpoint_t *e1)
+{
+    /* Chord log-uniform in [1e-3, 1e3]; coordinates bounded so the chord stays at least
+     * 2e-5 of the largest coordinate, twice the firmware's EF_MIN_CHORD_REL. */
+    double s = exp(ef_t_uniform(rs, log(1e-3), log(1e3)));
+    double rmax = fmin(1e4, 5e4 * s) - s;
+    /* Half the offsets near the largest allowed, half log-spread down to 1e-3 of it. */
+    double mag = ef_t_rng(rs) & 1u ? rmax : rmax * exp(ef_t_uniform(rs, log(1e-3), 0));
+    double p0[3] = {ef_t_uniform(rs, -mag, mag), ef_t_uniform(rs, -mag, mag),
+                    ef_t_uniform(rs, -mag, mag)};
+    int planar_xy = kind == BC_PLANAR_XY || kind == BC_ALONG_AXIS;
+    if (planar_xy)
+        p0[2] = 0;
+    rot3_t r;
+    if (kind == BC_ALONG_AXIS)
+        r = rot_z(0);
+    else if (kind == BC_PLANAR_XY)
+        r = rot_z(ef_t_uniform(rs, -M_PI, M_PI));
+    else
+        r = rot_random(rs);
+
+    /* Tangents in the canonical frame: chord along +x, reference plane xy. */
+    double t0[3], t1[3];
+    double al = ef_t_uniform(rs, -M_PI, M_PI), be = ef_t_uniform(rs, -M_PI, M_PI);
+    double tw = 0;
+    switch (kind) {
+    case BC_TWISTED: tw = ef_t_uniform(rs, 1e-3, M_PI - 1e-3); break;
+    case BC_ALONG_AXIS:
+    case BC_ALONG_ROT:
+        al = ef_t_rng(rs) & 1u ? 0 : M_PI;
+        be = ef_t_rng(rs) & 1u ? 0 : M_PI;
+        break;
+    case BC_NEAR_ALONG:
+        al = near_axis_angle(rs, (int)(ef_t_rng(rs) & 1u));
+        be = near_axis_angle(rs, (int)(ef_t_rng(rs) & 1u));
+        break;
+    case BC_REVERSAL:
+        al = near_axis_angle(rs, 1);
+        be = near_axis_angle(rs, 1);
+        break;
+    default: break;
+    }
+    t0[0] = cos(al), t0[1] = sin(al), t0[2] = 0;
+    t1[0] = cos(be), t1[1] = sin(be) * cos(tw), t1[2] = sin(be) * sin(tw);
+    if (kind == BC_GENERAL) {
+        unit_random(rs, t0);
+        unit_random(rs, t1);
+    }
+
+    memset(e0, 0, sizeof *e0);
+    memset(e1, 0, sizeof *e1);
+    const double c1[3] = {s, 0, 0};
+    ef_vec3_t d = rot_apply(&r, c1);
+    e0->p = ef_v3((float)p0[0], (float)p0[1], (float)p0[2]);
+    e1->p = ef_v3((float)(p0[0] + d.x), (float)(p0[1] + d.y), (float)(p0[2] + d.z));
+    e0->t = rot_apply(&r, t0);
+    e1->t = rot_apply(&r, t1);
+    if (g2) {
+        int planar = kind == BC_PLANAR_XY || kind == BC_PLANAR_ROT || kind == BC_ALONG_AXIS;
+        double n0[3], n1[3];
+        int z0, z1;
+        double k0 = norm_curvature(rs, &z0), k1 = norm_curvature(rs, &z1);
+        normal_for(rs, t0, planar, n0);
+        normal_for(rs, t1, planar, n1);
+        /* kappa == 0 goes with a zero normal half of the time (both are valid input). */
+        int zero_n0 = z0 && (ef_t_rng(rs) & 1u), zero_n1 = z1 && (ef_t_rng(rs) & 1u);
+        e0->n = zero_n0 ? ef_v3(0, 0, 0) : rot_apply(&r, n0);
+        e1->n = zero_n1 ? ef_v3(0, 0, 0) : rot_apply(&r, n1);
+        e0->kappa = (float)(k0 / s);
+        e1->kappa = (float)(k1 / s);
+    }
+}
+
+/* Parse "g1"/"g2" and N, build the table, run the calls, report how many of each kind. */
+int main(int argc, char **argv)
+{
+    if (argc < 3 || (strcmp(argv[1], "g1") != 0 && strcmp(argv[1], "g2") != 0)) {
+        fprintf(stderr, "usage: %s g1|g2 N [dump|nodump] [seed]\n", argv[0]);
+        return 2;
+    }
+    int g2 = strcmp(argv[1], "g2") == 0;
+    long n = strtol(argv[2], NULL, 10);
+    int dump = argc < 4 || strcmp(argv[3], "nodump") != 0;
+    unsigned long long rs = argc > 4 ? strtoull(argv[4], NULL, 0) : 20240607ull;
+    if (n < 1) {
+        fprintf(stderr, "bench_ct: N must be positive\n");
+        return 2;
+    }
+#ifndef EF_BENCH_DEFAULT_TABLES
+    syn_tables();
+#endif
+    const ef_table_t *tbl = g2 ? EF_BENCH_G2 : EF_BENCH_G1;
+    int rc = ef_table_check(tbl);
+    if (rc != EF_OK) {
+        fprintf(stderr, "bench_ct: table view rejected: %s\n", ef_err_str(rc));
+        return 1;
+    }
+
+    long per_kind[BC_COUNT] = {0}, clamped = 0;
+    for (long i = 0; i < n; i++) {
+        ef_endpoint_t e0, e1;
+        ef_seg_t seg;
+        int kind = (int)(i % BC_COUNT);
+        make_config(&rs, kind, g2, &e0, &e1);
+        /* Only the call sits between zero and dump; with --toggle-collect on the function,
+         * nothing of this loop is counted either way. */
+        if (dump)
+            CALLGRIND_ZERO_STATS;
+        rc = g2 ? ef_seg_g2_quintic(tbl, &e0, &e1, &seg) : ef_seg_g1_cubic(tbl, &e0, &e1, &seg);
+        if (dump)
+            CALLGRIND_DUMP_STATS;
+        if (rc != EF_OK) {
+            fprintf(stderr, "bench_ct: call %ld (kind %d) failed: %s\n", i, kind, ef_err_str(rc));
+            return 1;
+        }
+        per_kind[kind]++;
+        clamped += (seg.flags & EF_SEG_CLAMPED) != 0;
+    }
+    printf("bench_ct %s: %ld calls OK (%ld clamped); per kind:", g2 ? "g2" : "g1", n, clamped);
+    for (int k = 0; k < BC_COUNT; k++)
+        printf(" %ld", per_kind[k]);
+    printf("\n");
+    return 0;
+}
