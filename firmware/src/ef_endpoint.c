@@ -25,8 +25,9 @@ static int ef_finite(float x)
  * runs four times per G1 segment and six per G2. */
 static inline int ef_v3_ok(ef_vec3_t v)
 {
-    return (ef_fabsf(v.x) <= EF_MAX_COORD) & (ef_fabsf(v.y) <= EF_MAX_COORD) &
-           (ef_fabsf(v.z) <= EF_MAX_COORD);
+    int ox = ef_fabsf(v.x) <= EF_MAX_COORD, oy = ef_fabsf(v.y) <= EF_MAX_COORD;
+    int oz = ef_fabsf(v.z) <= EF_MAX_COORD;
+    return ox & oy & oz;
 }
 
 /* Checks combine with & rather than && so valid input always runs the same instructions. */
@@ -45,8 +46,9 @@ int ef_endpoint_check(const ef_endpoint_t *e, int g2)
     if (g2) {
         float nn = ef_v3_dot(e->n, e->n);
         int curved = e->kappa != 0.0f;
-        int bad_n = !(ef_fabsf(nn - 1.0f) <= 2.0f * EF_UNIT_TOL) |
-                    !(ef_fabsf(ef_v3_dot(e->n, e->t)) <= EF_UNIT_TOL);
+        int unit_n = ef_fabsf(nn - 1.0f) <= 2.0f * EF_UNIT_TOL;
+        int perp_n = ef_fabsf(ef_v3_dot(e->n, e->t)) <= EF_UNIT_TOL;
+        int bad_n = (unit_n & perp_n) ^ 1;
         /* gcc -O2 evaluated `curved` only when bad_n was set: a data-dependent count on
          * valid input (kappa == 0 with a zero normal). One opaque test keeps it fixed. */
         if (ef_ct_hidei(curved & bad_n))
@@ -126,7 +128,8 @@ int ef_normalize(const ef_endpoint_t *e0, const ef_endpoint_t *e1, int g2, ef_no
         ef_vec3_t cand_z = ef_v3_axpy(ef_v3(0.0f, 0.0f, 1.0f), -ex.z, ex);
         ef_vec3_t cand_y = ef_v3_axpy(ef_v3(0.0f, 1.0f, 0.0f), -ex.y, ex);
         const float tiny = 1e-10f;
-        int use_k = (ef_v3_dot(m, m) < tiny) & (ef_v3_dot(cand_k, cand_k) >= tiny);
+        int m_tiny = ef_v3_dot(m, m) < tiny, k_ok = ef_v3_dot(cand_k, cand_k) >= tiny;
+        int use_k = m_tiny & k_ok;
         m = ef_v3_select(use_k, cand_k, m);
         m = ef_v3_select(ef_v3_dot(m, m) < tiny, cand_z, m);
         m = ef_v3_select(ef_v3_dot(m, m) < tiny, cand_y, m);
@@ -142,8 +145,9 @@ int ef_normalize(const ef_endpoint_t *e0, const ef_endpoint_t *e1, int g2, ef_no
     out->e1 = ex;
     out->t0 = t0;
     out->t1 = t1;
-    if (g2 && !((ef_fabsf(e0->kappa * s) <= EF_MAX_NORM_CURVATURE) &
-                (ef_fabsf(e1->kappa * s) <= EF_MAX_NORM_CURVATURE)))
+    int k0_ok = ef_fabsf(e0->kappa * s) <= EF_MAX_NORM_CURVATURE;
+    int k1_ok = ef_fabsf(e1->kappa * s) <= EF_MAX_NORM_CURVATURE;
+    if (g2 && !(k0_ok & k1_ok))
         return EF_ERR_DOMAIN;
     return EF_OK;
 }

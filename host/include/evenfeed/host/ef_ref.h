@@ -71,13 +71,26 @@ double ef_ref_functional(const ef_dvec3_t *b, int degree);
 double ef_ref_objective(ef_ref_kind_t kind, const ef_dend_t *e0, const ef_dend_t *e1,
                         const double *dof, double *grad);
 
+/**
+ * @brief C^2 with its gradient and its exact Hessian with respect to the DOFs: the Newton
+ * model the optimizer uses. Near an optimum x*, C^2(x* + d) - C^2(x*) is about d^T H d / 2
+ * for DOF errors d along free DOFs.
+ * @param grad ndof values, or NULL
+ * @param hess ndof x ndof values, row-major, or NULL
+ * @return C^2 (NaN on bad arguments)
+ */
+double ef_ref_objective_hess(ef_ref_kind_t kind, const ef_dend_t *e0, const ef_dend_t *e1,
+                             const double *dof, double *grad, double *hess);
+
 /** Optimizer settings. ef_ref_opts_default() gives the documented defaults. */
 typedef struct {
     double x1_min;  /**< x1 lower bound per unit chord (default 0.1, as the thesis) */
     double x1_max;  /**< x1 upper bound per unit chord (default 10) */
     double x2_max;  /**< |x2| bound per unit chord (default 100) */
     int max_iter;   /**< iterations per start (default 200) */
-    double tol;     /**< stop when the projected gradient's norm is below tol (default 1e-12) */
+    double tol;     /**< a start stops when the projected gradient's norm is below
+                         tol * max(1, C^2), or when the predicted gain falls below 1e-10 C^2
+                         (default 1e-12; docs/optimizer.md) */
     const double *warm; /**< optional extra start, DOFs per unit chord (ndof values), or NULL */
 } ef_ref_opts_t;
 
