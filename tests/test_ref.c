@@ -1051,8 +1051,22 @@ static void test_threads(void)
 }
 
 /* Run every group; the summary line and exit status come from ef_test.h. */
+/* Regression: two basins closer than the screening grid, the better one on the x1 bound
+ * (a node of the default G1 table; before the bound starts every start found 1.80844). */
+static void test_close_basins(void)
+{
+    ef_dend_t e0, e1;
+    ef_ref_config(2.127120025868089, -1.145372321621279, 0, 0, &e0, &e1);
+    ef_ref_result_t r;
+    EF_CHECK_EQ(ef_ref_optimize(EF_REF_G1_CUBIC, &e0, &e1, NULL, &r, NULL), EF_OK);
+    EF_CHECK(r.C <= 1.8033341);
+    EF_CHECK_NEAR(r.dof[0], 0.1, 1e-9);
+    EF_CHECK_NEAR(r.dof[1], 1.23781, 1e-4);
+}
+
 int main(void)
 {
+    test_close_basins();
     test_basics();
     test_functional();
     test_gradient();

@@ -5,6 +5,10 @@
 #include "evenfeed/host/ef_build.h"
 #include "evenfeed/host/ef_ref.h"
 
+/* How far inside the fold region its edge nodes are optimized (rad): far above the
+ * optimizer's tie tolerance (1e-9 relative in C^2), far below the grid spacing. */
+#define EF_BUILD_EDGE_NUDGE 1e-6
+
 typedef struct {
     ef_tfile_t *t;
     int threads;
@@ -40,6 +44,20 @@ static int ef_build_node(ef_tfile_t *t, uint32_t node, const double *warm, doubl
 {
     double cfg[EF_TABLE_MAX_AXES] = {0};
     ef_tfile_node_config(t, node, cfg);
+    if (t->view.symmetry == EF_SYM_G1_FOLD) {
+        /* The fold's edges are symmetry lines (u = 0: reversal, v = 0: alpha = beta) on
+         * which two mirror-image optima can tie exactly; the lookup interpolates from inside
+         * the region only, so store the branch continuous with the inside: optimize a hair
+         * (EF_BUILD_EDGE_NUDGE rad) inside it. Elsewhere this moves the DOFs by O(1e-6). */
+        const uint32_t n0 = t->view.axis[0].nodes, n1 = t->view.axis[1].nodes;
+        const uint32_t i = node % n0, j = node / n0;
+        double u = t->lo[0] + (t->hi[0] - t->lo[0]) * i / (n0 - 1);
+        double v = t->lo[1] + (t->hi[1] - t->lo[1]) * j / (n1 - 1);
+        u += (i == 0 ? EF_BUILD_EDGE_NUDGE : 0) - (i == n0 - 1 ? EF_BUILD_EDGE_NUDGE : 0);
+        v += (j == 0 ? EF_BUILD_EDGE_NUDGE : 0) - (j == n1 - 1 ? EF_BUILD_EDGE_NUDGE : 0);
+        cfg[0] = u + v;
+        cfg[1] = u - v;
+    }
     int kind = t->view.kind;
     ef_dend_t e0, e1;
     ef_ref_config(cfg[0], cfg[1], kind == EF_TABLE_G2_QUINTIC ? cfg[2] : 0,

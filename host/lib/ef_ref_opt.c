@@ -13,6 +13,8 @@
  *        quintic  x1_0, x1_1 in {0.3, 1, 2}, x2_0, x2_1 in {-2, 0, 2}         81
  *        quartic  x1_0, x1_1 in {0.3, 1, 2} x inner point at the midpoint,
  *                 +/- 0.5 across the chord, 0.25 out of the tangents' plane   36
+ *      plus 7 with an x1 on its lower bound: (b, 0.3), (b, 1), (b, 2), mirrored, (b, b),
+ *      other DOFs neutral (x2 = 0, inner point at the midpoint)
  *      then up to EF_OPT_KEEP = 8 points of a screening grid (cubic 8 x 8, quintic
  *      (5 x 7)^2, quartic 5 x 5 x 3 x 5 x 3 nodes): the lowest grid points that no axis
  *      neighbour undercuts. All are clamped into the box.
@@ -47,7 +49,7 @@
 #define EF_OPT_AXIS_MAX 8   /* nodes per screening-grid axis */
 #define EF_OPT_GRID_MAX 1225 /* screening-grid points (quintic: 35 x 35) */
 #define EF_OPT_KEEP 8       /* Newton starts taken from the grid */
-#define EF_OPT_MAX_STARTS (1 + 81 + EF_OPT_KEEP) /* warm + fixed + grid */
+#define EF_OPT_MAX_STARTS (1 + 81 + 7 + EF_OPT_KEEP) /* warm + fixed + bound + grid */
 
 /* One normalized problem: the segment with p0 at the origin and unit chord, and its box. */
 typedef struct {
@@ -463,6 +465,25 @@ static int ef_opt_fixed_starts(const ef_prob_t *p, const ef_grid_t *gr, double s
                 }
             }
         }
+    /* Starts on the x1 lower bound, where most G1 optima sit: there the objective is flat
+     * and two basins can lie closer than the screening grid resolves (alpha 2.1271,
+     * beta -1.1454: C 1.80333 on the bound, 1.80844 at x1_0 = 0.51, reached from every
+     * interior start). Other DOFs at their neutral value (x2 = 0, inner point centred). */
+    const int i0 = 0, i1 = p->kind == EF_REF_G2_QUINTIC ? 2 : 1;
+    const double b0 = p->lo[i0], b1 = p->lo[i1];
+    const double pairs[7][2] = {{b0, 0.3}, {b0, 1.0}, {b0, 2.0}, {0.3, b1},
+                                {1.0, b1}, {2.0, b1}, {b0, b1}};
+    for (int q = 0; q < 7; q++, k++) {
+        for (int d = 0; d < p->n; d++)
+            st[k][d] = 0.0;
+        st[k][i0] = pairs[q][0];
+        st[k][i1] = pairs[q][1];
+        if (p->kind == EF_REF_G1_QUARTIC) {
+            st[k][2] = gr->mid.x;
+            st[k][3] = gr->mid.y;
+            st[k][4] = gr->mid.z;
+        }
+    }
     return k;
 }
 

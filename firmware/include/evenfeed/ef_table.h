@@ -24,8 +24,8 @@
  * | 26  | 2  | reserved, 0 |
  * | 28  | 4  | node count = product of the axes' node counts |
  * | 32  | 8  | f64 x1 lower bound per unit chord used by the optimizer (> 0) |
- * | 40  | 8  | f64 x1 upper bound per unit chord (> lower) |
- * | 48  | 8  | f64 bound on |x2| per unit chord (G2; 0 for G1) |
+ * | 40  | 8  | f64 x1 upper bound per unit chord (> lower, <= 1e6) |
+ * | 48  | 8  | f64 bound on |x2| per unit chord (G2, <= 1e6; 0 for G1) |
  * | 56  | 4  | provenance length in bytes (0..EF_TABLE_MAX_PROVENANCE) |
  * | 60  | 4  | reserved, 0 |
  * | 64  | 96 | 4 axes x { f64 lo, f64 hi, u32 nodes, u32 flags (bit 0: periodic) };
