@@ -30,11 +30,10 @@ static inline int ef_v3_ok(ef_vec3_t v)
     return ox & oy & oz;
 }
 
-/* Checks combine with & rather than && so valid input always runs the same instructions. */
-int ef_endpoint_check(const ef_endpoint_t *e, int g2)
+/* Checks combine with & rather than && so valid input always runs the same instructions.
+ * Inline so ef_normalize() pays no call per end; e is not NULL here. */
+static inline int ef_check(const ef_endpoint_t *e, int g2)
 {
-    if (!e)
-        return EF_ERR_ARG;
     int finite = ef_v3_ok(e->p) & ef_v3_ok(e->t);
     if (g2)
         finite &= ef_v3_ok(e->n) & ef_finite(e->kappa);
@@ -55,6 +54,12 @@ int ef_endpoint_check(const ef_endpoint_t *e, int g2)
             return EF_ERR_NORMAL;
     }
     return EF_OK;
+}
+
+/* Public entry: validate one end (NULL-safe). */
+int ef_endpoint_check(const ef_endpoint_t *e, int g2)
+{
+    return e ? ef_check(e, g2) : EF_ERR_ARG;
 }
 
 /* v / |v|, or the zero vector when |v| is 0 (callers select away from that case). */
@@ -83,8 +88,8 @@ static ef_vec3_t ef_v3_agree_sum(ef_vec3_t m0, ef_vec3_t m1, float *sigma)
  * of (alpha, beta) depends on it, and the mirror symmetry makes that sign free whenever m
  * vanishes (both tangents along the chord), so G1 takes the orientation from m directly.
  * G2 needs the plane itself for the curvature signs: when m vanishes it falls back to the
- * curvature vectors, then z, then y, projected off the chord. Every candidate is computed
- * and one selected, so the count does not depend on which applies. The orientation is fixed
+ * curvature vectors. Both candidates are computed and one selected, so the count does not
+ * depend on which applies. The orientation is fixed
  * by the first nonzero of e3.z, e3.y, e3.x being positive: planar data in z = 0 gets
  * e3 = +z and the usual counter-clockwise signs.
  */
@@ -92,9 +97,9 @@ int ef_normalize(const ef_endpoint_t *e0, const ef_endpoint_t *e1, int g2, ef_no
 {
     if (!e0 || !e1 || !out)
         return EF_ERR_ARG;
-    int rc = ef_endpoint_check(e0, g2);
+    int rc = ef_check(e0, g2);
     if (rc == EF_OK)
-        rc = ef_endpoint_check(e1, g2);
+        rc = ef_check(e1, g2);
     if (rc != EF_OK)
         return rc;
 
@@ -125,14 +130,12 @@ int ef_normalize(const ef_endpoint_t *e0, const ef_endpoint_t *e1, int g2, ef_no
         ef_vec3_t cand_k =
             ef_v3_agree_sum(ef_v3_cross(ex, ef_v3_scale(e0->n, e0->kappa * s)),
                             ef_v3_cross(ex, ef_v3_scale(e1->n, e1->kappa * s)), &sigma_k);
-        ef_vec3_t cand_z = ef_v3_axpy(ef_v3(0.0f, 0.0f, 1.0f), -ex.z, ex);
-        ef_vec3_t cand_y = ef_v3_axpy(ef_v3(0.0f, 1.0f, 0.0f), -ex.y, ex);
+        /* When the curvature candidate vanishes too, |kappa s| < 1e-5 at both ends and both
+         * tangents lie along the chord: angles are 0 or pi and curvatures ~0 in any plane,
+         * so no further fallback is needed (a zero e3 gives exactly 0 curvatures). */
         const float tiny = 1e-10f;
         int m_tiny = ef_v3_dot(m, m) < tiny, k_ok = ef_v3_dot(cand_k, cand_k) >= tiny;
-        int use_k = m_tiny & k_ok;
-        m = ef_v3_select(use_k, cand_k, m);
-        m = ef_v3_select(ef_v3_dot(m, m) < tiny, cand_z, m);
-        m = ef_v3_select(ef_v3_dot(m, m) < tiny, cand_y, m);
+        m = ef_v3_select(m_tiny & k_ok, cand_k, m);
         ef_vec3_t ez = ef_v3_unit_or_zero(m);
         float key = ef_selectf(ez.z != 0.0f, ez.z, ef_selectf(ez.y != 0.0f, ez.y, ez.x));
         ez = ef_v3_scale(ez, ef_selectf(key < 0.0f, -1.0f, 1.0f));

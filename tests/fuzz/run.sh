@@ -37,8 +37,12 @@ if [ "$jobs" -gt 1 ]; then
 fi
 echo "fuzzing for ${secs}s, corpus $corpus"
 status=0
-"$build/tests/fuzz_table_parse" "$@" "$corpus" || status=$?
+# libFuzzer reports every new corpus entry; keep that in a log and show its summary.
+log="$build/fuzz.log"
+"$build/tests/fuzz_table_parse" "$@" "$corpus" >"$log" 2>&1 || status=$?
+grep -E '^(INFO: Seed|#[0-9]+[[:space:]]+DONE|Done [0-9]+ runs|stat::)' "$log" || true
 if [ "$status" -ne 0 ]; then
+    tail -n 60 "$log" >&2
     echo "fuzzer failed (exit $status); reproducers in $build/artifacts/:" >&2
     ls -l "$build/artifacts/" >&2 || true
     echo "replay one with: $build/tests/fuzz_table_parse FILE" >&2
