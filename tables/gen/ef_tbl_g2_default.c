@@ -4,7 +4,7 @@
  * regenerate it from the .eft file instead of editing: hand edits bypass the
  * file's CRC and the parser's value checks.
  *
- * Table: G2 quintic, symmetry G2 mirror (alpha >= 0), 25857 nodes x 4 DOFs; file CRC-32 89a69cce.
+ * Table: G2 quintic, symmetry G2 mirror (alpha >= 0), 25857 nodes x 4 DOFs; file CRC-32 3b6e727c.
  * Axis 0: [0, 1.5707963267948966], 9 nodes.
  * Axis 1: [-1.5707963267948966, 1.5707963267948966], 17 nodes.
  * Axis 2: [-2, 2], 13 nodes.
@@ -25876,8 +25876,9 @@ static const float ef_tbl_g2_default_data[103428] = {
 
 static const char ef_tbl_g2_default_provenance[] =
     "evenfeed 0.1.0 table build --backend cpu --kind g2 --symmetry mi"
-    "rror --nodes 9x17x13x13 -o tables/g2_quintic_default.eft --c-sou"
-    "rce tables/gen/ef_tbl_g2_default.c --name ef_tbl_g2_default";
+    "rror --nodes 9x17x13x13 --domain 0:1.5707963267948966,-1.5707963"
+    "267948966:1.5707963267948966,-2:2,-2:2 --x1-min 0.1 --x1-max 10 "
+    "--x2-max 100";
 
 const ef_table_t ef_tbl_g2_default = {
     .kind = 2u,
@@ -25901,5 +25902,5 @@ const ef_table_t ef_tbl_g2_default = {
     },
     .data = ef_tbl_g2_default_data,
     .provenance = ef_tbl_g2_default_provenance,
-    .provenance_len = 187u,
+    .provenance_len = 204u,
 };
