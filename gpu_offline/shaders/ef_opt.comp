@@ -17,6 +17,7 @@
  *     #extension GL_ARB_gpu_shader_fp64 : require
  *     #define EF_KIND 1            (1 = G1 cubic, 2 = G2 quintic)
  *     #define EF_LOCAL_SIZE 32
+ *   and may define EF_CFG_STRIDE (it must be 8).
  * - One invocation per configuration, i = gl_GlobalInvocationID.x, none past ef_count.
  * - binding 0, EfCfg: EF_CFG_STRIDE = 8 doubles per configuration:
  *     alpha, beta, k0, k1, cos alpha, sin alpha, cos beta, sin beta
@@ -38,15 +39,17 @@
  *
  * llvmpipe (Mesa's CPU driver, the CI's GL) ends every loop of an invocation once all its
  * loops together have run 65535 iterations (gallivm's LP_MAX_TGSI_LOOP_ITERATIONS, a
- * watchdog shared by all loops of the shader), silently. A G2 solve written with plain
- * loops needs several hundred thousand. So every loop with a fixed count is written out
- * (Gauss-Legendre nodes one call each, the Jacobi sweep on a zero-padded fixed-size block,
- * grid axis 0 per row) and only the data-dependent loops remain: grid rows, starts, Newton
- * iterations, Jacobi sweeps, line-search halvings; a G2 solve then takes about 10^4 loop
- * iterations (docs/optimizer.md, "GPU port", has the measured margin). The loop over the
- * starts runs one extra, empty pass at the end; on llvmpipe that pass is reached only if no
- * loop was cut, so an exhausted run is reported ([7] = -1) instead of returned as a wrong
- * optimum. Other drivers have no such limit.
+ * watchdog shared by all loops of the shader), silently. Written with plain loops, a G2
+ * solve needs far more (a first draft of this shader lost most of its starts that way). So
+ * loops with a fixed count are written out (the Gauss-Legendre nodes one statement each,
+ * the Jacobi rotations of a sweep one call per pair on a zero-padded fixed-size block, the
+ * grid's neighbour test a row of axis 0 per pass), and each start's Newton iterations and
+ * backtracking share one loop with one evaluation per pass. What remains: grid points,
+ * starts, evaluations, Jacobi sweeps; a G2 solve takes 9,000 to 12,000 loop iterations per
+ * 8 invocations (docs/optimizer.md, "GPU port"). The loop over the starts runs one extra,
+ * empty pass at the end; on llvmpipe that pass is reached only if no loop was cut, so an
+ * exhausted run is reported ([7] = -1) instead of returned as a wrong optimum. Other
+ * drivers have no such limit.
  */
 
 layout(local_size_x = EF_LOCAL_SIZE) in;
@@ -124,31 +127,47 @@ const double EF_W[12] = double[](
     1.24573522906701387e-01lf, 1.16746268269177403e-01lf, 1.01583713361532962e-01lf,
     8.00391642716731105e-02lf, 5.34696629976592133e-02lf, 2.35876681932559139e-02lf);
 const double EF_A[60] = double[](
-    4.63880039955525003e+00lf, 1.76837110139148851e-01lf, 2.48774211596306189e-03lf, 1.54932956790363111e-05lf, 3.61271695265157205e-08lf,
-    3.28051597190908861e+00lf, 7.64932018859460938e-01lf, 6.04003998168379935e-02lf, 2.07168192883769395e-03lf, 2.64126412250586707e-05lf,
-    1.47186641902349447e+00lf, 1.28369266228722223e+00lf, 2.84021166336653141e-01lf, 2.60762090122161755e-02lf, 8.75984268647434492e-04lf,
-    -7.92503385537182692e-02lf, 1.25852278597341005e+00lf, 6.65112722299332493e-01lf, 1.30386847577691256e-01lf, 9.06384187962702183e-03lf,
-    -9.28370058460070591e-01lf, 6.20328234842608905e-01lf, 9.69991229640186692e-01lf, 3.82048356726778948e-01lf, 4.99092945894356529e-02lf,
-    -1.05688572205912967e+00lf, -2.58782573993656950e-01lf, 8.75129184218421119e-01lf, 7.58532849279327626e-01lf, 1.82986384054773688e-01lf,
-    -7.58532849279327626e-01lf, -8.75129184218421452e-01lf, 2.58782573993656673e-01lf, 1.05688572205912967e+00lf, 5.00980121499736364e-01lf,
-    -3.82048356726779059e-01lf, -9.69991229640186470e-01lf, -6.20328234842608461e-01lf, 9.28370058460070702e-01lf, 1.09390705733893889e+00lf,
-    -1.30386847577691312e-01lf, -6.65112722299332715e-01lf, -1.25852278597341005e+00lf, 7.92503385537185467e-02lf, 1.98383585917634253e+00lf,
-    -2.60762090122161755e-02lf, -2.84021166336653141e-01lf, -1.28369266228722223e+00lf, -1.47186641902349447e+00lf, 3.06653244092823352e+00lf,
-    -2.07168192883769049e-03lf, -6.04003998168379033e-02lf, -7.64932018859460494e-01lf, -3.28051597190908950e+00lf, 4.10794648515545013e+00lf,
-    -1.54932956790360502e-05lf, -2.48774211596303370e-03lf, -1.76837110139147879e-01lf, -4.63880039955525092e+00lf, 4.81814078123321021e+00lf);
+    4.63880039955525003e+00lf, 1.76837110139148851e-01lf, 2.48774211596306189e-03lf,
+    1.54932956790363111e-05lf, 3.61271695265157205e-08lf, 3.28051597190908861e+00lf,
+    7.64932018859460938e-01lf, 6.04003998168379935e-02lf, 2.07168192883769395e-03lf,
+    2.64126412250586707e-05lf, 1.47186641902349447e+00lf, 1.28369266228722223e+00lf,
+    2.84021166336653141e-01lf, 2.60762090122161755e-02lf, 8.75984268647434492e-04lf,
+    -7.92503385537182692e-02lf, 1.25852278597341005e+00lf, 6.65112722299332493e-01lf,
+    1.30386847577691256e-01lf, 9.06384187962702183e-03lf, -9.28370058460070591e-01lf,
+    6.20328234842608905e-01lf, 9.69991229640186692e-01lf, 3.82048356726778948e-01lf,
+    4.99092945894356529e-02lf, -1.05688572205912967e+00lf, -2.58782573993656950e-01lf,
+    8.75129184218421119e-01lf, 7.58532849279327626e-01lf, 1.82986384054773688e-01lf,
+    -7.58532849279327626e-01lf, -8.75129184218421452e-01lf, 2.58782573993656673e-01lf,
+    1.05688572205912967e+00lf, 5.00980121499736364e-01lf, -3.82048356726779059e-01lf,
+    -9.69991229640186470e-01lf, -6.20328234842608461e-01lf, 9.28370058460070702e-01lf,
+    1.09390705733893889e+00lf, -1.30386847577691312e-01lf, -6.65112722299332715e-01lf,
+    -1.25852278597341005e+00lf, 7.92503385537185467e-02lf, 1.98383585917634253e+00lf,
+    -2.60762090122161755e-02lf, -2.84021166336653141e-01lf, -1.28369266228722223e+00lf,
+    -1.47186641902349447e+00lf, 3.06653244092823352e+00lf, -2.07168192883769049e-03lf,
+    -6.04003998168379033e-02lf, -7.64932018859460494e-01lf, -3.28051597190908950e+00lf,
+    4.10794648515545013e+00lf, -1.54932956790360502e-05lf, -2.48774211596303370e-03lf,
+    -1.76837110139147879e-01lf, -4.63880039955525092e+00lf, 4.81814078123321021e+00lf);
 const double EF_C[60] = double[](
-    -3.83607793251100944e+01lf, 1.83709012617339624e+01lf, 5.32937099350693444e-01lf, 5.02178348311559976e-03lf, 1.56739315266688886e-05lf,
-    -3.19111443792234404e+01lf, 1.21759306693263785e+01lf, 2.34690972867986947e+00lf, 1.26883782214063739e-01lf, 2.20374513496298698e-03lf,
-    -2.23156467862860950e+01lf, 3.75170951479679626e+00lf, 4.03079431714945446e+00lf, 6.41891038366717681e-01lf, 3.04561303554533487e-02lf,
-    -1.21984738521673783e+01lf, -3.57086230708628038e+00lf, 3.91913368990879718e+00lf, 1.67606677793360381e+00lf, 1.75706056975826364e-01lf,
-    -3.92508158099970528e+00lf, -7.24378215760344890e+00lf, 1.30278250726089673e+00lf, 2.83658105651353187e+00lf, 6.31594829673957192e-01lf,
-    1.18332170666602288e+00lf, -6.59414786689812438e+00lf, -2.93534993487986018e+00lf, 3.11092499600095662e+00lf, 1.67346476955319634e+00lf,
-    3.11092499600095707e+00lf, -2.93534993487985840e+00lf, -6.59414786689812615e+00lf, 1.18332170666601955e+00lf, 3.56178632955781183e+00lf,
-    2.83658105651353187e+00lf, 1.30278250726089451e+00lf, -7.24378215760345245e+00lf, -3.92508158099969862e+00lf, 6.39790534515476494e+00lf,
-    1.67606677793360426e+00lf, 3.91913368990879807e+00lf, -3.57086230708628438e+00lf, -1.21984738521673748e+01lf, 9.99842963443543020e+00lf,
-    6.41891038366717681e-01lf, 4.03079431714945535e+00lf, 3.75170951479679493e+00lf, -2.23156467862860950e+01lf, 1.38607957856176718e+01lf,
-    1.26883782214063601e-01lf, 2.34690972867986813e+00lf, 1.21759306693263838e+01lf, -3.19111443792234404e+01lf, 1.72592164538681629e+01lf,
-    5.02178348311554338e-03lf, 5.32937099350690446e-01lf, 1.83709012617339660e+01lf, -3.83607793251101015e+01lf, 1.94519035066108010e+01lf);
+    -3.83607793251100944e+01lf, 1.83709012617339624e+01lf, 5.32937099350693444e-01lf,
+    5.02178348311559976e-03lf, 1.56739315266688886e-05lf, -3.19111443792234404e+01lf,
+    1.21759306693263785e+01lf, 2.34690972867986947e+00lf, 1.26883782214063739e-01lf,
+    2.20374513496298698e-03lf, -2.23156467862860950e+01lf, 3.75170951479679626e+00lf,
+    4.03079431714945446e+00lf, 6.41891038366717681e-01lf, 3.04561303554533487e-02lf,
+    -1.21984738521673783e+01lf, -3.57086230708628038e+00lf, 3.91913368990879718e+00lf,
+    1.67606677793360381e+00lf, 1.75706056975826364e-01lf, -3.92508158099970528e+00lf,
+    -7.24378215760344890e+00lf, 1.30278250726089673e+00lf, 2.83658105651353187e+00lf,
+    6.31594829673957192e-01lf, 1.18332170666602288e+00lf, -6.59414786689812438e+00lf,
+    -2.93534993487986018e+00lf, 3.11092499600095662e+00lf, 1.67346476955319634e+00lf,
+    3.11092499600095707e+00lf, -2.93534993487985840e+00lf, -6.59414786689812615e+00lf,
+    1.18332170666601955e+00lf, 3.56178632955781183e+00lf, 2.83658105651353187e+00lf,
+    1.30278250726089451e+00lf, -7.24378215760345245e+00lf, -3.92508158099969862e+00lf,
+    6.39790534515476494e+00lf, 1.67606677793360426e+00lf, 3.91913368990879807e+00lf,
+    -3.57086230708628438e+00lf, -1.21984738521673748e+01lf, 9.99842963443543020e+00lf,
+    6.41891038366717681e-01lf, 4.03079431714945535e+00lf, 3.75170951479679493e+00lf,
+    -2.23156467862860950e+01lf, 1.38607957856176718e+01lf, 1.26883782214063601e-01lf,
+    2.34690972867986813e+00lf, 1.21759306693263838e+01lf, -3.19111443792234404e+01lf,
+    1.72592164538681629e+01lf, 5.02178348311554338e-03lf, 5.32937099350690446e-01lf,
+    1.83709012617339660e+01lf, -3.83607793251101015e+01lf, 1.94519035066108010e+01lf);
 #else
 #error "EF_KIND must be 1 (G1 cubic) or 2 (G2 quintic)"
 #endif
@@ -216,8 +235,8 @@ void ef_ctrl(double x[EF_N], out dvec2 b[EF_D + 1])
 
 /*
  * The sparse Jacobian db_k/dx_i of the control points at x (ef_model of ef_ref.c), in the
- * CPU's order of accumulation. jv[0..EF_NJ-1] are the first derivatives, in the order the
- * CPU adds them up (which matters where two reach one DOF); for G2 jv[6], jv[7] are the
+ * CPU's order of accumulation. jv[0..1] (G1) or jv[0..5] (G2) are the first derivatives, in
+ * the order the CPU adds them up (which matters where two reach one DOF); jv[6], jv[7] are the
  * second derivatives d2b2/dx1_0^2 and d2b3/dx1_1^2 (from kappa x1^2 n / 20); no kind has
  * mixed ones.
  *   G1: jv[0] = db1/dx1_0, jv[1] = db2/dx1_1
@@ -248,37 +267,55 @@ void ef_jac(double x[EF_N], out dvec2 jv[8])
 #endif
 }
 
-/*
- * Adds Gauss-Legendre node j's share to C^2 and, with wg / wh, to the gradient / Hessian
- * (the loop body of ef_eval in ef_ref.c, in its order of operations). With a = f', c = f''
- * at the node, g = a.c, h = a.a, the integrand is g^2 h; U, V are its derivatives in a and
- * c, and a_i, c_i the derivatives of a, c in DOF i (docs/optimizer.md has the formulas).
- * j, wg and wh are constants at every call, so each call compiles to straight-line code.
- */
-void ef_node(int j, dvec2 b[EF_D + 1], dvec2 jv[8], bool wg, bool wh, inout double c2,
-             inout double grad[EF_N], inout double hess[EF_NN])
+/* f' and f'' at Gauss-Legendre node j: a = sum_k B'_k b_k, c = sum_k B''_k b_k. */
+void ef_node_ac(int j, dvec2 b[EF_D + 1], out dvec2 a, out dvec2 c)
 {
-    const double w = EF_W[j];
-    precise dvec2 a = dvec2(EF_A[j * EF_D] * b[1].x, EF_A[j * EF_D] * b[1].y);
-    precise dvec2 c = dvec2(EF_C[j * EF_D] * b[1].x, EF_C[j * EF_D] * b[1].y);
+    precise dvec2 pa = dvec2(EF_A[j * EF_D] * b[1].x, EF_A[j * EF_D] * b[1].y);
+    precise dvec2 pc = dvec2(EF_C[j * EF_D] * b[1].x, EF_C[j * EF_D] * b[1].y);
     for (int k = 2; k <= EF_D; k++) {
         const double ak = EF_A[j * EF_D + k - 1], ck = EF_C[j * EF_D + k - 1];
-        a = dvec2(a.x + ak * b[k].x, a.y + ak * b[k].y);
-        c = dvec2(c.x + ck * b[k].x, c.y + ck * b[k].y);
+        pa = dvec2(pa.x + ak * b[k].x, pa.y + ak * b[k].y);
+        pc = dvec2(pc.x + ck * b[k].x, pc.y + ck * b[k].y);
     }
-    precise double g = ef_dot(a, c), h = ef_dot(a, a);
-    precise double c2n = c2 + w * g * g * h;
-    c2 = c2n;
-    if (!wg && !wh)
-        return;
+    a = pa;
+    c = pc;
+}
 
-    precise double gh2 = 2.0lf * g * h, gg2 = 2.0lf * g * g;
-    precise dvec2 U = dvec2(gh2 * c.x + gg2 * a.x, gh2 * c.y + gg2 * a.y);
-    precise dvec2 V = dvec2(gh2 * a.x, gh2 * a.y);
+/* Node j's share of C^2: w g^2 h with g = a.c, h = a.a. */
+void ef_node_val(int j, dvec2 b[EF_D + 1], inout double c2)
+{
+    dvec2 a, c;
+    ef_node_ac(j, b, a, c);
+    precise double g = ef_dot(a, c), h = ef_dot(a, a);
+    precise double c2n = c2 + EF_W[j] * g * g * h;
+    c2 = c2n;
+}
+
+/*
+ * Node j's share of C^2 and of the gradient (the loop body of ef_eval in ef_ref.c, in its
+ * order of operations), and what the Hessian needs besides: a, c, g, h, the derivatives
+ * U = 2gh c + 2g^2 a and V = 2gh a of the integrand in a and c, and a_i, c_i, the
+ * derivatives of a, c in DOF i through the sparse Jacobian (docs/optimizer.md).
+ */
+void ef_node_grad_parts(int j, dvec2 b[EF_D + 1], dvec2 jv[8], inout double c2,
+                        inout double grad[EF_N], out dvec2 a, out dvec2 c, out double g,
+                        out double h, out dvec2 U, out dvec2 V, out dvec2 ai[EF_N],
+                        out dvec2 ci[EF_N])
+{
+    const double w = EF_W[j];
+    ef_node_ac(j, b, a, c);
+    precise double gv = ef_dot(a, c), hv = ef_dot(a, a);
+    g = gv;
+    h = hv;
+    precise double c2n = c2 + w * gv * gv * hv;
+    c2 = c2n;
+    precise double gh2 = 2.0lf * gv * hv, gg2 = 2.0lf * gv * gv;
+    precise dvec2 pU = dvec2(gh2 * c.x + gg2 * a.x, gh2 * c.y + gg2 * a.y);
+    U = pU;
+    V = dvec2(gh2 * a.x, gh2 * a.y);
     /* a_i = sum_k B'_k db_k/dx_i, c_i likewise with B''_k (k = 1..d, stored at k - 1). */
     const double A1 = EF_A[j * EF_D], A2 = EF_A[j * EF_D + 1];
     const double C1 = EF_C[j * EF_D], C2 = EF_C[j * EF_D + 1];
-    dvec2 ai[EF_N], ci[EF_N];
 #if EF_KIND == 1
     ai[0] = dvec2(A1 * jv[0].x, A1 * jv[0].y);
     ci[0] = dvec2(C1 * jv[0].x, C1 * jv[0].y);
@@ -301,14 +338,21 @@ void ef_node(int j, dvec2 b[EF_D + 1], dvec2 jv[8], bool wg, bool wh, inout doub
     ai[3] = dvec2(A3 * jv[5].x, A3 * jv[5].y);
     ci[3] = dvec2(C3 * jv[5].x, C3 * jv[5].y);
 #endif
-    if (wg)
-        for (int i = 0; i < EF_N; i++) {
-            precise double gi = grad[i] + w * (ef_dot(U, ai[i]) + ef_dot(V, ci[i]));
-            grad[i] = gi;
-        }
-    if (!wh)
-        return;
+    for (int i = 0; i < EF_N; i++) {
+        precise double gi = grad[i] + w * (ef_dot(U, ai[i]) + ef_dot(V, ci[i]));
+        grad[i] = gi;
+    }
+}
 
+/* Node j's share of C^2, the gradient and the upper triangle of the Hessian. */
+void ef_node_hess(int j, dvec2 b[EF_D + 1], dvec2 jv[8], inout double c2,
+                  inout double grad[EF_N], inout double hess[EF_NN])
+{
+    const double w = EF_W[j];
+    dvec2 a, c, U, V, ai[EF_N], ci[EF_N];
+    double g, h;
+    ef_node_grad_parts(j, b, jv, c2, grad, a, c, g, h, U, V, ai, ci);
+    precise double gh2 = 2.0lf * g * h, gg2 = 2.0lf * g * g;
     /* P = phi_aa a_i + phi_ac c_i,  Q = phi_ca a_i + phi_cc c_i. */
     dvec2 P[EF_N], Q[EF_N];
     for (int i = 0; i < EF_N; i++) {
@@ -330,6 +374,8 @@ void ef_node(int j, dvec2 b[EF_D + 1], dvec2 jv[8], bool wg, bool wh, inout doub
             }
 #if EF_KIND == 2
     /* (U.a_ii + V.c_ii) on the diagonal: only b2 depends on x1_0 twice, b3 on x1_1. */
+    const double A2 = EF_A[j * EF_D + 1], A3 = EF_A[j * EF_D + 2];
+    const double C2 = EF_C[j * EF_D + 1], C3 = EF_C[j * EF_D + 2];
     precise double h00 = hess[0] + w * (A2 * ef_dot(U, jv[6]) + C2 * ef_dot(V, jv[6]));
     hess[0] = h00;
     precise double h22 =
@@ -339,12 +385,34 @@ void ef_node(int j, dvec2 b[EF_D + 1], dvec2 jv[8], bool wg, bool wh, inout doub
 }
 
 /*
- * C^2 at x, with the gradient (wg) and the Hessian (wh, row-major EF_N x EF_N), node by
- * node in the CPU's order. The nodes are written out one call each rather than looped:
+ * The Gauss-Legendre nodes one statement each, in the CPU's order, instead of a loop:
  * llvmpipe stops every loop of an invocation after 65535 loop iterations in all (see the
- * top), so only loops whose count depends on the data are left as loops.
+ * top), so only loops whose count depends on the data stay loops. The value (screening
+ * grid) and the full evaluation (Newton) have separate node functions, each called from one
+ * place: the GLSL front end inlines a whole body at every call before it prunes, and a
+ * shared body with flags, called from several places, made the G2 shader three times slower
+ * to compile (which matters most under ASan in CI).
  */
-double ef_eval(double x[EF_N], bool wg, bool wh, out double grad[EF_N], out double hess[EF_NN])
+#if EF_NQ == 6
+#define EF_EACH_NODE(S) S(0) S(1) S(2) S(3) S(4) S(5)
+#else
+#define EF_EACH_NODE(S) S(0) S(1) S(2) S(3) S(4) S(5) S(6) S(7) S(8) S(9) S(10) S(11)
+#endif
+#define EF_NODE_VAL(j) ef_node_val(j, b, c2);
+#define EF_NODE_HESS(j) ef_node_hess(j, b, jv, c2, grad, hess);
+
+/* C^2 at x (the screening grid). */
+double ef_value(double x[EF_N])
+{
+    dvec2 b[EF_D + 1];
+    ef_ctrl(x, b);
+    double c2 = 0.0lf;
+    EF_EACH_NODE(EF_NODE_VAL)
+    return c2;
+}
+
+/* C^2, its gradient and its Hessian (row-major EF_N x EF_N) at x. */
+double ef_hess(double x[EF_N], out double grad[EF_N], out double hess[EF_NN])
 {
     dvec2 b[EF_D + 1], jv[8];
     ef_ctrl(x, b);
@@ -354,33 +422,12 @@ double ef_eval(double x[EF_N], bool wg, bool wh, out double grad[EF_N], out doub
     for (int i = 0; i < EF_NN; i++)
         hess[i] = 0.0lf;
     double c2 = 0.0lf;
-    ef_node(0, b, jv, wg, wh, c2, grad, hess);
-    ef_node(1, b, jv, wg, wh, c2, grad, hess);
-    ef_node(2, b, jv, wg, wh, c2, grad, hess);
-    ef_node(3, b, jv, wg, wh, c2, grad, hess);
-    ef_node(4, b, jv, wg, wh, c2, grad, hess);
-    ef_node(5, b, jv, wg, wh, c2, grad, hess);
-#if EF_NQ == 12
-    ef_node(6, b, jv, wg, wh, c2, grad, hess);
-    ef_node(7, b, jv, wg, wh, c2, grad, hess);
-    ef_node(8, b, jv, wg, wh, c2, grad, hess);
-    ef_node(9, b, jv, wg, wh, c2, grad, hess);
-    ef_node(10, b, jv, wg, wh, c2, grad, hess);
-    ef_node(11, b, jv, wg, wh, c2, grad, hess);
-#endif
-    if (wh)
-        for (int i = 0; i < EF_N; i++)
-            for (int k = 0; k < EF_N; k++)
-                if (k < i)
-                    hess[i * EF_N + k] = hess[k * EF_N + i];
+    EF_EACH_NODE(EF_NODE_HESS)
+    for (int i = 0; i < EF_N; i++)
+        for (int k = 0; k < EF_N; k++)
+            if (k < i)
+                hess[i * EF_N + k] = hess[k * EF_N + i];
     return c2;
-}
-
-/* C^2 only (the screening grid). */
-double ef_value(double x[EF_N])
-{
-    double g[EF_N], h[EF_NN];
-    return ef_eval(x, false, false, g, h);
 }
 
 /* Norm of the projected-gradient step x - P(x - g): zero exactly at a KKT point. */
@@ -395,60 +442,61 @@ double ef_pg(double x[EF_N], double g[EF_N])
 }
 
 /*
- * Eigen-decomposition of the symmetric m x m leading block of ef_ja (row stride EF_N) by
- * cyclic Jacobi rotations, at most EF_JACOBI_SWEEPS sweeps: eigenvalues end on ef_ja's
- * diagonal, eigenvectors in ef_jv's columns (ef_opt_eigen). ef_ja must be zero outside the
+ * Eigen-decomposition of the symmetric m x m leading block of ef_ea (row stride EF_N) by
+ * cyclic Jacobi rotations, at most EF_JACOBI_SWEEPS sweeps: eigenvalues end on ef_ea's
+ * diagonal, eigenvectors in ef_ev's columns (ef_opt_eigen). ef_ea must be zero outside the
  * block: a sweep then visits the fixed pairs of the full EF_N x EF_N (straight-line code)
  * and does exactly the CPU's arithmetic on the block. The zero rows and columns add only
  * exact zeros to the sums, pairs (p, q) reaching outside the block have a[p][q] = 0 and are
  * skipped as the CPU skips zeros, and rotations inside the block keep the outside zero.
  * Globals rather than parameters: nothing is copied per rotation.
  */
-double ef_ja[EF_NN], ef_jv[EF_NN];
+double ef_ea[EF_NN], ef_ev[EF_NN];
 
 /* The rotation in the (p, q) plane that zeroes a[p][q] (the smaller angle, for
- * stability), applied to the columns and rows of ef_ja and the columns of ef_jv. */
+ * stability), applied to the columns and rows of ef_ea and the columns of ef_ev. */
 void ef_rot(int p, int q)
 {
-    if (ef_ja[p * EF_N + q] == 0.0lf)
+    if (ef_ea[p * EF_N + q] == 0.0lf)
         return;
     precise double th =
-        (ef_ja[q * EF_N + q] - ef_ja[p * EF_N + p]) / (2.0lf * ef_ja[p * EF_N + q]);
+        (ef_ea[q * EF_N + q] - ef_ea[p * EF_N + p]) / (2.0lf * ef_ea[p * EF_N + q]);
     precise double t = (th >= 0.0lf ? 1.0lf : -1.0lf) / (abs(th) + sqrt(th * th + 1.0lf));
     precise double c = 1.0lf / sqrt(t * t + 1.0lf);
     precise double s = t * c;
     for (int k = 0; k < EF_N; k++) {
-        precise double akp = ef_ja[k * EF_N + p], akq = ef_ja[k * EF_N + q];
+        precise double akp = ef_ea[k * EF_N + p], akq = ef_ea[k * EF_N + q];
         precise double np = c * akp - s * akq, nq = s * akp + c * akq;
-        ef_ja[k * EF_N + p] = np;
-        ef_ja[k * EF_N + q] = nq;
+        ef_ea[k * EF_N + p] = np;
+        ef_ea[k * EF_N + q] = nq;
     }
     for (int k = 0; k < EF_N; k++) {
-        precise double apk = ef_ja[p * EF_N + k], aqk = ef_ja[q * EF_N + k];
+        precise double apk = ef_ea[p * EF_N + k], aqk = ef_ea[q * EF_N + k];
         precise double np = c * apk - s * aqk, nq = s * apk + c * aqk;
-        ef_ja[p * EF_N + k] = np;
-        ef_ja[q * EF_N + k] = nq;
+        ef_ea[p * EF_N + k] = np;
+        ef_ea[q * EF_N + k] = nq;
     }
     for (int k = 0; k < EF_N; k++) {
-        precise double vkp = ef_jv[k * EF_N + p], vkq = ef_jv[k * EF_N + q];
+        precise double vkp = ef_ev[k * EF_N + p], vkq = ef_ev[k * EF_N + q];
         precise double np = c * vkp - s * vkq, nq = s * vkp + c * vkq;
-        ef_jv[k * EF_N + p] = np;
-        ef_jv[k * EF_N + q] = nq;
+        ef_ev[k * EF_N + p] = np;
+        ef_ev[k * EF_N + q] = nq;
     }
 }
 
+/* Diagonalize ef_ea in place, eigenvectors into ef_ev (see above). */
 void ef_eigen()
 {
     for (int i = 0; i < EF_N; i++)
         for (int j = 0; j < EF_N; j++)
-            ef_jv[i * EF_N + j] = i == j ? 1.0lf : 0.0lf;
+            ef_ev[i * EF_N + j] = i == j ? 1.0lf : 0.0lf;
     for (int sweep = 0; sweep < EF_JACOBI_SWEEPS; sweep++) {
         precise double off = 0.0lf, diag = 0.0lf;
         for (int i = 0; i < EF_N; i++) {
-            diag = diag + ef_ja[i * EF_N + i] * ef_ja[i * EF_N + i];
+            diag = diag + ef_ea[i * EF_N + i] * ef_ea[i * EF_N + i];
             for (int j = 0; j < EF_N; j++)
                 if (j > i)
-                    off = off + ef_ja[i * EF_N + j] * ef_ja[i * EF_N + j];
+                    off = off + ef_ea[i * EF_N + j] * ef_ea[i * EF_N + j];
         }
         if (!(off > 1e-32lf * diag))
             break;
@@ -465,117 +513,164 @@ void ef_eigen()
 }
 
 /*
+ * The saddle-free Newton direction at x (steps 2-3 of a CPU iteration): components in the
+ * eps-active set (near a bound with the gradient pushing out) move by -g; the free ones
+ * along the eigenvectors of their Hessian block, each scaled by 1/|lambda| so that negative
+ * curvature is descended, not climbed, and at least EF_NC_STEP along clearly negative
+ * curvature, to leave exact saddles.
+ */
+void ef_direction(double x[EF_N], double g[EF_N], double h[EF_NN], double pg,
+                  out double d[EF_N])
+{
+    const double eps = min(pg, 1e-3lf);
+    bool act[EF_N];
+    int fi[EF_N];
+    int m = 0;
+    for (int i = 0; i < EF_N; i++) {
+        act[i] = (x[i] <= ef_lo[i] + eps && g[i] > 0.0lf) ||
+                 (x[i] >= ef_hi[i] - eps && g[i] < 0.0lf);
+        fi[i] = 0;
+    }
+    for (int i = 0; i < EF_N; i++)
+        if (!act[i]) {
+            fi[m] = i;
+            m++;
+        }
+    /* fi[0..m-1] lists the free DOFs; their Hessian block, zero-padded, is decomposed. */
+    for (int p = 0; p < EF_N; p++)
+        for (int q = 0; q < EF_N; q++)
+            ef_ea[p * EF_N + q] = p < m && q < m ? h[fi[p] * EF_N + fi[q]] : 0.0lf;
+    ef_eigen();
+    double lmax = 0.0lf;
+    for (int p = 0; p < EF_N; p++)
+        if (p < m)
+            lmax = max(lmax, abs(ef_ea[p * EF_N + p]));
+    for (int i = 0; i < EF_N; i++)
+        d[i] = act[i] ? -g[i] : 0.0lf;
+    for (int e = 0; e < EF_N; e++)
+        if (e < m) {
+            const double lam = ef_ea[e * EF_N + e];
+            precise double gv = 0.0lf;
+            for (int p = 0; p < EF_N; p++)
+                if (p < m)
+                    gv = gv + ef_ev[p * EF_N + e] * g[fi[p]];
+            precise double cc = -gv / max(abs(lam), 1e-8lf * (1.0lf + lmax));
+            if (lam < -1e-6lf * (1.0lf + lmax) && abs(cc) < EF_NC_STEP)
+                cc = cc < 0.0lf ? -EF_NC_STEP : EF_NC_STEP;
+            for (int p = 0; p < EF_N; p++)
+                if (p < m) {
+                    precise double dn = d[fi[p]] + cc * ef_ev[p * EF_N + e];
+                    d[fi[p]] = dn;
+                }
+        }
+}
+
+/* The trial point y = P(x + step d) and the quadratic model's change there,
+ * pred = g.dx + dx' H dx / 2 with dx = y - x (negative for descent). */
+double ef_trial(double x[EF_N], double g[EF_N], double h[EF_NN], double d[EF_N], double step,
+                out double y[EF_N])
+{
+    precise double dx[EF_N];
+    precise double lin = 0.0lf, quad = 0.0lf;
+    for (int i = 0; i < EF_N; i++) {
+        y[i] = ef_clamp(x[i] + step * d[i], ef_lo[i], ef_hi[i]);
+        dx[i] = y[i] - x[i];
+        lin = lin + g[i] * dx[i];
+    }
+    for (int i = 0; i < EF_N; i++)
+        for (int j = 0; j < EF_N; j++)
+            quad = quad + dx[i] * h[i * EF_N + j] * dx[j];
+    precise double pred = lin + 0.5lf * quad;
+    return pred;
+}
+
+/*
  * Projected saddle-free Newton from x (clamped into the box first); x becomes the end point
- * (ef_opt_local). Returns C^2 there; conv is true when the start ended stationary: the
- * projected gradient met tol, or the Newton model promised less than the rounding of C^2
- * and the gradient could not be halved any more.
+ * (ef_opt_local, docs/optimizer.md step 3). Returns C^2 there; conv is true when the start
+ * ended stationary: the projected gradient met tol, or the Newton model promised less than
+ * the rounding of C^2 and the gradient could not be halved any more.
+ *
+ * The CPU's two nested loops (iterations, backtracking) are one loop here with one
+ * evaluation per pass, of the start point or of a trial point, and that evaluation always
+ * includes the Hessian: an accepted trial's Hessian is the next iteration's. One evaluation
+ * site keeps the compiled shader small (the front end inlines every call), and the loop
+ * count low for llvmpipe. The values are the CPU's: the Hessian call there recomputes the
+ * gradient at the same point, with the same bits.
  */
 double ef_local(inout double x[EF_N], out bool conv)
 {
-    double g[EF_N], hd[EF_NN];
+    double f = 0.0lf, pg = 0.0lf, pred = 0.0lf, step = 1.0lf;
+    double g[EF_N], h[EF_NN], d[EF_N], y[EF_N];
+    bool first = true, done = false;
+    int it = 0, ls = 0;
     conv = false;
-    for (int i = 0; i < EF_N; i++)
+    for (int i = 0; i < EF_N; i++) {
         x[i] = ef_clamp(x[i], ef_lo[i], ef_hi[i]);
-    precise double f = ef_eval(x, true, false, g, hd);
-    precise double pg = ef_finite(f) ? ef_pg(x, g) : ef_inf();
-    int it;
-    for (it = 0; it < ef_max_iter && ef_finite(f); it++) {
-        if (pg <= ef_tol * max(1.0lf, f)) {
-            conv = true;
-            break;
-        }
-        /* eps-active set: near a bound with the gradient pushing out; those move by -g.
-         * fi[0..m-1] lists the free DOFs. */
-        const double eps = min(pg, 1e-3lf);
-        bool act[EF_N];
-        int fi[EF_N];
-        int m = 0;
-        for (int i = 0; i < EF_N; i++) {
-            act[i] = (x[i] <= ef_lo[i] + eps && g[i] > 0.0lf) ||
-                     (x[i] >= ef_hi[i] - eps && g[i] < 0.0lf);
-            fi[i] = 0;
-        }
-        for (int i = 0; i < EF_N; i++)
-            if (!act[i]) {
-                fi[m] = i;
-                m++;
-            }
-
-        /* Exact Hessian; its free block, zero-padded to EF_N x EF_N, eigen-decomposed. */
-        double h[EF_NN];
-        precise double d[EF_N];
-        ef_eval(x, true, true, g, h);
-        for (int p = 0; p < EF_N; p++)
-            for (int q = 0; q < EF_N; q++)
-                ef_ja[p * EF_N + q] = p < m && q < m ? h[fi[p] * EF_N + fi[q]] : 0.0lf;
-        ef_eigen();
-        double lmax = 0.0lf;
-        for (int p = 0; p < EF_N; p++)
-            if (p < m)
-                lmax = max(lmax, abs(ef_ja[p * EF_N + p]));
-        /* Saddle-free Newton on the free set: each eigen-direction scaled by 1/|lambda|, so
-         * negative curvature is descended, not climbed; at least EF_NC_STEP along clearly
-         * negative curvature, to leave exact saddles. */
-        for (int i = 0; i < EF_N; i++)
-            d[i] = act[i] ? -g[i] : 0.0lf;
-        for (int e = 0; e < EF_N; e++)
-            if (e < m) {
-                const double lam = ef_ja[e * EF_N + e];
-                precise double gv = 0.0lf;
-                for (int p = 0; p < EF_N; p++)
-                    if (p < m)
-                        gv = gv + ef_jv[p * EF_N + e] * g[fi[p]];
-                precise double cc = -gv / max(abs(lam), 1e-8lf * (1.0lf + lmax));
-                if (lam < -1e-6lf * (1.0lf + lmax) && abs(cc) < EF_NC_STEP)
-                    cc = cc < 0.0lf ? -EF_NC_STEP : EF_NC_STEP;
-                for (int p = 0; p < EF_N; p++)
-                    if (p < m)
-                        d[fi[p]] = d[fi[p]] + cc * ef_jv[p * EF_N + e];
-            }
-
-        /* Projected backtracking on the quadratic model's change pred. */
-        double xn[EF_N], gn[EF_N];
-        precise double fn = f, pgn = pg, step = 1.0lf;
-        bool accepted = false, floor_reached = false;
-        for (int ls = 0; ls < EF_LS_MAX && !accepted && !floor_reached; ls++, step *= 0.5lf) {
-            precise double dx[EF_N];
-            precise double lin = 0.0lf, quad = 0.0lf;
-            for (int i = 0; i < EF_N; i++) {
-                xn[i] = ef_clamp(x[i] + step * d[i], ef_lo[i], ef_hi[i]);
-                dx[i] = xn[i] - x[i];
-                lin = lin + g[i] * dx[i];
-            }
-            for (int i = 0; i < EF_N; i++)
-                for (int j = 0; j < EF_N; j++)
-                    quad = quad + dx[i] * h[i * EF_N + j] * dx[j];
-            precise double pred = lin + 0.5lf * quad;
-            fn = ef_eval(xn, true, false, gn, hd);
-            if (!ef_finite(fn)) {
-                /* try a shorter step */
+        y[i] = x[i];
+        g[i] = 0.0lf;
+        d[i] = 0.0lf;
+    }
+    for (int i = 0; i < EF_NN; i++)
+        h[i] = 0.0lf;
+    /* Each pass evaluates y and then either takes it as the current point (the start, or an
+     * accepted trial) or halves the step; at most 1 + max_iter * EF_LS_MAX passes. */
+    const int max_pass = 1 + ef_max_iter * EF_LS_MAX;
+    for (int pass = 0; pass < max_pass && !done; pass++) {
+        double gy[EF_N], hy[EF_NN];
+        const double fy = ef_hess(y, gy, hy);
+        bool take = first;
+        if (!first) {
+            /* Trial ls of the backtracking (step 4). */
+            bool accepted = false, floor_reached = false;
+            if (!ef_finite(fy)) {
+                /* a shorter step is tried */
             } else if (ls == 0 && abs(pred) <= EF_NOISE * abs(f)) {
                 /* Below the rounding of C^2 values cannot judge the step; the gradient
                  * can: take it while it halves the projected gradient, else stop here. */
-                pgn = ef_pg(xn, gn);
                 precise double lim = f + EF_NOISE * abs(f);
-                accepted = fn <= lim && pgn < 0.5lf * pg;
+                accepted = fy <= lim && ef_pg(y, gy) < 0.5lf * pg;
                 floor_reached = !accepted;
             } else {
                 precise double lim = f + 1e-4lf * pred;
-                accepted = pred < 0.0lf && fn <= lim;
-                if (accepted)
-                    pgn = ef_pg(xn, gn);
+                accepted = pred < 0.0lf && fy <= lim;
+            }
+            if (accepted) {
+                take = true;
+                it++;
+            } else if (floor_reached) {
+                conv = true; /* stationary to working precision */
+                done = true;
+            } else if (ls + 1 >= EF_LS_MAX) {
+                done = true; /* no acceptable step: the start ends unconverged */
+            } else {
+                ls++;
+                step *= 0.5lf;
+                pred = ef_trial(x, g, h, d, step, y);
             }
         }
-        if (floor_reached)
-            conv = true;
-        if (!accepted)
-            break;
-        for (int i = 0; i < EF_N; i++) {
-            x[i] = xn[i];
-            g[i] = gn[i];
+        if (take) {
+            /* y is the current point: the top of a CPU iteration (steps 1-3). */
+            for (int i = 0; i < EF_N; i++) {
+                x[i] = y[i];
+                g[i] = gy[i];
+            }
+            for (int i = 0; i < EF_NN; i++)
+                h[i] = hy[i];
+            f = fy;
+            pg = ef_finite(f) ? ef_pg(x, g) : ef_inf();
+            first = false;
+            if (!(it < ef_max_iter && ef_finite(f))) {
+                done = true;
+            } else if (pg <= ef_tol * max(1.0lf, f)) {
+                conv = true;
+                done = true;
+            } else {
+                ef_direction(x, g, h, pg, d);
+                ls = 0;
+                step = 1.0lf;
+                pred = ef_trial(x, g, h, d, step, y);
+            }
         }
-        f = fn;
-        pg = pgn;
     }
     if (it == ef_max_iter && pg <= ef_tol * max(1.0lf, f))
         conv = true;
@@ -739,9 +834,9 @@ void main()
     ef_lo[EF_I1] = ef_x1_min;
     ef_hi[EF_I1] = ef_x1_max;
 
-    /* Screening grid: all values, then the candidates in index order. The loops run over
-     * the outer axes with axis 0 written out (EF_GRID_AXIS0 points per iteration), to keep
-     * llvmpipe's loop-iteration count down. */
+    /* Screening grid: all values, then the candidates in index order, a row of axis 0 per
+     * loop pass (fewer loop iterations for llvmpipe's count; the values' loop stays one
+     * point per pass: the code of a value is larger, and compile time matters more). */
 #if EF_KIND == 1
 #define EF_GRID_ROW(F, r) F(r); F(r + 1); F(r + 2); F(r + 3); F(r + 4); F(r + 5); F(r + 6); F(r + 7)
 #define EF_GRID_AXIS0 8
@@ -749,9 +844,8 @@ void main()
 #define EF_GRID_ROW(F, r) F(r); F(r + 1); F(r + 2); F(r + 3); F(r + 4)
 #define EF_GRID_AXIS0 5
 #endif
-    for (int r = 0; r < EF_GRID_TOTAL; r += EF_GRID_AXIS0) {
-        EF_GRID_ROW(ef_grid_eval, r);
-    }
+    for (int i = 0; i < EF_GRID_TOTAL; i++)
+        ef_grid_eval(i);
     for (int q = 0; q < EF_KEEP; q++) {
         ef_keep[q] = 0;
         ef_keepv[q] = 0.0lf;

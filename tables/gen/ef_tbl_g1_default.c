@@ -4,7 +4,7 @@
  * regenerate it from the .eft file instead of editing: hand edits bypass the
  * file's CRC and the parser's value checks.
  *
- * Table: G1 cubic, symmetry G1 fold (u, v), 4753 nodes x 2 DOFs; file CRC-32 d84fa694.
+ * Table: G1 cubic, symmetry G1 fold (u, v), 4753 nodes x 2 DOFs; file CRC-32 80bb74b2.
  * Axis 0: [0, 1.5707963267948966], 49 nodes.
  * Axis 1: [0, 3.1415926535897931], 97 nodes.
  */
@@ -2393,8 +2393,8 @@ static const float ef_tbl_g1_default_data[9506] = {
 };
 
 static const char ef_tbl_g1_default_provenance[] =
-    "evenfeed 0.1.0 table build --backend cpu --kind g1 --symmetry fo"
-    "ld --nodes 49x97 --x1-min 0.1 --x1-max 10";
+    "evenfeed 0.1.0 table build --backend gl --kind g1 --symmetry fol"
+    "d --nodes 49x97 --x1-min 0.1 --x1-max 10";
 
 const ef_table_t ef_tbl_g1_default = {
     .kind = 1u,
@@ -2414,5 +2414,5 @@ const ef_table_t ef_tbl_g1_default = {
     },
     .data = ef_tbl_g1_default_data,
     .provenance = ef_tbl_g1_default_provenance,
-    .provenance_len = 105u,
+    .provenance_len = 104u,
 };
