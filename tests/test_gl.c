@@ -4,13 +4,13 @@
  * configurations. On CI this runs on llvmpipe; with no headless GL at all it is skipped
  * (exit 77), saying why.
  *
- * Criteria (docs/optimizer.md, "GPU port"): C within 1e-4 relative everywhere; DOFs within
- * 1e-3 relative where no DOF is on a bound, except where the two picked different optima
- * whose C^2 tie within 1e-9 (the CPU's own tie window: either is "the" optimum); same
- * at-bound bits where the DOFs are compared; no configuration handed back to the CPU
- * (which would hide a shader fault behind the fallback). The shader does the CPU's
- * arithmetic in the CPU's order, so on llvmpipe the results are in fact bit-identical;
- * the test prints how many, but does not require it of other drivers.
+ * Criteria (docs/optimizer.md, "GPU port"): C within 1e-4 relative everywhere. Unless the
+ * two picked different optima whose C^2 tie within 1e-9 (the CPU's own tie window: either
+ * is "the" optimum): the same at-bound bits, and DOFs within 1e-3 relative where no DOF is
+ * on a bound. Converged flags differ in at most 5 % of configurations. No configuration is
+ * handed back to the CPU (that would hide a shader fault behind the fallback). The shader
+ * does the CPU's arithmetic in the CPU's order, so on llvmpipe the results are in fact
+ * bit-identical; the test prints how many, but does not require it of other drivers.
  */
 #include <math.h>
 #include <stdio.h>
@@ -19,8 +19,8 @@
 #include "ef_test.h"
 #include "evenfeed/gpu/ef_gl.h"
 
-#define N_G1 200 /* full circle, plus the fixed cases below */
-#define N_G2 40  /* alpha, beta in [-pi/2, pi/2], kappa in [-2, 2] (the default G2 table) */
+#define N_G1  200 /* full circle, plus the fixed cases below */
+#define N_G2  40  /* alpha, beta in [-pi/2, pi/2], kappa in [-2, 2] (the default G2 table) */
 #define MAX_N (N_G1 + 8)
 
 /* Outcome counts of one comparison run. */
@@ -85,8 +85,8 @@ static void compare(ef_gl_t *gl, int kind, const double *cfg, int n, const ef_re
             st->max_rel_c = fmax(st->max_rel_c, rel_c);
         if (!(dc <= 1e-4 * r.C + 1e-12)) { /* the straight line has C = 0 */
             EF_CHECK(0);
-            fprintf(stderr, "%s %d (%.17g, %.17g, %.17g, %.17g): C gpu %.17g cpu %.17g\n", label,
-                    i, c[0], c[1], c[2], c[3], g[4], r.C);
+            fprintf(stderr, "%s %d (%.17g, %.17g, %.17g, %.17g): C gpu %.17g cpu %.17g\n", label, i,
+                    c[0], c[1], c[2], c[3], g[4], r.C);
         }
 
         double rel_dof = 0.0;
@@ -106,9 +106,10 @@ static void compare(ef_gl_t *gl, int kind, const double *cfg, int n, const ef_re
         st->max_rel_dof = fmax(st->max_rel_dof, rel_dof);
         if (!(rel_dof <= 1e-3)) {
             EF_CHECK(0);
-            fprintf(stderr, "%s %d (%.17g, %.17g, %.17g, %.17g): DOFs gpu %.10g %.10g %.10g "
-                    "%.10g, cpu %.10g %.10g %.10g %.10g (C %.10g / %.10g)\n", label, i, c[0],
-                    c[1], c[2], c[3], g[0], g[1], g[2], g[3], r.dof[0], r.dof[1],
+            fprintf(stderr,
+                    "%s %d (%.17g, %.17g, %.17g, %.17g): DOFs gpu %.10g %.10g %.10g "
+                    "%.10g, cpu %.10g %.10g %.10g %.10g (C %.10g / %.10g)\n",
+                    label, i, c[0], c[1], c[2], c[3], g[0], g[1], g[2], g[3], r.dof[0], r.dof[1],
                     nd > 2 ? r.dof[2] : 0.0, nd > 3 ? r.dof[3] : 0.0, g[4], r.C);
         }
     }
@@ -138,10 +139,10 @@ int main(void)
 
     /* G1 cubic over the full circle, after fixed cases: the published optimum, the straight
      * line (C = 0), a node where the best basin sits on the x1 bound next to a close
-     * interior one, a reversal-symmetric pair of optima, and tangents along the chord
-     * pointing backwards. */
-    static const double fixed_g1[][2] = {{M_PI / 2, -M_PI / 2}, {0.0, 0.0}, {2.1271, -1.1454},
-                                         {0.6, -0.6}, {M_PI, M_PI}, {-3.0, 2.5}};
+     * interior one, a symmetric arc, and tangents pointing backwards (both x1 on the
+     * bound). */
+    static const double fixed_g1[][2] = {{M_PI / 2, -M_PI / 2}, {0.0, 0.0},   {2.1271, -1.1454},
+                                         {0.6, -0.6},           {M_PI, M_PI}, {-3.0, 2.5}};
     const int nf = (int)(sizeof fixed_g1 / sizeof fixed_g1[0]);
     for (int i = 0; i < N_G1 + nf; i++) {
         double *c = cfg + 4 * i;

@@ -45,7 +45,7 @@
  * the Jacobi rotations of a sweep one call per pair on a zero-padded fixed-size block, the
  * grid's neighbour test a row of axis 0 per pass), and each start's Newton iterations and
  * backtracking share one loop with one evaluation per pass. What remains: grid points,
- * starts, evaluations, Jacobi sweeps; a G2 solve takes 9,000 to 12,000 loop iterations per
+ * starts, evaluations, Jacobi sweeps; a G2 solve takes at most about 12,000 loop iterations per
  * 8 invocations (docs/optimizer.md, "GPU port"). The loop over the starts runs one extra,
  * empty pass at the end; on llvmpipe that pass is reached only if no loop was cut, so an
  * exhausted run is reported ([7] = -1) instead of returned as a wrong optimum. Other
@@ -777,6 +777,16 @@ void ef_grid_pick(int i)
         ef_nk++;
 }
 
+/* A row of axis 0, for the candidates' loop: fewer loop passes for llvmpipe's count. (The
+ * values' loop stays one point per pass: a value is more code, and compile time counts.) */
+#if EF_KIND == 1
+#define EF_GRID_ROW(F, r) F(r); F(r + 1); F(r + 2); F(r + 3); F(r + 4); F(r + 5); F(r + 6); F(r + 7)
+#define EF_GRID_AXIS0 8
+#else
+#define EF_GRID_ROW(F, r) F(r); F(r + 1); F(r + 2); F(r + 3); F(r + 4)
+#define EF_GRID_AXIS0 5
+#endif
+
 /*
  * Start number k, in the CPU's order: the fixed starts (x1 in {0.3, 1, 2} at each end,
  * times x2 in {-2, 0, 2} at each end for G2), the 7 starts with an x1 on its lower bound,
@@ -834,16 +844,7 @@ void main()
     ef_lo[EF_I1] = ef_x1_min;
     ef_hi[EF_I1] = ef_x1_max;
 
-    /* Screening grid: all values, then the candidates in index order, a row of axis 0 per
-     * loop pass (fewer loop iterations for llvmpipe's count; the values' loop stays one
-     * point per pass: the code of a value is larger, and compile time matters more). */
-#if EF_KIND == 1
-#define EF_GRID_ROW(F, r) F(r); F(r + 1); F(r + 2); F(r + 3); F(r + 4); F(r + 5); F(r + 6); F(r + 7)
-#define EF_GRID_AXIS0 8
-#else
-#define EF_GRID_ROW(F, r) F(r); F(r + 1); F(r + 2); F(r + 3); F(r + 4)
-#define EF_GRID_AXIS0 5
-#endif
+    /* Screening grid: all values, then the candidates in index order. */
     for (int i = 0; i < EF_GRID_TOTAL; i++)
         ef_grid_eval(i);
     for (int q = 0; q < EF_KEEP; q++) {
