@@ -421,11 +421,7 @@ static int ef_gl_solve_rows(void *ctx, ef_tfile_t *t, uint32_t row_begin, uint32
     for (uint32_t i = 0; i < n; i++)
         ef_build_node_config(t, first + i, cfg + 4 * (size_t)i);
     ef_ref_opts_t o;
-    ef_ref_opts_default(&o);
-    o.x1_min = t->x1_min;
-    o.x1_max = t->x1_max;
-    if (t->view.kind == EF_TABLE_G2_QUINTIC)
-        o.x2_max = t->x2_max;
+    ef_build_ref_opts(t, &o);
     int rc = ef_gl_solve(gl, t->view.kind, cfg, n, &o, res, m);
     if (rc == EF_OK)
         for (uint32_t i = 0; i < n; i++) {

@@ -63,17 +63,6 @@ bad:
     return 0;
 }
 
-/* Firmware end data from the double data (the table path runs in float, as a drive would). */
-static ef_endpoint_t ef_fw_end(const ef_dend_t *e)
-{
-    ef_endpoint_t f;
-    f.p = ef_v3((float)e->p.x, (float)e->p.y, (float)e->p.z);
-    f.t = ef_v3((float)e->t.x, (float)e->t.y, (float)e->t.z);
-    f.n = ef_v3((float)e->n.x, (float)e->n.y, (float)e->n.z);
-    f.kappa = (float)e->kappa;
-    return f;
-}
-
 /* Read options into a; returns EF_OK or an exit status already reported. */
 static int ef_segment_parse(int argc, char **argv, ef_seg_args_t *a, int *optimize, int *json,
                             const char **table_path)
@@ -176,7 +165,7 @@ static void ef_segment_print(const ef_seg_args_t *a, const char *source, const d
                              int ndof, const ef_dvec3_t *b, int degree, double C,
                              uint32_t clamp, const ef_norm_t *nm, int json)
 {
-    ef_endpoint_t f0 = ef_fw_end(&a->e0), f1 = ef_fw_end(&a->e1);
+    ef_endpoint_t f0 = ef_ref_end_to_fw(&a->e0), f1 = ef_ref_end_to_fw(&a->e1);
     float twist = ef_norm_twist(nm, &f0, &f1);
     static const char *names_g1[] = {"x1_0", "x1_1"};
     static const char *names_g2[] = {"x1_0", "x2_0", "x1_1", "x2_1"};
@@ -269,7 +258,7 @@ int ef_cmd_segment(int argc, char **argv)
         return rc;
     int g2 = a.kind == EF_REF_G2_QUINTIC;
     /* One validation for both paths: the firmware's, on the data a drive would get. */
-    ef_endpoint_t f0 = ef_fw_end(&a.e0), f1 = ef_fw_end(&a.e1);
+    ef_endpoint_t f0 = ef_ref_end_to_fw(&a.e0), f1 = ef_ref_end_to_fw(&a.e1);
     ef_norm_t nm;
     rc = ef_normalize(&f0, &f1, g2, &nm);
     if (rc != EF_OK)

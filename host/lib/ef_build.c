@@ -52,6 +52,16 @@ static float ef_build_clampf(double v, double lo, double hi)
     return f;
 }
 
+/* The table's bounds on top of the reference defaults. */
+void ef_build_ref_opts(const ef_tfile_t *t, ef_ref_opts_t *o)
+{
+    ef_ref_opts_default(o);
+    o->x1_min = t->x1_min;
+    o->x1_max = t->x1_max;
+    if (t->view.kind == EF_TABLE_G2_QUINTIC)
+        o->x2_max = t->x2_max;
+}
+
 /* x1 DOFs between the x1 bounds, x2 DOFs within +-x2_max. */
 void ef_build_store(ef_tfile_t *t, uint32_t node, const double *dof)
 {
@@ -74,11 +84,7 @@ static int ef_build_node(ef_tfile_t *t, uint32_t node, const double *warm, doubl
     ef_dend_t e0, e1;
     ef_ref_config(cfg[0], cfg[1], g2 ? cfg[2] : 0, g2 ? cfg[3] : 0, &e0, &e1);
     ef_ref_opts_t o;
-    ef_ref_opts_default(&o);
-    o.x1_min = t->x1_min;
-    o.x1_max = t->x1_max;
-    if (g2)
-        o.x2_max = t->x2_max;
+    ef_build_ref_opts(t, &o);
     o.warm = warm;
     ef_ref_result_t r;
     ef_msg_t sub = {{0}};

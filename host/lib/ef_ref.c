@@ -429,3 +429,14 @@ double ef_ref_objective(ef_ref_kind_t kind, const ef_dend_t *e0, const ef_dend_t
 {
     return ef_ref_objective_hess(kind, e0, e1, dof, grad, NULL);
 }
+
+/* Rounded to float32 component by component, as a firmware would receive it. */
+ef_endpoint_t ef_ref_end_to_fw(const ef_dend_t *e)
+{
+    ef_endpoint_t f;
+    f.p = ef_v3((float)e->p.x, (float)e->p.y, (float)e->p.z);
+    f.t = ef_v3((float)e->t.x, (float)e->t.y, (float)e->t.z);
+    f.n = ef_v3((float)e->n.x, (float)e->n.y, (float)e->n.z);
+    f.kappa = (float)e->kappa;
+    return f;
+}

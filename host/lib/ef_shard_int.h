@@ -7,6 +7,7 @@
 #include <stddef.h>
 #include <stdint.h>
 #include "evenfeed/host/ef_build.h"
+#include "ef_file_int.h"
 
 /* Longest backend name a spec record holds. */
 #define EF_SPEC_MAX_BACKEND 31u
@@ -75,14 +76,5 @@ int ef_efile_get_header(const char *path, const uint8_t *buf, size_t len,
 size_t ef_values_check(const ef_spec_rec_t *s, const uint8_t *raw, const float *vals,
                        size_t n);
 
-/* Whole-file read, refusing files larger than max bytes (EF_ERR_TBL_SIZE). */
-int ef_file_read(const char *path, size_t max, uint8_t **buf, size_t *len, ef_msg_t *m);
-/* Write a file atomically: temporary file beside it, fsync, rename, directory sync. */
-int ef_file_write_atomic(const char *path, const uint8_t *buf, size_t len, ef_msg_t *m);
-/* fsync the directory holding path (best effort). */
-void ef_file_sync_dir(const char *path);
-/* EF_OK if a file can be created or replaced at path: its directory is writable and path is
- * not a directory. */
-int ef_file_check_writable(const char *path, const char *what, ef_msg_t *m);
 
 #endif /* EF_SHARD_INT_H */

@@ -17,6 +17,7 @@
 #include <unistd.h>
 
 #include "evenfeed/host/ef_tfile.h"
+#include "ef_file_int.h"
 
 #define EF_TF_PAD8(n) (((n) + 7u) & ~(uint64_t)7u)
 /* Largest file any valid table can be: reading stops before allocating more than this. */
@@ -495,108 +496,21 @@ int ef_tfile_serialize(const ef_tfile_t *t, uint8_t **blob, size_t *len, ef_msg_
     return ef_tf_validate(&h, t->values, "table", blob, len, &view, m);
 }
 
-/* write(2) until done, retrying interrupted and short writes. */
-static int ef_tf_write_all(int fd, const uint8_t *p, size_t n)
-{
-    while (n > 0) {
-        ssize_t w = write(fd, p, n);
-        if (w < 0) {
-            if (errno == EINTR) {
-                continue;
-            }
-            return -1;
-        }
-        p += w;
-        n -= (size_t)w;
-    }
-    return 0;
-}
 
-/* Make the rename durable; some file systems refuse fsync on directories, which only
- * weakens durability, never atomicity, so that is not an error. */
-static void ef_tf_sync_dir(const char *path)
-{
-    const char *slash = strrchr(path, '/');
-    char *dir;
-    int fd;
-
-    if (slash == NULL) {
-        dir = strdup(".");
-    } else if (slash == path) {
-        dir = strdup("/");
-    } else {
-        dir = strndup(path, (size_t)(slash - path));
-    }
-    if (dir == NULL) {
-        return;
-    }
-    fd = open(dir, O_RDONLY | O_CLOEXEC);
-    if (fd >= 0) {
-        (void)fsync(fd);
-        (void)close(fd);
-    }
-    free(dir);
-}
 
 /* Readers see the old file or the complete new one: the image goes to a temporary file
  * beside PATH (same file system, so rename is atomic), is flushed, then renamed over. */
 int ef_tfile_write(const ef_tfile_t *t, const char *path, ef_msg_t *m)
 {
-    static atomic_uint counter; /* distinct names for concurrent writers in one process */
     uint8_t *blob = NULL;
-    size_t len = 0, tmp_size;
-    char *tmp;
-    int rc, fd = -1, tries, err;
-
+    size_t len = 0;
     if (t == NULL || path == NULL || path[0] == '\0') {
         return ef_fail(m, EF_ERR_ARG, "ef_tfile_write: NULL argument or empty path");
     }
-    rc = ef_tfile_serialize(t, &blob, &len, m);
-    if (rc != EF_OK) {
-        return rc;
+    int rc = ef_tfile_serialize(t, &blob, &len, m);
+    if (rc == EF_OK) {
+        rc = ef_file_write_atomic(path, blob, len, m);
     }
-    tmp_size = strlen(path) + 48;
-    tmp = malloc(tmp_size);
-    if (tmp == NULL) {
-        free(blob);
-        return ef_fail(m, EF_ERR_NOMEM, "%s: out of memory", path);
-    }
-    /* O_EXCL with a fresh name: never clobbers another writer's temporary file, and the
-     * 0666 mode lets the umask decide permissions as for any new file. */
-    for (tries = 0; tries < 100 && fd < 0; tries++) {
-        snprintf(tmp, tmp_size, "%s.tmp.%ld.%u", path, (long)getpid(),
-                 atomic_fetch_add(&counter, 1u));
-        fd = open(tmp, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
-        if (fd < 0 && errno != EEXIST) {
-            break;
-        }
-    }
-    if (fd < 0) {
-        err = errno;
-        rc = ef_fail(m, EF_ERR_IO, "%s: cannot create temporary file %s: %s", path, tmp,
-                     strerror(err));
-        free(tmp);
-        free(blob);
-        return rc;
-    }
-    if (ef_tf_write_all(fd, blob, len) != 0 || fsync(fd) != 0) {
-        err = errno;
-        (void)close(fd);
-        (void)unlink(tmp);
-        rc = ef_fail(m, EF_ERR_IO, "%s: write %s: %s", path, tmp, strerror(err));
-    } else if (close(fd) != 0) {
-        err = errno;
-        (void)unlink(tmp);
-        rc = ef_fail(m, EF_ERR_IO, "%s: close %s: %s", path, tmp, strerror(err));
-    } else if (rename(tmp, path) != 0) {
-        err = errno;
-        (void)unlink(tmp);
-        rc = ef_fail(m, EF_ERR_IO, "%s: rename from %s: %s", path, tmp, strerror(err));
-    } else {
-        ef_tf_sync_dir(path);
-        rc = EF_OK;
-    }
-    free(tmp);
     free(blob);
     return rc;
 }

@@ -54,17 +54,6 @@ static ef_dvec3_t ef_sphere(uint64_t *s)
     return (ef_dvec3_t){r * cos(ph), r * sin(ph), z};
 }
 
-/* Firmware end data (float) from double end data. */
-static ef_endpoint_t ef_to_fw(const ef_dend_t *e)
-{
-    ef_endpoint_t f;
-    f.p = ef_v3((float)e->p.x, (float)e->p.y, (float)e->p.z);
-    f.t = ef_v3((float)e->t.x, (float)e->t.y, (float)e->t.z);
-    f.n = ef_v3((float)e->n.x, (float)e->n.y, (float)e->n.z);
-    f.kappa = (float)e->kappa;
-    return f;
-}
-
 /* One configuration: the firmware's segment, its C in double, and the reference optimum. */
 static int ef_verify_one(ef_verify_job_t *j, uint32_t i)
 {
@@ -89,7 +78,7 @@ static int ef_verify_one(ef_verify_job_t *j, uint32_t i)
         }
         ef_ref_config(cfg[0], cfg[1], g2 ? cfg[2] : 0, g2 ? cfg[3] : 0, &e0, &e1);
     }
-    ef_endpoint_t f0 = ef_to_fw(&e0), f1 = ef_to_fw(&e1);
+    ef_endpoint_t f0 = ef_ref_end_to_fw(&e0), f1 = ef_ref_end_to_fw(&e1);
     ef_seg_t seg;
     int rc = g2 ? ef_seg_g2_quintic(t, &f0, &f1, &seg) : ef_seg_g1_cubic(t, &f0, &f1, &seg);
     if (rc != EF_OK)

@@ -12,6 +12,7 @@
 #define EF_BUILD_H
 
 #include <stdint.h>
+#include "evenfeed/host/ef_ref.h"
 #include "evenfeed/host/ef_tfile.h"
 
 #ifdef __cplusplus
@@ -50,6 +51,10 @@ typedef struct {
  * the branch continuous with the inside.
  */
 void ef_build_node_config(const ef_tfile_t *t, uint32_t node, double cfg[EF_TABLE_MAX_AXES]);
+
+/** @brief Reference optimizer settings with the table's bounds (x1_min, x1_max, and x2_max
+ *  for G2), the rest at their defaults; what both backends optimize under. */
+void ef_build_ref_opts(const ef_tfile_t *t, ef_ref_opts_t *o);
 
 /** @brief Store DOFs (per unit chord, double) at a node as float32, kept inside the
  *  table's bounds (float rounding could otherwise cross them). */

@@ -14,6 +14,7 @@
 #ifndef EF_REF_H
 #define EF_REF_H
 
+#include "evenfeed/ef_endpoint.h"
 #include "evenfeed/host/ef_host.h"
 
 #ifdef __cplusplus
@@ -38,6 +39,9 @@ typedef enum {
 
 #define EF_REF_MAX_DOF 5
 #define EF_REF_MAX_DEGREE 7
+
+/** The same end data in the firmware's float32 form (what a drive would be given). */
+ef_endpoint_t ef_ref_end_to_fw(const ef_dend_t *e);
 
 /** Number of DOFs of a kind (2, 4, 5), or 0 for an unknown kind. */
 int ef_ref_ndof(ef_ref_kind_t kind);
