@@ -16,6 +16,8 @@ const char *ef_err_str(int err)
     case EF_ERR_NOCONV: return "optimizer did not converge";
     case EF_ERR_IO: return "I/O error";
     case EF_ERR_NOMEM: return "out of memory";
+    case EF_ERR_GCODE: return "malformed or unsupported G-code";
+    case EF_ERR_REVERSAL: return "corner reverses the path: exact stop at the vertex";
     case EF_ERR_TBL_TRUNCATED: return "table truncated";
     case EF_ERR_TBL_MAGIC: return "not an evenfeed table (bad magic)";
     case EF_ERR_TBL_VERSION: return "unsupported table format version";

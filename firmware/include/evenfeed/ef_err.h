@@ -27,6 +27,9 @@ typedef enum {
     EF_ERR_NOCONV = -8,       /**< optimizer did not converge (host) */
     EF_ERR_IO = -9,           /**< file or device I/O failed (host) */
     EF_ERR_NOMEM = -10,       /**< allocation failed (host only; firmware never allocates) */
+    EF_ERR_GCODE = -11,       /**< malformed or unsupported G-code (host; message has line:col) */
+    EF_ERR_REVERSAL = -12,    /**< a corner turns back on itself (near 180 degrees): no blend;
+                                   the defined safe behaviour is an exact stop at the vertex */
     EF_ERR_TBL_TRUNCATED = -20,  /**< table blob shorter than its header says */
     EF_ERR_TBL_MAGIC = -21,      /**< not a table file (magic bytes) */
     EF_ERR_TBL_VERSION = -22,    /**< format version not supported */
