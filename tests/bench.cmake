@@ -28,6 +28,6 @@ if(NOT EF_SANITIZE)
 
   add_test(NAME fw_constant_time
            COMMAND sh ${CMAKE_CURRENT_SOURCE_DIR}/bench/ct_bench.sh $<TARGET_FILE:bench_ct>
-                   2000 g1 g2)
+                   2000 g1 g2 blend)
   set_tests_properties(fw_constant_time PROPERTIES SKIP_RETURN_CODE 77 TIMEOUT 300)
 endif()

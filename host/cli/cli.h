@@ -20,5 +20,6 @@ void ef_cli_json_num(FILE *f, double v);
 int ef_cmd_segment(int argc, char **argv);
 int ef_cmd_table(int argc, char **argv);
 int ef_cmd_demo(int argc, char **argv);
+int ef_cmd_gcode(int argc, char **argv);
 
 #endif

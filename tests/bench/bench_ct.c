@@ -8,7 +8,7 @@
  * ct_bench.sh runs it and reduces the dumps to min / median / max. Outside valgrind the
  * client requests are no-ops and the program only checks that every call succeeds.
  *
- * Usage: bench_ct g1|g2 N [dump|nodump] [seed]
+ * Usage: bench_ct g1|g2|blend N [dump|nodump] [seed]
  *   nodump leaves out the client requests, so a single end-of-run dump holds the sum over
  *   all calls: ct_bench.sh --verify compares it with the sum of the per-call dumps.
  *
@@ -34,6 +34,7 @@
 #define CALLGRIND_DUMP_STATS ((void)0)
 #endif
 #include "ef_test.h"
+#include "evenfeed/ef_blend.h"
 #include "evenfeed/ef_err.h"
 #include "evenfeed/ef_seg.h"
 #include "evenfeed/ef_table.h"
@@ -298,14 +299,73 @@ static void make_config(unsigned long long *rs, int kind, int g2, ef_endpoint_t 
     }
 }
 
-/* Parse "g1"/"g2" and N, build the table, run the calls, report how many of each kind. */
+/*
+ * One random valid corner for ef_blend_corner (kind "blend", G2 table): turns uniform over
+ * (0, 179] degrees, near 0 (some below EF_BLEND_MIN_TURN: the straight outcome) and just
+ * below the reversal threshold; in z = 0 or a random plane; corners up to 1e3 from the
+ * origin; tolerances 1e-4..10; neighbour limits 1e-7..1e3 (clamped and, where the blend
+ * would be below float resolution, the stop outcome). Every outcome is valid input.
+ */
+static void make_corner(unsigned long long *rs, long i, ef_vec3_t *v, ef_vec3_t *ui, ef_vec3_t *uo,
+                        float *tol, float *mi, float *mo)
+{
+    int cls = (int)(i % 4);
+    double th;
+    if (cls <= 1)
+        th = ef_t_uniform(rs, 1e-9, 1.0) * (179.0 * M_PI / 180.0);
+    else if (cls == 2)
+        th = exp(ef_t_uniform(rs, log(1e-6), log(1e-1)));
+    else
+        th = EF_BLEND_MAX_TURN - exp(ef_t_uniform(rs, log(1e-5), log(3e-2)));
+    rot3_t r = (i / 4) % 2 ? rot_random(rs) : rot_z(ef_t_uniform(rs, -M_PI, M_PI));
+    const double a[3] = {1, 0, 0}, b[3] = {cos(th), sin(th), 0};
+    *ui = rot_apply(&r, a);
+    *uo = rot_apply(&r, b);
+    double mag = exp(ef_t_uniform(rs, log(1e-3), log(1e3)));
+    *v = ef_v3((float)ef_t_uniform(rs, -mag, mag), (float)ef_t_uniform(rs, -mag, mag),
+               (i / 4) % 2 ? (float)ef_t_uniform(rs, -mag, mag) : 0.0f);
+    *tol = (float)exp(ef_t_uniform(rs, log(1e-4), log(10.0)));
+    *mi = (float)exp(ef_t_uniform(rs, log(1e-7), log(1e3)));
+    *mo = (float)exp(ef_t_uniform(rs, log(1e-7), log(1e3)));
+}
+
+/* Corner blends: N calls of ef_blend_corner, one dump each; counts the outcomes. */
+static int run_blend(const ef_table_t *tbl, long n, int dump, unsigned long long *rs)
+{
+    long outcome[4] = {0};
+    for (long i = 0; i < n; i++) {
+        ef_vec3_t v, ui, uo;
+        float tol, mi, mo;
+        ef_blend_t bl;
+        make_corner(rs, i, &v, &ui, &uo, &tol, &mi, &mo);
+        if (dump)
+            CALLGRIND_ZERO_STATS;
+        int rc = ef_blend_corner(tbl, v, ui, uo, tol, mi, mo, &bl);
+        if (dump)
+            CALLGRIND_DUMP_STATS;
+        if (rc != EF_OK) {
+            fprintf(stderr, "bench_ct: blend call %ld failed: %s\n", i, ef_err_str(rc));
+            return 1;
+        }
+        int o = (bl.flags & EF_BLEND_STRAIGHT) ? 1 : (bl.flags & EF_BLEND_STOP) ? 2
+                : (bl.flags & EF_BLEND_CLAMPED) ? 3 : 0;
+        outcome[o]++;
+    }
+    printf("bench_ct blend: %ld calls OK; blend %ld, straight %ld, stop %ld, clamped %ld\n", n,
+           outcome[0], outcome[1], outcome[2], outcome[3]);
+    return 0;
+}
+
+/* Parse "g1"/"g2"/"blend" and N, build the table, run the calls, report how many of each kind. */
 int main(int argc, char **argv)
 {
-    if (argc < 3 || (strcmp(argv[1], "g1") != 0 && strcmp(argv[1], "g2") != 0)) {
-        fprintf(stderr, "usage: %s g1|g2 N [dump|nodump] [seed]\n", argv[0]);
+    if (argc < 3 || (strcmp(argv[1], "g1") != 0 && strcmp(argv[1], "g2") != 0 &&
+                     strcmp(argv[1], "blend") != 0)) {
+        fprintf(stderr, "usage: %s g1|g2|blend N [dump|nodump] [seed]\n", argv[0]);
         return 2;
     }
-    int g2 = strcmp(argv[1], "g2") == 0;
+    int blend = strcmp(argv[1], "blend") == 0;
+    int g2 = blend || strcmp(argv[1], "g2") == 0;
     long n = strtol(argv[2], NULL, 10);
     int dump = argc < 4 || strcmp(argv[3], "nodump") != 0;
     unsigned long long rs = argc > 4 ? strtoull(argv[4], NULL, 0) : 20240607ull;
@@ -322,6 +382,8 @@ int main(int argc, char **argv)
         fprintf(stderr, "bench_ct: table view rejected: %s\n", ef_err_str(rc));
         return 1;
     }
+    if (blend)
+        return run_blend(tbl, n, dump, &rs);
 
     long per_kind[BC_COUNT] = {0}, clamped = 0;
     for (long i = 0; i < n; i++) {

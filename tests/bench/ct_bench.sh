@@ -1,10 +1,11 @@
 #!/bin/sh
-# Constant-time check of ef_seg_g1_cubic / ef_seg_g2_quintic by instruction count.
+# Constant-time check of ef_seg_g1_cubic / ef_seg_g2_quintic / ef_blend_corner by
+# instruction count.
 #
 # Usage: ct_bench.sh [--targets] [--verify] [--keep DIR] BENCH N KIND...
 #   BENCH     the bench_ct binary (this script builds nothing)
 #   N         calls per kind (random valid configurations, fixed seed)
-#   KIND      g1 or g2 (several may be given; each is run and checked)
+#   KIND      g1, g2 or blend (ef_blend_corner) (several may be given; each is run and checked)
 #   --targets also fail if the max count is above the targets (G1 400, G2 1500)
 #   --verify  also run once without per-call dumps and check that the single dump's total,
 #             and callgrind_annotate's inclusive count for the function, equal the sum of
@@ -24,6 +25,8 @@ set -eu
 MAX_RATIO=1.02
 TARGET_G1=400
 TARGET_G2=1500
+# No target was set for corner blends; this one is the G2 segment's.
+TARGET_BLEND=1500
 
 targets=0
 verify=0
@@ -39,7 +42,7 @@ while [ $# -gt 0 ]; do
     esac
 done
 if [ $# -lt 3 ]; then
-    echo "usage: ct_bench.sh [--targets] [--verify] [--keep DIR] BENCH N g1|g2..." >&2
+    echo "usage: ct_bench.sh [--targets] [--verify] [--keep DIR] BENCH N g1|g2|blend..." >&2
     exit 2
 fi
 bench=$1
@@ -76,7 +79,8 @@ for kind in "$@"; do
     case "$kind" in
     g1) fn=ef_seg_g1_cubic; label="G1 cubic"; target=$TARGET_G1 ;;
     g2) fn=ef_seg_g2_quintic; label="G2 quintic"; target=$TARGET_G2 ;;
-    *) echo "ct_bench.sh: kind must be g1 or g2, not $kind" >&2; exit 2 ;;
+    blend) fn=ef_blend_corner; label="corner blend"; target=$TARGET_BLEND ;;
+    *) echo "ct_bench.sh: kind must be g1, g2 or blend, not $kind" >&2; exit 2 ;;
     esac
     run_cg dump "$fn" "$kind" "$kind"
     # Per-call dumps are cg.PID.1 .. cg.PID.N; cg.PID (the exit dump) holds nothing

@@ -1,15 +1,17 @@
 #!/bin/sh
-# Fuzz the table parser with libFuzzer for a fixed time.
+# Fuzz the table parser and the G-code reader with libFuzzer for a fixed time.
 #
 #   tests/fuzz/run.sh [SECONDS [BUILD_DIR]]     default 60 s, build-fuzz
 #
 # Configures its own clang build directory (BUILD_DIR, or $EF_FUZZ_BUILD), builds
-# fuzz_table_parse (-fsanitize=fuzzer,address,undefined), and fuzzes a working copy of the
-# seed corpus kept in that build directory, so coverage accumulates across runs while the
-# checked-in corpus stays as generated. Crash reproducers go to $EF_FUZZ_BUILD/artifacts/;
-# the script exits nonzero when the fuzzer finds one. EF_FUZZ_JOBS=N runs N processes
-# (libFuzzer fork mode). Needs clang and libclang-rt-dev (the libFuzzer runtime). Warnings
-# are not errors here: a fuzz run should not depend on the newest clang diagnostics.
+# fuzz_table_parse and fuzz_gcode (-fsanitize=fuzzer,address,undefined), and fuzzes each
+# for half of SECONDS (EF_FUZZ_TARGETS="table" or "gcode" picks one, which then gets all of
+# it), on a working copy of its seed corpus kept in that build directory, so coverage
+# accumulates across runs while the checked-in corpora stay as they are. Crash reproducers
+# go to $EF_FUZZ_BUILD/artifacts/; the script exits nonzero when a fuzzer finds one.
+# EF_FUZZ_JOBS=N runs N processes (libFuzzer fork mode). Needs clang and libclang-rt-dev
+# (the libFuzzer runtime). Warnings are not errors here: a fuzz run should not depend on
+# the newest clang diagnostics.
 set -eu
 
 secs=${1:-60}
@@ -22,29 +24,49 @@ mkdir -p "$build"
 build=$(cd "$build" && pwd)
 jobs=${EF_FUZZ_JOBS:-1}
 cc=${CC:-clang}
+targets=${EF_FUZZ_TARGETS:-table gcode}
 
 cmake -S "$root" -B "$build" -G Ninja -DCMAKE_C_COMPILER="$cc" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     -DEF_FUZZ=ON -DEF_WERROR=ON >/dev/null
-ninja -C "$build" fuzz_table_parse
+ninja -C "$build" fuzz_table_parse fuzz_gcode
+mkdir -p "$build/artifacts"
+n=0
+for t in $targets; do n=$((n + 1)); done
+each=$((secs / n))
+[ "$each" -ge 1 ] || each=1
 
-corpus=$build/fuzz-corpus
-mkdir -p "$corpus" "$build/artifacts"
-cp "$root"/tests/fuzz/corpus/* "$corpus"/
+# fuzz BINARY SEEDS CORPUS: one target for $each seconds; returns the fuzzer's status.
+fuzz() {
+    bin=$1 seeds=$2 corpus=$3
+    mkdir -p "$corpus"
+    cp "$seeds"/* "$corpus"/
+    set -- -max_total_time="$each" -print_final_stats=1 -artifact_prefix="$build/artifacts/"
+    if [ "$jobs" -gt 1 ]; then
+        set -- "$@" -fork="$jobs"
+    fi
+    echo "fuzzing $bin for ${each}s, corpus $corpus"
+    st=0
+    # libFuzzer reports every new corpus entry; keep that in a log and show its summary.
+    log="$build/fuzz-$bin.log"
+    "$build/tests/$bin" "$@" "$corpus" >"$log" 2>&1 || st=$?
+    grep -E '^(INFO: Seed|#[0-9]+[[:space:]]+DONE|Done [0-9]+ runs|stat::|INFO: fuzzed for)' "$log" || true
+    # fork mode (EF_FUZZ_JOBS > 1) prints progress lines instead of the final stats
+    [ "$jobs" -gt 1 ] && grep -E '^#[0-9]+: cov:' "$log" | tail -n 1 || true
+    if [ "$st" -ne 0 ]; then
+        tail -n 60 "$log" >&2
+        echo "$bin failed (exit $st); reproducers in $build/artifacts/:" >&2
+        ls -l "$build/artifacts/" >&2 || true
+        echo "replay one with: $build/tests/$bin FILE" >&2
+    fi
+    return "$st"
+}
 
-set -- -max_total_time="$secs" -print_final_stats=1 -artifact_prefix="$build/artifacts/"
-if [ "$jobs" -gt 1 ]; then
-    set -- "$@" -fork="$jobs"
-fi
-echo "fuzzing for ${secs}s, corpus $corpus"
 status=0
-# libFuzzer reports every new corpus entry; keep that in a log and show its summary.
-log="$build/fuzz.log"
-"$build/tests/fuzz_table_parse" "$@" "$corpus" >"$log" 2>&1 || status=$?
-grep -E '^(INFO: Seed|#[0-9]+[[:space:]]+DONE|Done [0-9]+ runs|stat::)' "$log" || true
-if [ "$status" -ne 0 ]; then
-    tail -n 60 "$log" >&2
-    echo "fuzzer failed (exit $status); reproducers in $build/artifacts/:" >&2
-    ls -l "$build/artifacts/" >&2 || true
-    echo "replay one with: $build/tests/fuzz_table_parse FILE" >&2
-fi
+for t in $targets; do
+    case $t in
+    table) fuzz fuzz_table_parse "$root/tests/fuzz/corpus" "$build/fuzz-corpus" || status=$? ;;
+    gcode) fuzz fuzz_gcode "$root/tests/fuzz/corpus_gcode" "$build/fuzz-corpus-gcode" || status=$? ;;
+    *) echo "unknown fuzz target '$t' (table, gcode)" >&2; exit 2 ;;
+    esac
+done
 exit "$status"

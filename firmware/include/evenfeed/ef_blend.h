@@ -1,0 +1,132 @@
+/**
+ * @file ef_blend.h
+ * @brief Corner blends between two straight moves: a G2 quintic from the G2 table that
+ * replaces the corner, deviating from it by at most a tolerance P.
+ *
+ * ## Geometry (line–line corners)
+ * The programmed path comes in along the unit direction u_in, reaches the corner v and
+ * leaves along u_out. The turn angle is theta = angle(u_in, u_out) in [0, pi] and the half
+ * turn phi = theta / 2. The blend is symmetric: with trim L on both sides it runs from
+ * A = v - L u_in to B = v + L u_out, so its chord B - A = L (u_in + u_out) has length
+ * s = 2 L cos(phi) and lies along the bisector direction. In the table's normalized frame
+ * the configuration is alpha = -beta = phi (the mirror image, alpha = -phi, has the same
+ * DOFs), k0 = k1 = 0: the blend meets the lines with curvature 0, so the path stays G2.
+ *
+ * The configuration is its own image under the reversal symmetry (reflection in the
+ * chord's perpendicular bisector plus running the curve backwards), which maps DOFs
+ * (x1_0, x2_0, x1_1, x2_1) to (x1_1, -x2_1, x1_0, -x2_0). The optimum is therefore
+ * symmetric, x1_0 = x1_1 = x1 and x2_0 = -x2_1 = x2; the lookup is evaluated and its two
+ * halves averaged (x1 = (x1_0 + x1_1)/2, x2 = (x2_0 - x2_1)/2) so the curve is symmetric
+ * about the bisector to float precision whatever rounding the table has. With
+ * a = 2 x1/5 + x2/20 (x1, x2 in program units, i.e. per unit chord times s), the control
+ * points are
+ *
+ *     b0 = A,  b1 = A + (x1/5) u_in,  b2 = A + a u_in,
+ *     b5 = B,  b4 = B - (x1/5) u_out, b3 = B - a u_out.
+ *
+ * The curve's midpoint is f(1/2) = v + c (u_out - u_in) / 32 with c = 16 - x1/L - 10 a/L,
+ * on the bisector; it is the curve's point nearest to v (tests/test_blend.c checks this
+ * numerically), so the deviation of the blend from the programmed corner is
+ *
+ *     dev = |f(1/2) - v| = L g(theta),   g = |c| sin(phi) / 16,
+ *
+ * linear in L because everything (DOFs included) scales with L. The blend takes
+ * L = min((P - q) / g, max_in, max_out, EF_MAX_COORD) and reports dev = L g, where
+ * q = 4 eps max|v_i| (eps = 2^-23) is kept for the float32 rounding of the control
+ * points, so the curve as stored, not only the exact one, stays within P.
+ *
+ * ## Outcomes for valid input (all return ::EF_OK; the cost does not depend on which)
+ * - a blend: out->seg is the quintic (degree 5), trims L; ::EF_BLEND_CLAMPED when a
+ *   neighbour limited L (then dev < P);
+ * - ::EF_BLEND_STRAIGHT: turn below ::EF_BLEND_MIN_TURN, nothing to blend (trims 0,
+ *   out->seg degree 0): the path goes straight through v;
+ * - ::EF_BLEND_STOP: the blend that fits is too small for float32 to represent (its chord is
+ *   below max(EF_MIN_CHORD, EF_MIN_CHORD_REL * max|v_i|), as for any segment, or P <= q,
+ *   P below the float32 resolution of the coordinates): no blend,
+ *   trims 0, out->seg degree 0, and the caller must stop exactly at v.
+ *
+ * ## Near reversals
+ * A turn above ::EF_BLEND_MAX_TURN (179 degrees by default) is ::EF_ERR_REVERSAL: the blend
+ * would be a hairpin whose tangents point nearly straight back (the table's alpha near its
+ * domain edge pi/2), the caller must stop exactly at the vertex. Up to the threshold the
+ * blend is built and tested like any other.
+ *
+ * Not covered yet: arc ends (a corner between a line and an arc, or two arcs, needs the
+ * arc's curvature at the blend ends and an asymmetric configuration), and asymmetric trims
+ * (a short neighbour on one side shrinks the blend on both sides).
+ */
+#ifndef EF_BLEND_H
+#define EF_BLEND_H
+
+#include <stdint.h>
+#include "ef_seg.h"
+#include "ef_table.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Turns (rad) below this need no blend (::EF_BLEND_STRAIGHT). Default 1e-4 rad. */
+#ifndef EF_BLEND_MIN_TURN
+#define EF_BLEND_MIN_TURN 1e-4f
+#endif
+
+/** Turns (rad) above this are reversals (::EF_ERR_REVERSAL). Default 179 degrees. */
+#ifndef EF_BLEND_MAX_TURN
+#define EF_BLEND_MAX_TURN 3.1241393f
+#endif
+
+/** Blend flag: max_in or max_out limited the trim; the deviation is below the tolerance. */
+#define EF_BLEND_CLAMPED 1u
+/** Blend flag: the corner is straight (turn < EF_BLEND_MIN_TURN); no blend, trims 0. */
+#define EF_BLEND_STRAIGHT 2u
+/** Blend flag: the blend that fits is below float32 resolution; no blend, trims 0, the
+ *  caller stops exactly at the vertex. */
+#define EF_BLEND_STOP 4u
+/** Blend flag: the table lookup clamped the configuration (never for turns up to
+ *  EF_BLEND_MAX_TURN with the default table; kept for tables of smaller domain). */
+#define EF_BLEND_TBL_CLAMPED 8u
+
+/** A corner blend. On error everything is zero. */
+typedef struct {
+    ef_seg_t seg;    /**< the quintic (degree 5) from p_in to p_out; degree 0 when there
+                          is no blend (EF_BLEND_STRAIGHT, EF_BLEND_STOP) */
+    ef_vec3_t p_in;  /**< where the incoming straight part now ends (v - trim_in u_in) */
+    ef_vec3_t p_out; /**< where the outgoing straight part now starts (v + trim_out u_out) */
+    float trim_in;   /**< length cut from the end of the incoming line (0: none) */
+    float trim_out;  /**< length cut from the start of the outgoing line */
+    float dev;       /**< predicted deviation from the corner, L g (<= tol - q); 0 if no blend */
+    float gain;      /**< g(turn): deviation per unit trim */
+    float turn;      /**< turn angle theta (rad), in [0, EF_BLEND_MAX_TURN] */
+    uint32_t flags;  /**< EF_BLEND_* */
+} ef_blend_t;
+
+/**
+ * @brief Blend the corner between two straight moves. Constant instruction count for valid
+ * input (the blend, straight and stop outcomes included).
+ * @param g2      G2 quintic table (e.g. ef_tbl_g2_default)
+ * @param v       the corner (programmed vertex), |v_i| <= EF_MAX_COORD
+ * @param u_in    unit direction of the incoming line (| |u| - 1 | within EF_UNIT_TOL)
+ * @param u_out   unit direction of the outgoing line
+ * @param tol     the largest allowed deviation P from the corner, > 0, finite
+ * @param max_in  longest trim allowed on the incoming line (e.g. half its length, so the
+ *                blends at its two ends cannot overlap), > 0, finite
+ * @param max_out longest trim allowed on the outgoing line, > 0, finite (trims are also
+ *                never longer than EF_MAX_COORD, so FLT_MAX may stand for "no limit")
+ * @param out     the blend
+ * @retval EF_OK            out valid; see out->flags
+ * @retval EF_ERR_ARG       NULL pointer, tol <= 0, max_in <= 0 or max_out <= 0
+ * @retval EF_ERR_KIND      not a G2 quintic table
+ * @retval EF_ERR_NONFINITE NaN/inf in v, u_in, u_out, tol, max_in or max_out, or |v_i| or
+ *                          |u_i| above EF_MAX_COORD
+ * @retval EF_ERR_TANGENT   u_in or u_out not of unit length (covers a zero-length move)
+ * @retval EF_ERR_REVERSAL  turn above EF_BLEND_MAX_TURN: stop exactly at v
+ */
+int ef_blend_corner(const ef_table_t *g2, ef_vec3_t v, ef_vec3_t u_in, ef_vec3_t u_out, float tol,
+                    float max_in, float max_out, ef_blend_t *out);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* EF_BLEND_H */

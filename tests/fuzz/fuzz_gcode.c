@@ -1,0 +1,180 @@
+/*
+ * libFuzzer target for the G-code reader: every input must either be read to an end item
+ * or be rejected with EF_ERR_GCODE and a "fuzz:line:col: " message; every item must have a
+ * known kind, a line inside the input, finite positions within the coordinate limit, and
+ * feeds that are positive on feed moves. Broken invariants abort (a libFuzzer crash).
+ *
+ * Built with -DEF_FUZZ_REPLAY_MAIN it is also a plain-C replay driver (gcode_fuzz_replay
+ * DIR|FILE...): seeds named "ok-*" must read to the end, "bad-*" must be rejected.
+ */
+#include <dirent.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "evenfeed/host/ef_gcode.h"
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+
+/* Report and crash, so the input is saved as a reproducer. */
+static void ef_fuzz_fail(const char *what, long a)
+{
+    fprintf(stderr, "gcode fuzz invariant broken: %s (%ld)\n", what, a);
+    abort();
+}
+
+/* Position within the reader's documented limits. */
+static void ef_fuzz_vec(const double *v, const char *what)
+{
+    for (int k = 0; k < 3; k++)
+        if (!isfinite(v[k]) || fabs(v[k]) > EF_GCODE_MAX_COORD * (1 + 1e-12))
+            ef_fuzz_fail(what, k);
+}
+
+/* Read the whole input; 0 when it read to an end item, else the error code. */
+static int ef_fuzz_read(const uint8_t *data, size_t size)
+{
+    static ef_gcode_t r; /* large: keep it off the stack */
+    ef_gcode_item_t it;
+    ef_msg_t m = {{0}};
+    size_t lines = 1;
+    int rc;
+
+    for (size_t k = 0; k < size; k++)
+        lines += data[k] == '\n';
+    if (ef_gcode_init(&r, (const char *)data, size, "fuzz") != EF_OK)
+        ef_fuzz_fail("init", 0);
+    for (;;) {
+        rc = ef_gcode_next(&r, &it, &m);
+        if (rc != EF_OK) {
+            if (rc != EF_ERR_GCODE || strncmp(m.text, "fuzz:", 5) != 0)
+                ef_fuzz_fail("bad error code or message", rc);
+            if (ef_gcode_next(&r, &it, &m) != rc) /* errors are sticky */
+                ef_fuzz_fail("error not sticky", rc);
+            return rc;
+        }
+        if (it.kind < EF_GC_RAPID || it.kind > EF_GC_END)
+            ef_fuzz_fail("unknown kind", it.kind);
+        if (it.line < 1 || it.line > lines || it.col < 1)
+            ef_fuzz_fail("line/col outside the input", (long)it.line);
+        if (it.units != 20 && it.units != 21)
+            ef_fuzz_fail("units", it.units);
+        if (memchr(it.text, 0, sizeof it.text) == NULL)
+            ef_fuzz_fail("text not terminated", 0);
+        ef_fuzz_vec(it.start, "start");
+        ef_fuzz_vec(it.end, "end");
+        ef_fuzz_vec(it.centre, "centre");
+        if ((it.kind == EF_GC_LINE || it.kind == EF_GC_ARC) && !(it.feed > 0 && it.feed <= EF_GCODE_MAX_FEED))
+            ef_fuzz_fail("feed", it.kind);
+        if (it.kind == EF_GC_ARC &&
+            (!(it.radius > 0) || !isfinite(it.sweep) || it.sweep == 0 || it.turns < 1 || it.dir * it.sweep < 0))
+            ef_fuzz_fail("arc", it.turns);
+        if (it.kind == EF_GC_END) {
+            ef_gcode_item_t again;
+            if (ef_gcode_next(&r, &again, &m) != EF_OK || again.kind != EF_GC_END)
+                ef_fuzz_fail("end not repeated", 0);
+            return 0;
+        }
+    }
+}
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+    ef_fuzz_read(data, size);
+    return 0;
+}
+
+#ifdef EF_FUZZ_REPLAY_MAIN
+static int n_run, n_failed;
+
+/* Run one file; the name prefix states what the reader must say about it. */
+static void replay_file(const char *path)
+{
+    const char *base = strrchr(path, '/');
+    FILE *f = fopen(path, "rb");
+    uint8_t *buf = malloc(1 << 20);
+    size_t len = 0;
+    base = base ? base + 1 : path;
+    if (!f || !buf) {
+        fprintf(stderr, "%s: cannot read\n", path);
+        n_failed++;
+        free(buf);
+        if (f)
+            fclose(f);
+        return;
+    }
+    len = fread(buf, 1, 1 << 20, f);
+    fclose(f);
+    int rc = ef_fuzz_read(buf, len);
+    n_run++;
+    if (!strncmp(base, "ok-", 3) && rc != 0) {
+        fprintf(stderr, "%s: expected to read to the end, got error %d\n", path, rc);
+        n_failed++;
+    } else if (!strncmp(base, "bad-", 4) && rc == 0) {
+        fprintf(stderr, "%s: expected rejection, read OK\n", path);
+        n_failed++;
+    }
+    free(buf);
+}
+
+/* qsort comparator: a stable replay order. */
+static int cmp_names(const void *a, const void *b)
+{
+    return strcmp(*(char *const *)a, *(char *const *)b);
+}
+
+/* Every regular file of a directory, sorted by name. */
+static void replay_dir(const char *dir)
+{
+    DIR *d = opendir(dir);
+    struct dirent *e;
+    char *names[4096];
+    size_t n = 0;
+    if (!d) {
+        fprintf(stderr, "%s: cannot open directory\n", dir);
+        n_failed++;
+        return;
+    }
+    while ((e = readdir(d)) != NULL && n < 4096) {
+        if (e->d_name[0] == '.')
+            continue;
+        names[n] = malloc(strlen(dir) + strlen(e->d_name) + 2);
+        if (!names[n])
+            break;
+        sprintf(names[n], "%s/%s", dir, e->d_name);
+        n++;
+    }
+    closedir(d);
+    qsort(names, n, sizeof names[0], cmp_names);
+    for (size_t k = 0; k < n; k++) {
+        struct stat st;
+        if (stat(names[k], &st) == 0 && S_ISREG(st.st_mode))
+            replay_file(names[k]);
+        free(names[k]);
+    }
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 2) {
+        fprintf(stderr, "usage: %s DIR|FILE...\n", argv[0]);
+        return 2;
+    }
+    for (int k = 1; k < argc; k++) {
+        struct stat st;
+        if (stat(argv[k], &st) != 0) {
+            fprintf(stderr, "%s: not found\n", argv[k]);
+            n_failed++;
+        } else if (S_ISDIR(st.st_mode)) {
+            replay_dir(argv[k]);
+        } else {
+            replay_file(argv[k]);
+        }
+    }
+    printf("replayed %d inputs, %d failed\n", n_run, n_failed);
+    return n_failed || n_run == 0 ? EXIT_FAILURE : EXIT_SUCCESS;
+}
+#endif
