@@ -21,6 +21,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "ef_le.h"
 #include "ef_test.h"
 #include "evenfeed/host/ef_tfile.h"
 
@@ -155,34 +156,9 @@ static uint8_t *make_blob(int v, size_t *len)
     return b;
 }
 
-/* Little-endian field writers for corrupting images in place. */
-static void put16(uint8_t *p, uint32_t v)
-{
-    p[0] = (uint8_t)v;
-    p[1] = (uint8_t)(v >> 8);
-}
 
-/* 32-bit little-endian store. */
-static void put32(uint8_t *p, uint32_t v)
-{
-    put16(p, v & 0xFFFFu);
-    put16(p + 2, v >> 16);
-}
 
-/* f64 little-endian store through its bit pattern. */
-static void putf64(uint8_t *p, double d)
-{
-    uint64_t u;
-    memcpy(&u, &d, sizeof u);
-    put32(p, (uint32_t)u);
-    put32(p + 4, (uint32_t)(u >> 32));
-}
 
-/* 32-bit little-endian load. */
-static uint32_t get32(const uint8_t *p)
-{
-    return (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) | ((uint32_t)p[3] << 24);
-}
 
 /* Recompute the trailing CRC so a corruption reaches the field check, not the CRC check. */
 static void fix_crc(uint8_t *b, size_t len)

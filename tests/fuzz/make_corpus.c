@@ -17,6 +17,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "../ef_le.h"
 #include "evenfeed/host/ef_tfile.h"
 
 #define PI         3.14159265358979323846
@@ -110,36 +111,9 @@ static uint8_t *base_image(int which, size_t *len)
     return b;
 }
 
-/* Little-endian field stores for the near misses. */
-static void put16(uint8_t *p, uint32_t v)
-{
-    p[0] = (uint8_t)v;
-    p[1] = (uint8_t)(v >> 8);
-}
 
-/* 32-bit little-endian store. */
-static void put32(uint8_t *p, uint32_t v)
-{
-    put16(p, v & 0xFFFFu);
-    put16(p + 2, v >> 16);
-}
 
-/* f64 little-endian store through its bit pattern. */
-static void putf64(uint8_t *p, double d)
-{
-    uint64_t u;
-    memcpy(&u, &d, sizeof u);
-    put32(p, (uint32_t)u);
-    put32(p + 4, (uint32_t)(u >> 32));
-}
 
-/* float32 little-endian store (node values). */
-static void putf32(uint8_t *p, float f)
-{
-    uint32_t u;
-    memcpy(&u, &f, sizeof u);
-    put32(p, u);
-}
 
 /* Near misses: one rule broken each, starting from a base table. */
 enum {
