@@ -8,7 +8,6 @@
 #include <fcntl.h>
 #include <inttypes.h>
 #include <math.h>
-#include <pthread.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -18,6 +17,7 @@
 #include <unistd.h>
 #include "evenfeed/host/ef_build.h"
 #include "evenfeed/host/ef_ref.h"
+#include "ef_parallel_int.h"
 #include "ef_shard_int.h"
 
 /* How far inside the fold region its edge nodes are optimized (rad): far above the
@@ -102,10 +102,9 @@ typedef struct {
 } ef_cpu_ctx_t;
 
 typedef struct {
+    ef_job_t job; /* first: ef_parallel_run() reads it */
     ef_tfile_t *t;
     uint32_t row_begin, row_end, stride;
-    int rc;
-    ef_msg_t msg;
 } ef_cpu_job_t;
 
 /* Worker: rows row_begin + index, + threads, ...; each row in order so warm starts are fixed. */
@@ -116,8 +115,8 @@ static void *ef_cpu_worker(void *arg)
     for (uint32_t row = j->row_begin; row < j->row_end; row += j->stride) {
         double prev[EF_TABLE_MAX_DOF];
         for (uint32_t i = 0; i < n0; i++) {
-            j->rc = ef_build_node(j->t, row * n0 + i, i ? prev : NULL, prev, &j->msg);
-            if (j->rc != EF_OK)
+            j->job.rc = ef_build_node(j->t, row * n0 + i, i ? prev : NULL, prev, &j->job.msg);
+            if (j->job.rc != EF_OK)
                 return NULL;
         }
     }
@@ -129,27 +128,11 @@ static int ef_cpu_solve_rows(void *ctx, ef_tfile_t *t, uint32_t row_begin, uint3
                              ef_msg_t *m)
 {
     const ef_cpu_ctx_t *c = ctx;
-    pthread_t tid[64];
     ef_cpu_job_t job[64];
-    int started = 0, rc = EF_OK;
-    for (int i = 0; i < c->threads; i++) {
+    for (int i = 0; i < c->threads; i++)
         job[i] = (ef_cpu_job_t){.t = t, .row_begin = row_begin + (uint32_t)i, .row_end = row_end,
-                                .stride = (uint32_t)c->threads, .rc = EF_OK};
-        if (pthread_create(&tid[i], NULL, ef_cpu_worker, &job[i]) != 0) {
-            rc = ef_fail(m, EF_ERR_NOMEM, "build: cannot start thread %d", i);
-            break;
-        }
-        started++;
-    }
-    for (int i = 0; i < started; i++)
-        pthread_join(tid[i], NULL);
-    for (int i = 0; i < started && rc == EF_OK; i++)
-        if (job[i].rc != EF_OK) {
-            rc = job[i].rc;
-            if (m)
-                *m = job[i].msg;
-        }
-    return rc;
+                                .stride = (uint32_t)c->threads};
+    return ef_parallel_run(job, sizeof job[0], c->threads, ef_cpu_worker, "build", NULL, m);
 }
 
 /* Release the CPU backend's context. */

@@ -1,21 +1,20 @@
 /* Accuracy harness: table segments against the reference optimum on random configurations. */
 #include <math.h>
-#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
 #include "evenfeed/ef_seg.h"
 #include "evenfeed/host/ef_ref.h"
 #include "evenfeed/host/ef_verify.h"
+#include "ef_parallel_int.h"
 
 typedef struct {
+    ef_job_t job; /* first: ef_parallel_run() reads it */
     const ef_table_t *tbl;
     const ef_verify_opts_t *o;
     int index, threads;
     double *excess, *x1e, *x2e, (*cfg)[4];
     uint32_t clamped, misses;
-    int rc;
-    ef_msg_t msg;
 } ef_verify_job_t;
 
 /* splitmix64: configuration i depends only on (seed, i), whatever the thread split. */
@@ -82,7 +81,7 @@ static int ef_verify_one(ef_verify_job_t *j, uint32_t i)
     ef_seg_t seg;
     int rc = g2 ? ef_seg_g2_quintic(t, &f0, &f1, &seg) : ef_seg_g1_cubic(t, &f0, &f1, &seg);
     if (rc != EF_OK)
-        return ef_fail(&j->msg, rc, "verify: configuration %u (%.6g, %.6g, %.6g, %.6g): %s", i,
+        return ef_fail(&j->job.msg, rc, "verify: configuration %u (%.6g, %.6g, %.6g, %.6g): %s", i,
                        cfg[0], cfg[1], cfg[2], cfg[3], ef_err_str(rc));
     ef_dvec3_t b[6];
     for (int k = 0; k <= seg.degree; k++)
@@ -103,7 +102,7 @@ static int ef_verify_one(ef_verify_job_t *j, uint32_t i)
     ef_msg_t sub = {{0}};
     rc = ef_ref_optimize(g2 ? EF_REF_G2_QUINTIC : EF_REF_G1_CUBIC, &e0, &e1, &o, &r, &sub);
     if (rc != EF_OK)
-        return ef_fail(&j->msg, rc, "verify: reference failed at configuration %u: %s", i,
+        return ef_fail(&j->job.msg, rc, "verify: reference failed at configuration %u: %s", i,
                        sub.text);
     double ex = r.C < 1e-9 ? c_tab - r.C : (c_tab - r.C) / r.C;
     /* Float32 control points sit up to an ulp off the feasible set, so a table may beat the
@@ -131,8 +130,8 @@ static void *ef_verify_worker(void *arg)
 {
     ef_verify_job_t *j = arg;
     for (uint32_t i = (uint32_t)j->index; i < j->o->count; i += (uint32_t)j->threads) {
-        j->rc = ef_verify_one(j, i);
-        if (j->rc != EF_OK)
+        j->job.rc = ef_verify_one(j, i);
+        if (j->job.rc != EF_OK)
             break;
     }
     return NULL;
@@ -181,26 +180,12 @@ int ef_verify_table(const ef_table_t *tbl, const ef_verify_opts_t *o, ef_verify_
     double(*cfg)[4] = (double(*)[4])(buf + 3 * (size_t)n);
     struct timespec t0, t1;
     clock_gettime(CLOCK_MONOTONIC, &t0);
-    pthread_t tid[64];
     ef_verify_job_t job[64];
-    int started = 0, rc = EF_OK;
-    for (int i = 0; i < o->threads; i++) {
+    for (int i = 0; i < o->threads; i++)
         job[i] = (ef_verify_job_t){.tbl = tbl, .o = o, .index = i, .threads = o->threads,
                                    .excess = excess, .x1e = x1e, .x2e = x2e, .cfg = cfg};
-        if (pthread_create(&tid[i], NULL, ef_verify_worker, &job[i]) != 0) {
-            rc = ef_fail(m, EF_ERR_NOMEM, "verify: cannot start thread %d", i);
-            break;
-        }
-        started++;
-    }
-    for (int i = 0; i < started; i++)
-        pthread_join(tid[i], NULL);
-    for (int i = 0; i < started && rc == EF_OK; i++)
-        if (job[i].rc != EF_OK) {
-            rc = job[i].rc;
-            if (m)
-                *m = job[i].msg;
-        }
+    int started = 0;
+    int rc = ef_parallel_run(job, sizeof job[0], o->threads, ef_verify_worker, "verify", &started, m);
     if (rc == EF_OK) {
         uint32_t worst = 0;
         for (uint32_t i = 1; i < n; i++)
