@@ -7,13 +7,11 @@
  * Built with -DEF_FUZZ_REPLAY_MAIN it is also a plain-C replay driver (gcode_fuzz_replay
  * DIR|FILE...): seeds named "ok-*" must read to the end, "bad-*" must be rejected.
  */
-#include <dirent.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 
 #include "evenfeed/host/ef_gcode.h"
 
@@ -88,93 +86,19 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 }
 
 #ifdef EF_FUZZ_REPLAY_MAIN
-static int n_run, n_failed;
+#include "replay.h"
 
-/* Run one file; the name prefix states what the reader must say about it. */
-static void replay_file(const char *path)
+/* Accepted when the reader reaches the end of the program without an error. */
+static int replay_gcode(const uint8_t *buf, size_t len, char *why, size_t why_len)
 {
-    const char *base = strrchr(path, '/');
-    FILE *f = fopen(path, "rb");
-    uint8_t *buf = malloc(1 << 20);
-    size_t len = 0;
-    base = base ? base + 1 : path;
-    if (!f || !buf) {
-        fprintf(stderr, "%s: cannot read\n", path);
-        n_failed++;
-        free(buf);
-        if (f)
-            fclose(f);
-        return;
-    }
-    len = fread(buf, 1, 1 << 20, f);
-    fclose(f);
     int rc = ef_fuzz_read(buf, len);
-    n_run++;
-    if (!strncmp(base, "ok-", 3) && rc != 0) {
-        fprintf(stderr, "%s: expected to read to the end, got error %d\n", path, rc);
-        n_failed++;
-    } else if (!strncmp(base, "bad-", 4) && rc == 0) {
-        fprintf(stderr, "%s: expected rejection, read OK\n", path);
-        n_failed++;
-    }
-    free(buf);
-}
-
-/* qsort comparator: a stable replay order. */
-static int cmp_names(const void *a, const void *b)
-{
-    return strcmp(*(char *const *)a, *(char *const *)b);
-}
-
-/* Every regular file of a directory, sorted by name. */
-static void replay_dir(const char *dir)
-{
-    DIR *d = opendir(dir);
-    struct dirent *e;
-    char *names[4096];
-    size_t n = 0;
-    if (!d) {
-        fprintf(stderr, "%s: cannot open directory\n", dir);
-        n_failed++;
-        return;
-    }
-    while ((e = readdir(d)) != NULL && n < 4096) {
-        if (e->d_name[0] == '.')
-            continue;
-        names[n] = malloc(strlen(dir) + strlen(e->d_name) + 2);
-        if (!names[n])
-            break;
-        sprintf(names[n], "%s/%s", dir, e->d_name);
-        n++;
-    }
-    closedir(d);
-    qsort(names, n, sizeof names[0], cmp_names);
-    for (size_t k = 0; k < n; k++) {
-        struct stat st;
-        if (stat(names[k], &st) == 0 && S_ISREG(st.st_mode))
-            replay_file(names[k]);
-        free(names[k]);
-    }
+    if (rc != 0)
+        snprintf(why, why_len, "error %d", rc);
+    return rc != 0;
 }
 
 int main(int argc, char **argv)
 {
-    if (argc < 2) {
-        fprintf(stderr, "usage: %s DIR|FILE...\n", argv[0]);
-        return 2;
-    }
-    for (int k = 1; k < argc; k++) {
-        struct stat st;
-        if (stat(argv[k], &st) != 0) {
-            fprintf(stderr, "%s: not found\n", argv[k]);
-            n_failed++;
-        } else if (S_ISDIR(st.st_mode)) {
-            replay_dir(argv[k]);
-        } else {
-            replay_file(argv[k]);
-        }
-    }
-    printf("replayed %d inputs, %d failed\n", n_run, n_failed);
-    return n_failed || n_run == 0 ? EXIT_FAILURE : EXIT_SUCCESS;
+    return ef_replay_main(argc, argv, replay_gcode);
 }
 #endif
