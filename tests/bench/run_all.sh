@@ -8,8 +8,9 @@ cd "$(dirname "$0")/../.."
 ef=$b/host/evenfeed
 
 echo "== Instructions per segment call (callgrind, x86-64, firmware at -O2), 10000 random"
-echo "   valid configurations each (planar, 3-D, near-reversal, out-of-domain); targets G1 <= 400, G2 <= 1500"
-sh tests/bench/ct_bench.sh "$b/tests/bench_ct" 10000 g1 g2
+echo "   valid configurations each (planar, 3-D, near-reversal, out-of-domain), and ef_blend_corner on"
+echo "   10000 random corners; targets G1 <= 400, G2 <= 1500"
+sh tests/bench/ct_bench.sh "$b/tests/bench_ct" 10000 g1 g2 blend
 
 echo
 echo "== Default tables against the CPU reference optimum (accuracy harness)"
