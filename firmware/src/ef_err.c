@@ -18,6 +18,12 @@ const char *ef_err_str(int err)
     case EF_ERR_NOMEM: return "out of memory";
     case EF_ERR_GCODE: return "malformed or unsupported G-code";
     case EF_ERR_REVERSAL: return "corner reverses the path: exact stop at the vertex";
+    case EF_ERR_FULL: return "buffer full: pull or process first";
+    case EF_ERR_AGAIN: return "nothing to pull yet";
+    case EF_ERR_ARC: return "inconsistent arc (radius, centre or axis)";
+    case EF_ERR_FEED: return "feed or motion limit not positive and finite";
+    case EF_ERR_UNDERRUN: return "interpolator ran out of moves while moving";
+    case EF_ERR_STATE: return "call not allowed in the current state";
     case EF_ERR_TBL_TRUNCATED: return "table truncated";
     case EF_ERR_TBL_MAGIC: return "not an evenfeed table (bad magic)";
     case EF_ERR_TBL_VERSION: return "unsupported table format version";

@@ -51,14 +51,25 @@
  * domain edge pi/2), the caller must stop exactly at the vertex. Up to the threshold the
  * blend is built and tested like any other.
  *
- * Not covered yet: arc ends (a corner between a line and an arc, or two arcs, needs the
- * arc's curvature at the blend ends and an asymmetric configuration), and asymmetric trims
- * (a short neighbour on one side shrinks the blend on both sides).
+ * ## Corners with arc ends (ef_blend_prims())
+ * When either side is an arc or helix, the blend runs from the point at distance L_in
+ * before the vertex on the incoming primitive to the point at distance L_out after it on
+ * the outgoing one, with the primitives' tangents and curvature vectors there (an arc end
+ * has curvature 1/r towards the centre), through the G2 table in its general,
+ * asymmetric configuration. There is no closed form for the deviation, so it is measured:
+ * the largest distance from the blend's points (::EF_BLEND_DEV_SAMPLES of them) to the
+ * replaced pieces of the two primitives, plus a bound for what lies between samples. The
+ * trims start from the line–line estimate with the vertex tangents and are shrunk in a
+ * fixed number of steps (::EF_BLEND_ITER) until the measured deviation is within
+ * tol - q; if none is, the outcome is ::EF_BLEND_STOP. Trims are limited by max_in and
+ * max_out separately (asymmetric trims: a short neighbour on one side shortens only that
+ * side, the other keeps the trim the tolerance allows).
  */
 #ifndef EF_BLEND_H
 #define EF_BLEND_H
 
 #include <stdint.h>
+#include "ef_path.h"
 #include "ef_seg.h"
 #include "ef_table.h"
 
@@ -124,6 +135,66 @@ typedef struct {
  */
 int ef_blend_corner(const ef_table_t *g2, ef_vec3_t v, ef_vec3_t u_in, ef_vec3_t u_out, float tol,
                     float max_in, float max_out, ef_blend_t *out);
+
+/** Samples of the blend used to measure its deviation (ef_blend_prims()). */
+#ifndef EF_BLEND_DEV_SAMPLES
+#define EF_BLEND_DEV_SAMPLES 16
+#endif
+/** Fixed number of trim refinement steps in ef_blend_prims(). */
+#ifndef EF_BLEND_ITER
+#define EF_BLEND_ITER 6
+#endif
+
+/**
+ * @brief Blend the corner between two checked primitives (lines, arcs, helices). For two
+ * lines this is ef_blend_corner() with the lines' directions; otherwise the measured
+ * construction of the file comment. Fixed instruction count per pair of kinds.
+ * @param g2       G2 quintic table
+ * @param start_in where the incoming primitive starts
+ * @param in       incoming primitive (ends at the vertex)
+ * @param len_in   its length (from ef_prim_check())
+ * @param out      outgoing primitive (starts at the vertex, in->end)
+ * @param len_out  its length
+ * @param tol      largest allowed deviation P, > 0
+ * @param max_in   longest trim allowed on the incoming primitive, in (0, len_in]
+ * @param max_out  longest trim allowed on the outgoing primitive, in (0, len_out]
+ * @param res      the blend (seg degree 5, p_in / p_out on the primitives, trims, dev
+ *                 measured, turn between the vertex tangents)
+ * @retval EF_OK            res valid; see res->flags (STRAIGHT, STOP, CLAMPED)
+ * @retval EF_ERR_ARG       NULL pointer, tol, max_in or max_out out of range
+ * @retval EF_ERR_KIND      not a G2 quintic table
+ * @retval EF_ERR_NONFINITE non-finite input
+ * @retval EF_ERR_REVERSAL  the vertex tangents turn by more than EF_BLEND_MAX_TURN: stop
+ *                          exactly at the vertex
+ */
+int ef_blend_prims(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in, float len_in,
+                   const ef_prim_t *out, float len_out, float tol, float max_in, float max_out,
+                   ef_blend_t *res);
+
+/**
+ * @brief One piece of a checked arc/helix primitive, from arc length s0 to s1 along it, as a
+ * G2 quintic through the table with the arc's exact end data (position, tangent,
+ * curvature vector). The piece's measured deviation from the true arc is in m->dev.
+ * @param g2     G2 quintic table
+ * @param start  where the primitive starts
+ * @param pr     the arc primitive
+ * @param s0,s1  0 <= s0 < s1 <= its length; the sweep of the piece must not exceed
+ *               ::EF_ARC_PIECE_SWEEP (plus rounding)
+ * @param m      out: b, degree 5, kind EF_MOVE_ARC, dev, tag, feed; length and kappa_max
+ *               via ef_move_measure(); planner fields zero
+ * @retval EF_OK
+ * @retval EF_ERR_ARG  NULL pointer, not an arc, s0/s1 out of range or piece too long
+ * @retval EF_ERR_KIND not a G2 quintic table
+ * @retval others      as ef_seg_g2_quintic()
+ */
+int ef_blend_arc_piece(const ef_table_t *g2, ef_vec3_t start, const ef_prim_t *pr, float s0,
+                       float s1, ef_move_t *m);
+
+/** Longest sweep (rad) of one arc piece. Callers split arcs into ceil(|sweep| / this) pieces
+ *  or more; tests/test_prim.c measures the deviation this gives. */
+#ifndef EF_ARC_PIECE_SWEEP
+#define EF_ARC_PIECE_SWEEP 1.5707964f
+#endif
 
 #ifdef __cplusplus
 }

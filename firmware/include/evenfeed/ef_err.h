@@ -30,6 +30,15 @@ typedef enum {
     EF_ERR_GCODE = -11,       /**< malformed or unsupported G-code (host; message has line:col) */
     EF_ERR_REVERSAL = -12,    /**< a corner turns back on itself (near 180 degrees): no blend;
                                    the defined safe behaviour is an exact stop at the vertex */
+    EF_ERR_FULL = -13,        /**< a fixed buffer (look-ahead window, queue) is full: pull or
+                                   process first, then push the same item again */
+    EF_ERR_AGAIN = -14,       /**< nothing to pull yet: push more input or finish the stream */
+    EF_ERR_ARC = -15,         /**< arc data inconsistent: radii at start and end differ, zero
+                                   radius, or axis not unit / not perpendicular */
+    EF_ERR_FEED = -16,        /**< feed or a motion limit <= 0 or non-finite */
+    EF_ERR_UNDERRUN = -17,    /**< the interpolator ran out of moves while moving */
+    EF_ERR_STATE = -18,       /**< call not allowed in the object's current state (e.g. push
+                                   after finish, or after a sticky error) */
     EF_ERR_TBL_TRUNCATED = -20,  /**< table blob shorter than its header says */
     EF_ERR_TBL_MAGIC = -21,      /**< not a table file (magic bytes) */
     EF_ERR_TBL_VERSION = -22,    /**< format version not supported */

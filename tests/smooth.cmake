@@ -1,0 +1,1 @@
+# (filled when the module's tests land)
