@@ -1,2 +1,409 @@
-/* Placeholder until the module lands. */
-typedef int ef_blend_arc_placeholder_t;
+/* Corners with arc/helix ends (ef_blend_prims()) and arc pieces as G2 quintics
+ * (ef_blend_arc_piece()). Both build the quintic from exact end frames of the primitives
+ * (ef_prim_frame()) through the G2 table and measure its deviation, since no closed form
+ * exists. See ef_blend.h. */
+#include "evenfeed/ef_blend.h"
+#include "evenfeed/ef_bezier.h"
+#include "evenfeed/ef_config.h"
+#include "evenfeed/ef_err.h"
+
+/* Share of the tolerance kept for float32 rounding, per unit of the coordinates' magnitude
+ * (as ef_blend.c). */
+#define EF_BA_ROUND_MARGIN (4.0f * 1.1920929e-7f)
+/* Samples of an arc piece's quintic for its deviation from the true arc (fixed count). */
+#define EF_BA_PIECE_SAMPLES 64
+/* Extra samples per refined interval, plus one (ef_ba_try()). */
+#define EF_BA_REFINE 8
+/* Points of each replaced piece checked for their distance to the blend (ef_ba_try()). */
+#define EF_BA_PATH_PTS 3
+/* Relative allowance over the blend's bounded deviation: the between-sample term is an
+ * estimate (second differences), not a proof. tests/test_prim.c (6000 random corners)
+ * finds the true deviation at most 1.023 x the result (with the 0.99 target, all within
+ * 0.981 tol). */
+#define EF_BA_DEV_REL 1.02f
+
+static int ef_ba_finite(float x)
+{
+    return (x == x) & (x - x == 0.0f);
+}
+
+static void ef_ba_zero_move(ef_move_t *m)
+{
+    ef_move_t zero = {0};
+    *m = zero;
+}
+
+static int ef_ba_fail_blend(ef_blend_t *res, int rc)
+{
+    ef_blend_t zero = {0};
+    *res = zero;
+    return rc;
+}
+
+static ef_endpoint_t ef_ba_end(const ef_frame_t *f)
+{
+    ef_endpoint_t e;
+    e.p = f->p;
+    e.t = f->t;
+    e.n = f->n;
+    e.kappa = f->kappa;
+    return e;
+}
+
+static float ef_ba_maxabs(ef_vec3_t a)
+{
+    return ef_maxf(ef_maxf(ef_fabsf(a.x), ef_fabsf(a.y)), ef_fabsf(a.z));
+}
+
+/* Start radius of an arc (perpendicular to the axis); 0 for a line. */
+static float ef_ba_radius(ef_vec3_t start, const ef_prim_t *pr)
+{
+    if (pr->kind != EF_PRIM_ARC)
+        return 0.0f;
+    float aa = ef_v3_dot(pr->axis, pr->axis);
+    ef_vec3_t a = ef_v3_scale(pr->axis, 1.0f / ef_sqrtf(ef_maxf(aa, 1e-30f)));
+    ef_vec3_t d0 = ef_v3_sub(start, pr->centre);
+    return ef_v3_norm(ef_v3_axpy(d0, -ef_v3_dot(d0, a), a));
+}
+
+/* Distance from q to the piece [sa, sb] of a checked primitive, or an upper bound of it (the
+ * distance to a point of the piece, so never below the true distance). Lines: exact. Arcs
+ * and helices: the point of the piece at q's polar angle about the axis (relative to the
+ * piece's middle, so no large angles), then one Newton step along the curve; the smaller of
+ * the two distances. For a circle the first is the exact distance when q's angle is inside
+ * the piece. */
+static float ef_ba_dist_piece(ef_vec3_t q, ef_vec3_t start, const ef_prim_t *pr, float len,
+                              float sa, float sb)
+{
+    ef_frame_t f;
+    if (pr->kind == EF_PRIM_LINE) {
+        ef_prim_frame(start, pr, sa, &f);
+        float s = ef_minf(ef_maxf(ef_v3_dot(ef_v3_sub(q, f.p), f.t), 0.0f), sb - sa);
+        return ef_v3_norm(ef_v3_sub(q, ef_v3_axpy(f.p, s, f.t)));
+    }
+    float r0 = ef_ba_radius(start, pr);
+    float aa = ef_v3_dot(pr->axis, pr->axis);
+    ef_vec3_t a = ef_v3_scale(pr->axis, 1.0f / ef_sqrtf(ef_maxf(aa, 1e-30f)));
+    float sm = 0.5f * (sa + sb);
+    ef_prim_frame(start, pr, sm, &f);
+    ef_vec3_t em = ef_v3_scale(f.n, -1.0f);  /* outward radial unit at the middle */
+    ef_vec3_t cm = ef_v3_axpy(f.p, -r0, em); /* axis point level with the middle */
+    ef_vec3_t w = ef_v3_sub(q, cm);
+    w = ef_v3_axpy(w, -ef_v3_dot(w, a), a);
+    float dpsi = ef_atan2f(ef_v3_dot(w, ef_v3_cross(a, em)), ef_v3_dot(w, em));
+    float sw = pr->sweep; /* ds/dpsi = len / sweep */
+    float s1 = ef_minf(ef_maxf(sm + dpsi * (len / sw), sa), sb);
+    ef_prim_frame(start, pr, s1, &f);
+    ef_vec3_t d = ef_v3_sub(q, f.p);
+    float d1 = ef_v3_norm(d);
+    float s2 = ef_minf(ef_maxf(s1 + ef_v3_dot(d, f.t), sa), sb);
+    ef_prim_frame(start, pr, s2, &f);
+    float d2 = ef_v3_norm(ef_v3_sub(q, f.p));
+    return ef_minf(d1, d2);
+}
+
+int ef_blend_arc_piece(const ef_table_t *g2, ef_vec3_t start, const ef_prim_t *pr, float s0,
+                       float s1, ef_move_t *m)
+{
+    if (!m)
+        return EF_ERR_ARG;
+    ef_ba_zero_move(m);
+    if (!g2 || !pr || pr->kind != EF_PRIM_ARC)
+        return EF_ERR_ARG;
+    if (g2->kind != EF_TABLE_G2_QUINTIC)
+        return EF_ERR_KIND;
+    float len;
+    int rc = ef_prim_check(start, pr, &len);
+    if (rc != EF_OK)
+        return rc;
+    if (!(s0 >= 0.0f) || !(s1 > s0) || !(s1 <= len))
+        return EF_ERR_ARG;
+    float piece = ef_fabsf(pr->sweep) * ((s1 - s0) / len);
+    if (!(piece <= EF_ARC_PIECE_SWEEP * (1.0f + 1e-5f)))
+        return EF_ERR_ARG;
+
+    ef_frame_t f0, f1;
+    ef_prim_frame(start, pr, s0, &f0);
+    ef_prim_frame(start, pr, s1, &f1);
+    ef_endpoint_t e0 = ef_ba_end(&f0), e1 = ef_ba_end(&f1);
+    ef_seg_t seg;
+    rc = ef_seg_g2_quintic(g2, &e0, &e1, &seg);
+    if (rc != EF_OK)
+        return rc;
+
+    /* Deviation from the true arc piece: EF_BA_PIECE_SAMPLES interior samples. */
+    float dev = 0.0f;
+    ef_vec3_t pt[1];
+    for (int i = 1; i <= EF_BA_PIECE_SAMPLES; i++) {
+        float t = (float)i * (1.0f / (float)(EF_BA_PIECE_SAMPLES + 1));
+        ef_bezier_eval(seg.b, 5, t, 0, pt);
+        dev = ef_maxf(dev, ef_ba_dist_piece(pt[0], start, pr, len, s0, s1));
+    }
+    for (int i = 0; i < 6; i++)
+        m->b[i] = seg.b[i];
+    m->degree = 5;
+    m->kind = EF_MOVE_ARC;
+    m->flags = (uint16_t)((seg.flags & EF_SEG_CLAMPED) ? EF_MOVE_CLAMPED : 0u);
+    m->tag = pr->tag;
+    m->feed = pr->feed;
+    m->dev = dev;
+    rc = ef_move_measure(m);
+    if (rc != EF_OK) {
+        ef_ba_zero_move(m);
+        return rc;
+    }
+    return EF_OK;
+}
+
+/* One trial blend for trims (li, lo): end frames, the quintic, its measured deviation. */
+typedef struct {
+    ef_seg_t seg;
+    ef_vec3_t pa, pb;
+    float li, lo, dev;
+    int ok;
+} ef_ba_trial_t;
+
+/* Upper bounds of min(fa, fb) on each interval [i, i + 1] of n samples: each f by its linear
+ * interpolant plus E = (largest |second difference| at the interval's two ends) / 8, the
+ * interpolation error of a smooth function (second differences at the first and last sample
+ * taken from their neighbours); the largest value of the smaller of the two bounds is at an
+ * end or where they cross. */
+static void ef_ba_interval_bounds(const float *fa, const float *fb, int n, float *bnd)
+{
+    for (int i = 0; i + 1 < n; i++) {
+        int k0 = i < 1 ? 1 : i, k1 = i + 1 > n - 2 ? n - 2 : i + 1;
+        float ea = ef_maxf(ef_fabsf(fa[k0 - 1] - 2.0f * fa[k0] + fa[k0 + 1]),
+                           ef_fabsf(fa[k1 - 1] - 2.0f * fa[k1] + fa[k1 + 1]));
+        float eb = ef_maxf(ef_fabsf(fb[k0 - 1] - 2.0f * fb[k0] + fb[k0 + 1]),
+                           ef_fabsf(fb[k1 - 1] - 2.0f * fb[k1] + fb[k1 + 1]));
+        float a0 = fa[i] + 0.125f * ea, a1 = fa[i + 1] + 0.125f * ea;
+        float b0 = fb[i] + 0.125f * eb, b1 = fb[i + 1] + 0.125f * eb;
+        float m = ef_maxf(ef_minf(a0, b0), ef_minf(a1, b1));
+        /* crossing of a0 + (a1 - a0) x and b0 + (b1 - b0) x, x in (0, 1) */
+        float g0 = a0 - b0, g1 = a1 - b1;
+        int cross = (g0 * g1) < 0.0f;
+        float x = g0 / ef_selectf(cross, g0 - g1, 1.0f);
+        bnd[i] = ef_maxf(m, ef_selectf(cross, a0 + (a1 - a0) * x, 0.0f));
+    }
+}
+
+/* Distance from x to the quintic b (samples cs[0..n-1] at i / (n - 1)), from above: the
+ * nearest sample, then one Newton step on |f(t) - x|^2 from it; the smaller distance. */
+static float ef_ba_dist_curve(const ef_vec3_t *b, const ef_vec3_t *cs, int n, ef_vec3_t x)
+{
+    int j = 0;
+    float d2 = 3.4e38f;
+    for (int i = 0; i < n; i++) {
+        ef_vec3_t w = ef_v3_sub(cs[i], x);
+        float e = ef_v3_dot(w, w);
+        j = e < d2 ? i : j;
+        d2 = ef_minf(d2, e);
+    }
+    ef_vec3_t der[3], pt[1];
+    float t = (float)j / (float)(n - 1);
+    ef_bezier_eval(b, 5, t, 2, der);
+    ef_vec3_t w = ef_v3_sub(der[0], x);
+    float g = ef_v3_dot(w, der[1]);
+    float gg = ef_maxf(ef_v3_dot(der[1], der[1]) + ef_v3_dot(w, der[2]), 1e-30f);
+    float tn = ef_minf(ef_maxf(t - g / gg, 0.0f), 1.0f);
+    ef_bezier_eval(b, 5, tn, 0, pt);
+    return ef_minf(ef_v3_norm(ef_v3_sub(pt[0], x)), ef_sqrtf(d2));
+}
+
+static void ef_ba_try(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in, float len_in,
+                      const ef_prim_t *out, float len_out, float li, float lo, ef_ba_trial_t *tr)
+{
+    ef_vec3_t v = in->end;
+    ef_frame_t ga, gb;
+    ef_prim_frame(start_in, in, len_in - li, &ga);
+    ef_prim_frame(v, out, lo, &gb);
+    ef_endpoint_t e0 = ef_ba_end(&ga), e1 = ef_ba_end(&gb);
+    int rc = ef_seg_g2_quintic(g2, &e0, &e1, &tr->seg);
+    tr->pa = ga.p;
+    tr->pb = gb.p;
+    tr->li = li;
+    tr->lo = lo;
+    /* Deviation, blend to path: max_t min(f_in(t), f_out(t)), f the distances to the replaced
+     * pieces (each an upper bound, see ef_ba_dist_piece()); its top is usually a kink where
+     * the two cross, not a sample. EF_BLEND_DEV_SAMPLES + 2 samples (ends included) and a
+     * bound per interval (ef_ba_interval_bounds()); then the interval with the largest bound
+     * is sampled EF_BA_REFINE - 1 times more and its bound replaced by the finer one. */
+    enum { NS = EF_BLEND_DEV_SAMPLES + 2 };
+    float fa[NS], fb[NS], bnd[NS - 1];
+    const float h = 1.0f / (float)(NS - 1);
+    ef_vec3_t pt[1];
+    for (int i = 0; i < NS; i++) {
+        ef_bezier_eval(tr->seg.b, 5, (float)i * h, 0, pt);
+        fa[i] = ef_ba_dist_piece(pt[0], start_in, in, len_in, len_in - li, len_in);
+        fb[i] = ef_ba_dist_piece(pt[0], v, out, len_out, 0.0f, lo);
+    }
+    ef_ba_interval_bounds(fa, fb, NS, bnd);
+    int jm = 0;
+    for (int i = 1; i < NS - 1; i++)
+        jm = bnd[i] > bnd[jm] ? i : jm;
+    float ga_[EF_BA_REFINE + 1], gb_[EF_BA_REFINE + 1], gbnd[EF_BA_REFINE];
+    ga_[0] = fa[jm];
+    gb_[0] = fb[jm];
+    ga_[EF_BA_REFINE] = fa[jm + 1];
+    gb_[EF_BA_REFINE] = fb[jm + 1];
+    for (int k = 1; k < EF_BA_REFINE; k++) {
+        float t = ((float)jm + (float)k * (1.0f / (float)EF_BA_REFINE)) * h;
+        ef_bezier_eval(tr->seg.b, 5, t, 0, pt);
+        ga_[k] = ef_ba_dist_piece(pt[0], start_in, in, len_in, len_in - li, len_in);
+        gb_[k] = ef_ba_dist_piece(pt[0], v, out, len_out, 0.0f, lo);
+    }
+    ef_ba_interval_bounds(ga_, gb_, EF_BA_REFINE + 1, gbnd);
+    float fine = 0.0f;
+    for (int k = 0; k < EF_BA_REFINE; k++)
+        fine = ef_maxf(fine, gbnd[k]);
+    bnd[jm] = fine;
+    float dev = 0.0f;
+    for (int i = 0; i < NS - 1; i++)
+        dev = ef_maxf(dev, bnd[i]);
+    /* The other way: the path's points must be within the tolerance of the blend too (a
+     * lopsided hairpin blend could otherwise cut the tip short while staying close to one of
+     * the two nearly parallel pieces). Checked for the vertex and EF_BA_PATH_PTS points of
+     * each replaced piece, by ef_ba_dist_curve() (an upper bound). */
+    ef_vec3_t cs[NS];
+    for (int i = 0; i < NS; i++)
+        ef_bezier_eval(tr->seg.b, 5, (float)i * h, 0, &cs[i]);
+    dev = ef_maxf(dev, ef_ba_dist_curve(tr->seg.b, cs, NS, v));
+    for (int k = 1; k <= EF_BA_PATH_PTS; k++) {
+        float fr = (float)k * (1.0f / (float)(EF_BA_PATH_PTS + 1));
+        ef_frame_t f;
+        ef_prim_frame(start_in, in, len_in - fr * li, &f);
+        dev = ef_maxf(dev, ef_ba_dist_curve(tr->seg.b, cs, NS, f.p));
+        ef_prim_frame(v, out, fr * lo, &f);
+        dev = ef_maxf(dev, ef_ba_dist_curve(tr->seg.b, cs, NS, f.p));
+    }
+    tr->dev = dev * EF_BA_DEV_REL;
+    /* A configuration whose tangent angles the table had to clamp (a lopsided hairpin: a
+     * tangent beyond 90 degrees from the chord) gives a poor curve; such a trial does not
+     * count. (A clamped curvature, a tight arc, is fine: the curve still meets the end data
+     * exactly and its deviation is measured.) */
+    uint32_t bad = EF_LOOKUP_CLAMP_ALPHA | EF_LOOKUP_CLAMP_BETA;
+    tr->ok = (rc == EF_OK) & (tr->seg.degree == 5) & ef_ba_finite(tr->dev) &
+             ((tr->seg.clamp & bad) == 0u);
+}
+
+int ef_blend_prims(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in, float len_in,
+                   const ef_prim_t *out, float len_out, float tol, float max_in, float max_out,
+                   ef_blend_t *res)
+{
+    if (!res)
+        return EF_ERR_ARG;
+    if (!g2 || !in || !out)
+        return ef_ba_fail_blend(res, EF_ERR_ARG);
+    if (g2->kind != EF_TABLE_G2_QUINTIC)
+        return ef_ba_fail_blend(res, EF_ERR_KIND);
+    int finite = ef_ba_finite(len_in) & ef_ba_finite(len_out) & ef_ba_finite(tol) &
+                 ef_ba_finite(max_in) & ef_ba_finite(max_out);
+    if (!finite)
+        return ef_ba_fail_blend(res, EF_ERR_NONFINITE);
+    float cl_in, cl_out;
+    int rc = ef_prim_check(start_in, in, &cl_in);
+    if (rc != EF_OK)
+        return ef_ba_fail_blend(res, rc);
+    rc = ef_prim_check(in->end, out, &cl_out);
+    if (rc != EF_OK)
+        return ef_ba_fail_blend(res, rc);
+    /* The lengths must be the primitives' (ef_prim_check()'s, up to rounding). */
+    int lens = (ef_fabsf(len_in - cl_in) <= 1e-5f * cl_in) &
+               (ef_fabsf(len_out - cl_out) <= 1e-5f * cl_out);
+    int range = (tol > 0.0f) & (max_in > 0.0f) & (max_out > 0.0f) & (max_in <= len_in) &
+                (max_out <= len_out);
+    if (!(lens & range))
+        return ef_ba_fail_blend(res, EF_ERR_ARG);
+    /* From here on the lengths as this code computes them, so s = len is exactly the end. */
+    len_in = cl_in;
+    len_out = cl_out;
+    max_in = ef_minf(max_in, cl_in);
+    max_out = ef_minf(max_out, cl_out);
+
+    ef_vec3_t v = in->end;
+    ef_frame_t fi, fo;
+    ef_prim_frame(start_in, in, len_in, &fi);
+    ef_prim_frame(v, out, 0.0f, &fo);
+    if (in->kind == EF_PRIM_LINE && out->kind == EF_PRIM_LINE)
+        return ef_blend_corner(g2, v, fi.t, fo.t, tol, max_in, max_out, res);
+
+    /* The line–line blend with the vertex tangents: turn, outcome for reversals and straight
+     * corners, gain g and the first trim estimate (no neighbour limit). */
+    ef_blend_t ll;
+    rc = ef_blend_corner(g2, v, fi.t, fo.t, tol, EF_MAX_COORD, EF_MAX_COORD, &ll);
+    if (rc != EF_OK)
+        return ef_ba_fail_blend(res, rc);
+    float theta = ll.turn;
+    int straight = (ll.flags & EF_BLEND_STRAIGHT) != 0u;
+
+    /* Arc sides are trimmed by at most EF_ARC_PIECE_SWEEP of their sweep, so the replaced
+     * piece stays a gentle curve the table can follow. */
+    float cap_in = max_in, cap_out = max_out;
+    if (in->kind == EF_PRIM_ARC)
+        cap_in = ef_minf(cap_in, len_in * (EF_ARC_PIECE_SWEEP / ef_fabsf(in->sweep)));
+    if (out->kind == EF_PRIM_ARC)
+        cap_out = ef_minf(cap_out, len_out * (EF_ARC_PIECE_SWEEP / ef_fabsf(out->sweep)));
+    float r_in = ef_ba_radius(start_in, in), r_out = ef_ba_radius(v, out);
+    float scale = ef_ba_maxabs(v) + r_in + r_out;
+    float tol_geo = tol - EF_BA_ROUND_MARGIN * scale;
+
+    /* Trims as a scale lambda of the line–line trim, each side clamped by its own limit.
+     * Fixed EF_BLEND_ITER steps: secant through the origin towards 0.99 (tol - q), kept
+     * inside the bracket [feasible, infeasible] (geometric bisection when it leaves it);
+     * the longest feasible trial is the result. */
+    float l0 = ll.trim_in;
+    int have_l0 = (ll.flags & (EF_BLEND_STRAIGHT | EF_BLEND_STOP)) == 0u;
+    l0 = have_l0 ? l0 : ef_minf(cap_in, cap_out); /* STOP from line–line: still try */
+    l0 = ef_maxf(l0, 1e-30f);
+    float lam_cap = ef_maxf(cap_in, cap_out) / l0;
+    float lam_sym = ef_minf(cap_in, cap_out) / l0; /* largest lambda with equal trims */
+    float lam = ef_minf(1.0f, lam_cap), lo_ok = 0.0f, hi_bad = 3.4e38f;
+    ef_ba_trial_t tr = {0}, best = {0};
+    for (int it = 0; it < EF_BLEND_ITER; it++) {
+        float li = ef_minf(lam * l0, cap_in), lo = ef_minf(lam * l0, cap_out);
+        ef_ba_try(g2, start_in, in, len_in, out, len_out, li, lo, &tr);
+        int feasible = tr.ok & (tr.dev <= tol_geo);
+        if (feasible && lam > lo_ok) {
+            lo_ok = lam;
+            best = tr;
+        }
+        if (!feasible)
+            hi_bad = ef_minf(hi_bad, lam);
+        float next = lam * (0.99f * tol_geo / ef_maxf(tr.dev, 1e-30f));
+        /* a failed trial: back towards symmetric trims (in the table's domain), or halve */
+        float back = lam > lam_sym ? ef_maxf(lam_sym, 0.5f * lam) : 0.5f * lam;
+        next = tr.ok ? next : back;
+        next = ef_minf(next, lam_cap);
+        int inside = (next > lo_ok) & (next < hi_bad);
+        float mid = tr.ok ? 0.5f * ef_minf(hi_bad, lam) : back;
+        mid = lo_ok > 0.0f ? ef_sqrtf(lo_ok * ef_minf(hi_bad, lam_cap)) : mid;
+        lam = inside ? next : mid;
+        lam = ef_maxf(lam, 1e-30f);
+    }
+
+    int blend = best.ok & (straight ^ 1) & (tol_geo > 0.0f);
+    int stop = (straight ^ 1) & (blend ^ 1);
+    if (!blend) {
+        ef_blend_t zero = {0};
+        *res = zero;
+        res->p_in = v;
+        res->p_out = v;
+        res->gain = ll.gain;
+        res->turn = theta;
+        res->flags = (uint32_t)straight * EF_BLEND_STRAIGHT + (uint32_t)stop * EF_BLEND_STOP;
+        return EF_OK;
+    }
+    res->seg = best.seg;
+    res->p_in = best.pa;
+    res->p_out = best.pb;
+    res->trim_in = best.li;
+    res->trim_out = best.lo;
+    res->dev = best.dev;
+    res->gain = ll.gain;
+    res->turn = theta;
+    /* A limit, not the tolerance, bounded a side: max_in / max_out or the arc cap. */
+    int clamped = (best.li >= cap_in) | (best.lo >= cap_out);
+    res->flags = (uint32_t)clamped * EF_BLEND_CLAMPED +
+                 (uint32_t)((best.seg.flags & EF_SEG_CLAMPED) != 0u) * EF_BLEND_TBL_CLAMPED;
+    return EF_OK;
+}

@@ -148,7 +148,33 @@ int ef_blend_corner(const ef_table_t *g2, ef_vec3_t v, ef_vec3_t u_in, ef_vec3_t
 /**
  * @brief Blend the corner between two checked primitives (lines, arcs, helices). For two
  * lines this is ef_blend_corner() with the lines' directions; otherwise the measured
- * construction of the file comment. Fixed instruction count per pair of kinds.
+ * construction of the file comment. Fixed instruction count per pair of kinds (fixed
+ * iteration and sample counts; only keeping the best trial and the outcome differ).
+ *
+ * Details of the measured construction (firmware/src/ef_blend_arc.c):
+ * - both primitives are checked again (ef_prim_check(); its error codes are returned) and
+ *   len_in / len_out must be their lengths to 1e-5 relative (else EF_ERR_ARG);
+ * - outcome STRAIGHT when the vertex tangents turn by less than EF_BLEND_MIN_TURN (a
+ *   curvature jump there, e.g. a line tangent to an arc, is left as it is);
+ * - the trim on an arc side is also at most EF_ARC_PIECE_SWEEP of its sweep;
+ * - trims are lambda x (the line–line trim for the vertex tangents), each side clamped by
+ *   its own limit; EF_BLEND_ITER trials (secant towards 0.99 (tol - q), bracketed), the
+ *   longest feasible one is kept. q = 4 eps (max|v_i| + r_in + r_out), r = 0 for lines;
+ * - a trial is feasible if the table did not clamp its tangent angles (a lopsided hairpin,
+ *   a tangent beyond 90 degrees from the chord, would; a clamped curvature is accepted) and
+ *   its measured deviation is within tol - q. The deviation is two-sided:
+ *   (a) blend to path: the distances of EF_BLEND_DEV_SAMPLES + 2 blend points (ends
+ *   included) to each replaced piece, each an upper bound (the distance to an actual point
+ *   of the piece); per interval each distance is bounded by its linear interpolant plus
+ *   (local max |second difference|) / 8, and the top of the smaller of the two bounds
+ *   (at an end or at their crossing, the blend's middle) is the interval's bound; the
+ *   interval with the largest bound is sampled 7 times more and bounded again; times 1.02;
+ *   (b) path to blend: the vertex and 3 points of each replaced piece to the blend (nearest
+ *   sample plus one Newton step, an upper bound). Without (b) a blend between two nearly
+ *   parallel pieces could cut a hairpin's tip short and still be close to the path;
+ * - res->dev is that measured deviation, res->gain the line–line g(turn) of the vertex
+ *   tangents (for information), EF_BLEND_CLAMPED when max_in, max_out or the arc cap
+ *   limited a trim.
  * @param g2       G2 quintic table
  * @param start_in where the incoming primitive starts
  * @param in       incoming primitive (ends at the vertex)
@@ -181,7 +207,13 @@ int ef_blend_prims(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in
  * @param s0,s1  0 <= s0 < s1 <= its length; the sweep of the piece must not exceed
  *               ::EF_ARC_PIECE_SWEEP (plus rounding)
  * @param m      out: b, degree 5, kind EF_MOVE_ARC, dev, tag, feed; length and kappa_max
- *               via ef_move_measure(); planner fields zero
+ *               via ef_move_measure(); planner fields zero; flags EF_MOVE_CLAMPED when the
+ *               lookup clamped. dev: the largest of 64 interior samples' distances to the
+ *               piece (each an upper bound: the distance to a point of the piece; exact
+ *               for circles); tests/test_prim.c finds it at least the true maximum less
+ *               float32 rounding, and at most 1.7 times it. On error m is all zero.
+ *               The primitive is checked again (ef_prim_check(); its codes are
+ *               returned).
  * @retval EF_OK
  * @retval EF_ERR_ARG  NULL pointer, not an arc, s0/s1 out of range or piece too long
  * @retval EF_ERR_KIND not a G2 quintic table

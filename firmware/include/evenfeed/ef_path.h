@@ -111,12 +111,29 @@ typedef struct {
  * @retval EF_ERR_ARC        inconsistent arc: radius mismatch beyond the tolerance, axis
  *                           not unit, sweep 0 or above EF_ARC_MAX_SWEEP, or the end's
  *                           angle not the one the sweep reaches (beyond the tolerance)
+ *
+ * Checks run in this order, so one input has one code: ARG (NULL, kind, flags); NONFINITE
+ * (start, end, feed, tol, qtol, and for arcs centre, axis, sweep; a NaN tol is NONFINITE,
+ * not ARG); ARG (tol or qtol < 0); FEED; then for lines DEGENERATE; for arcs ARC (axis:
+ * | |axis|^2 - 1 | > 2 EF_UNIT_TOL; sweep), DEGENERATE (radius), ARC (radius, angle).
+ * A line's arc fields are not looked at. Only the centre's position perpendicular to the
+ * axis matters (the axis line through it). The angle test allows the radius tolerance as an
+ * arc length, r |d angle| <= max(EF_ARC_ABS_TOL, EF_ARC_REL_TOL r), plus the float32
+ * rounding of the sweep itself, 8 eps (|sweep| + 2 pi) rad (eps = 2^-23), so many-turn arcs
+ * are not refused for their representation.
  */
 int ef_prim_check(ef_vec3_t start, const ef_prim_t *pr, float *len);
 
 /**
  * @brief Point, tangent, normal and curvature of a (checked) primitive at arc length `s`
- * from its start, 0 <= s <= len (clamped).
+ * from its start, 0 <= s <= len (clamped; NaN counts as 0).
+ *
+ * The position is exactly `start` at s <= 0 and exactly `pr->end` at s >= len (len as
+ * ef_prim_check() computes it), so consecutive primitives join exactly. Lines: n = 0,
+ * kappa = 0. Arcs: evaluated with the start radius; sin/cos by a fixed-count polynomial
+ * (about 1 ulp), so positions are within a few eps of (|centre| + r) plus the float32
+ * resolution of the angle sweep * s / len (eps |sweep| r: 5e-4 r at 1000 turns).
+ * The primitive is not validated again (out is zero for NULL or an unknown kind).
  * @retval EF_OK
  * @retval EF_ERR_ARG NULL pointer or unknown kind
  */
@@ -174,6 +191,11 @@ typedef struct {
  * @brief Arc length, curvature bound and largest |tangent component| per axis of a move's
  * curve, by Gauss–Legendre quadrature and sampling with fixed counts
  * (::EF_MOVE_SAMPLES samples; for degree 1 exact).
+ *
+ * Length: 16-node Gauss–Legendre on |f'| (relative error ~2e-7 on evenfeed's curves).
+ * kappa_max and tabs: at t = i / EF_MOVE_SAMPLES, i = 0..EF_MOVE_SAMPLES (ends included).
+ * A zero speed at a sample (a cusp) gives an infinite curvature: EF_ERR_NONFINITE. On error
+ * length, kappa_max and tabs are zero.
  * @param m  move with b and degree set; m->length, m->kappa_max and m->tabs are filled
  * @retval EF_OK
  * @retval EF_ERR_ARG       NULL move or degree not 1, 3 or 5
@@ -188,7 +210,7 @@ int ef_move_measure(ef_move_t *m);
 
 /**
  * @brief Evaluate a move's time law at time t since the move began (clamped to
- * [0, duration]).
+ * [0, duration]; t >= duration or NaN gives tau = 1 exactly). Implemented in ef_plan.c.
  * @param m   move (law, duration, length set)
  * @param t   time (s)
  * @param tau out: parameter in [0, 1]
