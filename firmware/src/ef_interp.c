@@ -1,2 +1,148 @@
-/* Placeholder until the module lands. */
-typedef int ef_interp_placeholder_t;
+/* Interpolator: planned moves -> setpoints at the servo period (see ef_interp.h). */
+#include "evenfeed/ef_interp.h"
+#include "evenfeed/ef_bezier.h"
+#include "evenfeed/ef_err.h"
+
+/** Smallest parametric speed |f'(tau)| the corrected step divides by (below it the law's
+ *  tau is used for that sample). */
+#define EF_INTERP_MIN_DERIV 1e-12f
+
+static int ef_interp_finite(float x)
+{
+    return (x - x) == 0.0f;
+}
+
+static int ef_interp_vok(ef_vec3_t v)
+{
+    return ef_interp_finite(v.x) & ef_interp_finite(v.y) & ef_interp_finite(v.z) &
+           (ef_fabsf(v.x) <= EF_MAX_COORD) & (ef_fabsf(v.y) <= EF_MAX_COORD) &
+           (ef_fabsf(v.z) <= EF_MAX_COORD);
+}
+
+int ef_interp_init(ef_interp_t *ip, ef_vec3_t home, uint32_t period_us, int mode)
+{
+    if (!ip || period_us == 0u || (mode != EF_STEP_UNIFORM && mode != EF_STEP_CORRECTED))
+        return EF_ERR_ARG;
+    if (!ef_interp_vok(home))
+        return EF_ERR_NONFINITE;
+    ip->head = ip->count = 0;
+    ip->mode = mode;
+    ip->period_us = period_us;
+    ip->t = ip->tau = ip->s_done = 0.0f;
+    ip->pos = ip->end = home;
+    ip->v_end = 0.0f;
+    ip->last_seq = ip->last_tag = 0;
+    return EF_OK;
+}
+
+uint32_t ef_interp_space(const ef_interp_t *ip)
+{
+    return ip ? (uint32_t)EF_INTERP_QUEUE - ip->count : 0u;
+}
+
+int ef_interp_push(ef_interp_t *ip, const ef_move_t *m)
+{
+    if (!ip || !m)
+        return EF_ERR_ARG;
+    if (m->degree != 1 && m->degree != 3 && m->degree != 5)
+        return EF_ERR_ARG;
+    int ok =
+        ef_interp_finite(m->duration) & ef_interp_finite(m->length) & ef_interp_finite(m->v_exit);
+    for (int i = 0; i <= m->degree; i++)
+        ok &= ef_interp_vok(m->b[i]);
+    for (int k = 0; k < EF_TIMELAW_PHASES; k++) {
+        ok &= ef_interp_finite(m->law.dt[k]) & (m->law.dt[k] >= 0.0f);
+        for (int i = 0; i < 5; i++)
+            ok &= ef_interp_finite(m->law.c[k][i]);
+    }
+    if (!ok || !(m->duration > 0.0f) || !(m->length > 0.0f) || !(m->v_exit >= 0.0f))
+        return EF_ERR_ARG;
+    ef_vec3_t gap = ef_v3_sub(m->b[0], ip->end);
+    if (!(ef_v3_dot(gap, gap) <= EF_INTERP_JOIN_TOL * EF_INTERP_JOIN_TOL))
+        return EF_ERR_ARG;
+    if (ip->count >= EF_INTERP_QUEUE)
+        return EF_ERR_FULL;
+    if (ip->count == 0) {
+        ip->t = ip->tau = ip->s_done = 0.0f;
+    }
+    ip->q[(ip->head + ip->count) % EF_INTERP_QUEUE] = *m;
+    ip->count++;
+    ip->end = m->b[m->degree];
+    ip->v_end = m->v_exit;
+    return EF_OK;
+}
+
+/** Position on the head move at time ip->t (uniform or corrected parameter step). */
+static void ef_interp_eval(ef_interp_t *ip, const ef_move_t *m, float *v)
+{
+    float tau_law = 0.0f;
+    ef_timelaw_eval(m, ip->t, &tau_law, v);
+    ef_vec3_t d[2];
+    if (ip->mode != EF_STEP_CORRECTED) {
+        ef_bezier_eval(m->b, m->degree, tau_law, 0, d);
+        ip->tau = tau_law;
+        ip->pos = d[0];
+        return;
+    }
+    /* One Newton-like step on arc length: S (chords so far) towards s(t) = L tau_law. */
+    ef_bezier_eval(m->b, m->degree, ip->tau, 1, d);
+    float s = tau_law * m->length;
+    float sp = ef_v3_norm(d[1]);
+    float tn = tau_law;
+    if (sp > EF_INTERP_MIN_DERIV)
+        tn = ip->tau + (s - ip->s_done) / sp;
+    if (!ef_interp_finite(tn))
+        tn = tau_law;
+    tn = ef_maxf(ip->tau, ef_minf(1.0f, tn)); /* never step back */
+    ef_vec3_t p[1];
+    ef_bezier_eval(m->b, m->degree, tn, 0, p);
+    ip->s_done += ef_v3_norm(ef_v3_sub(p[0], d[0]));
+    ip->tau = tn;
+    ip->pos = p[0];
+}
+
+int ef_interp_process(ef_interp_t *ip, uint32_t dt_us, uint32_t *next_us, ef_setpoint_t *sp)
+{
+    if (!ip || !sp)
+        return EF_ERR_ARG;
+    if (next_us)
+        *next_us = ip->period_us;
+    int rc = EF_OK;
+    float v = 0.0f;
+    if (ip->count > 0) {
+        ip->t += (float)dt_us * 1e-6f;
+        /* Finish every move the elapsed time covers; the leftover carries into the next. */
+        for (uint32_t i = 0; i < EF_INTERP_QUEUE && ip->count > 0; i++) {
+            const ef_move_t *m = &ip->q[ip->head];
+            if (ip->t < m->duration)
+                break;
+            ip->t -= m->duration;
+            ip->pos = m->b[m->degree];
+            ip->last_seq = m->seq;
+            ip->last_tag = m->tag;
+            ip->tau = ip->s_done = 0.0f;
+            ip->head = (ip->head + 1u) % EF_INTERP_QUEUE;
+            ip->count--;
+        }
+        if (ip->count > 0) {
+            const ef_move_t *m = &ip->q[ip->head];
+            ef_interp_eval(ip, m, &v);
+            sp->p = ip->pos;
+            sp->v_plan = v;
+            sp->seq = m->seq;
+            sp->tag = m->tag;
+            sp->moving = 1;
+            return EF_OK;
+        }
+        ip->t = 0.0f;
+        ip->pos = ip->end;
+    }
+    if (ip->v_end > 0.0f)
+        rc = EF_ERR_UNDERRUN; /* ran dry while moving: hold the end position */
+    sp->p = ip->pos;
+    sp->v_plan = 0.0f;
+    sp->seq = ip->last_seq;
+    sp->tag = ip->last_tag;
+    sp->moving = 0;
+    return rc;
+}

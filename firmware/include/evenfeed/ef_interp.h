@@ -83,7 +83,8 @@ int ef_interp_init(ef_interp_t *ip, ef_vec3_t home, uint32_t period_us, int mode
  * @brief Queue a planned move.
  * @retval EF_OK
  * @retval EF_ERR_ARG  NULL, a move that does not start within EF_INTERP_JOIN_TOL of the
- *                     previous end, duration <= 0 or not finite, degree not 1/3/5
+ *                     previous end, duration <= 0 or not finite, degree not 1/3/5,
+ *                     non-finite control points / law / length / v_exit (ip unchanged)
  * @retval EF_ERR_FULL queue full: process first
  */
 int ef_interp_push(ef_interp_t *ip, const ef_move_t *m);
@@ -100,6 +101,10 @@ uint32_t ef_interp_space(const ef_interp_t *ip);
  * @retval EF_OK           sp valid (moving or idle at rest)
  * @retval EF_ERR_ARG      NULL ip or sp
  * @retval EF_ERR_UNDERRUN ran out of moves while moving; sp holds the last end position
+ *                         (returned on every call until a move is pushed; the time the
+ *                         queue was dry is not carried into that move)
+ * Every call finishes as many queued moves as dt covers (at most EF_INTERP_QUEUE) and
+ * carries the leftover time into the next one.
  */
 int ef_interp_process(ef_interp_t *ip, uint32_t dt_us, uint32_t *next_us, ef_setpoint_t *sp);
 

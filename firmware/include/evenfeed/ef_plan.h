@@ -88,17 +88,23 @@ int ef_plan_init(ef_plan_t *p, const ef_limits_t *lim);
  * @param p planner
  * @param m move with b, degree, kind, flags (EF_MOVE_STOP_END), tag, feed, length,
  *          kappa_max, tabs set (ef_move_measure()); planner fields are overwritten
+ *          (flags other than the EF_MOVE_* ones are dropped)
  * @retval EF_OK
- * @retval EF_ERR_ARG       NULL pointer, degree not 1/3/5, length <= 0
- * @retval EF_ERR_NONFINITE non-finite data
+ * @retval EF_ERR_ARG       NULL pointer, degree not 1/3/5, length <= 0 (below EF_MIN_CHORD),
+ *                          kappa_max < 0, a tabs component < 0 or all below 0.5 (every
+ *                          unit tangent has a component >= 1/sqrt(3))
+ * @retval EF_ERR_NONFINITE non-finite data (b, length, kappa_max, tabs, feed), or a control
+ *                          point beyond EF_MAX_COORD
  * @retval EF_ERR_FEED      feed <= 0
  * @retval EF_ERR_FULL      window full: pull first (nothing changed)
+ * On any error the planner is unchanged.
  */
 int ef_plan_push(ef_plan_t *p, const ef_move_t *m);
 
 /**
  * @brief End of input for now: the newest move ends at rest (an exact stop) and every move
- * in the window becomes releasable. Later pushes start again from rest.
+ * in the window becomes releasable. Later pushes start again from rest. (The newest move
+ * gets ::EF_MOVE_STOP_END, so it is released with that flag and v_exit 0.)
  * @retval EF_OK
  * @retval EF_ERR_ARG NULL
  */
@@ -109,6 +115,8 @@ int ef_plan_finish(ef_plan_t *p);
  * @retval EF_OK       out filled
  * @retval EF_ERR_ARG  NULL pointer
  * @retval EF_ERR_AGAIN nothing releasable yet (window not full, no stop in it, not finished)
+ * The pass recomputes the backward bounds of the whole window: O(EF_LOOKAHEAD) ramp
+ * searches, each a fixed-count bisection.
  */
 int ef_plan_pull(ef_plan_t *p, ef_move_t *out);
 
@@ -121,9 +129,11 @@ uint32_t ef_plan_space(const ef_plan_t *p);
  * within the move's length: |v_exit - v_entry| ramp distance <= length (the passes
  * guarantee it); otherwise the exit speed is lowered/raised to what is reachable.
  * @param m     move with length, v_max, a_max, v_entry, v_exit set; duration and law filled
+ *              (v_exit rewritten when it had to be made reachable)
  * @param j_max jerk limit (0: none)
  * @retval EF_OK
- * @retval EF_ERR_ARG NULL, length <= 0, or speeds negative / non-finite
+ * @retval EF_ERR_ARG NULL, length <= 0 (below EF_MIN_CHORD), speeds negative / non-finite,
+ *                    v_max or a_max <= 0, j_max < 0 / non-finite (m unchanged)
  */
 int ef_plan_timelaw(ef_move_t *m, float j_max);
 
