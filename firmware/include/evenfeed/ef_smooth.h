@@ -20,7 +20,9 @@
  *    turn exceeds EF_BLEND_MAX_TURN (a reversal), or when the blend that fits is below float32
  *    resolution: the move ending there gets ::EF_MOVE_STOP_END.
  * 2. **Collinear collapse** (G64 Q): consecutive lines whose inner vertices all lie within
- *    qtol of the merged line become one line (at most ::EF_SMOOTH_MERGE_MAX vertices).
+ *    min(qtol, tol / 2) of the merged line become one line (at most ::EF_SMOOTH_MERGE_MAX
+ *    vertices). What the merge used of the tolerance is taken from the blends at the merged
+ *    line's ends, so the total deviation from the program stays within tol.
  * 3. **Smooth vertex** (CAM micro-segments; the tolerance-gated rule): between two lines
  *    both no longer than micro_len, turning by at most micro_turn, whose lengths differ by at
  *    most a factor ::EF_SMOOTH_LEN_RATIO, and where the curve through the neighbouring points
@@ -30,7 +32,10 @@
  *    segment through the table (::EF_MOVE_SMOOTH).
  * 4. Otherwise a **corner**: a G2 blend within tol (ef_blend_prims()). Each primitive gives
  *    at most half its length to the blend at either end, so blends never overlap.
- * Arcs between vertices become G2 quintic pieces of at most ::EF_ARC_PIECE_SWEEP.
+ * Arcs between vertices become equal G2 quintic pieces of at most ::EF_ARC_PIECE_SWEEP,
+ * split further (doubling, at most ::EF_SMOOTH_ARC_SPLITS times) until a piece deviates from
+ * the true arc by at most max(tol / 2, ::EF_SMOOTH_ARC_TOL_MIN). Equal pieces of one arc
+ * have the same normalized configuration, so checking the first checks them all.
  *
  * ## Errors
  * A primitive that fails validation is refused with its error (nothing is queued, the state
@@ -62,6 +67,14 @@ extern "C" {
 /** Smooth vertices need neighbouring chords whose lengths differ by at most this factor. */
 #ifndef EF_SMOOTH_LEN_RATIO
 #define EF_SMOOTH_LEN_RATIO 4.0f
+#endif
+/** Most doublings of an arc's piece count to meet the tolerance. */
+#ifndef EF_SMOOTH_ARC_SPLITS
+#define EF_SMOOTH_ARC_SPLITS 6
+#endif
+/** Deviation allowed to arc pieces where the tolerance is 0 (exact-stop mode), units. */
+#ifndef EF_SMOOTH_ARC_TOL_MIN
+#define EF_SMOOTH_ARC_TOL_MIN 1e-4f
 #endif
 /** Moves one pushed primitive may produce before the planner must take them (an arc is
  *  emitted piece by piece as the planner has room, so this bounds the staging buffer, not
@@ -106,7 +119,10 @@ typedef struct {
     uint8_t start_smooth, end_smooth; /**< smooth vertex at start / end */
     ef_frame_t fs, fe;   /**< smooth vertex frames at start / end */
     ef_blend_t blend;    /**< blend at its end (when end_kind says so) */
+    ef_vec3_t blend_in_end; /**< where the blend at its start ended (its first point) */
     uint32_t nmerged;    /**< inner vertices merged into it */
+    float merge_dev;     /**< largest distance of those vertices from it: the blends and
+                              smooth sections at its ends get only tol - merge_dev */
     ef_vec3_t merged[EF_SMOOTH_MERGE_MAX]; /**< those vertices (for the Q check) */
 } ef_smooth_prim_t;
 
@@ -120,6 +136,7 @@ typedef struct {
     ef_move_t stage[EF_SMOOTH_STAGE];
     uint32_t sh, sn;      /**< staged moves waiting for planner room */
     uint32_t arc_next;    /**< arc emission cursor: next piece of the oldest primitive */
+    uint32_t arc_n;       /**< pieces the oldest primitive's arc is split into */
     int emitting;         /**< the oldest primitive is partly emitted */
     ef_smooth_stats_t st;
 } ef_smooth_t;
