@@ -1,1 +1,22 @@
-# (filled when the module's tests land)
+# Host pipeline and `evenfeed smooth` (docs/smoothing-cli.md): conversions, exact stops,
+# events, notes, refused input, the sample program end to end, and the CLI's outputs.
+# Test names start with "pipeline" (ctest -R pipeline).
+if(TARGET ef_tables_default)
+  add_executable(test_pipeline ${CMAKE_CURRENT_LIST_DIR}/test_pipeline.c)
+  target_include_directories(test_pipeline PRIVATE ${CMAKE_CURRENT_LIST_DIR})
+  target_compile_definitions(test_pipeline PRIVATE EF_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
+  target_link_libraries(test_pipeline PRIVATE ef_host ef_tables_default m)
+  add_test(NAME pipeline_unit COMMAND test_pipeline)
+  set_tests_properties(pipeline_unit PROPERTIES TIMEOUT 600)
+
+  add_test(NAME pipeline_cli
+           COMMAND bash ${CMAKE_CURRENT_LIST_DIR}/test_smooth_cli.sh $<TARGET_FILE:evenfeed>
+                   ${PROJECT_SOURCE_DIR})
+  set_tests_properties(pipeline_cli PROPERTIES TIMEOUT 600 PASS_REGULAR_EXPRESSION " 0 failed")
+  # The demo needs no input file and writes its SVG where it is told.
+  add_test(NAME pipeline_demo
+           COMMAND sh -c "$<TARGET_FILE:evenfeed> demo --svg \"$1\" && test -s \"$1\"" sh
+                   ${CMAKE_CURRENT_BINARY_DIR}/pipeline-demo.svg)
+  set_tests_properties(pipeline_demo PROPERTIES TIMEOUT 600
+                       PASS_REGULAR_EXPRESSION "SVG plot written to .*pipeline-demo.svg")
+endif()

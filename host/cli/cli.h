@@ -5,6 +5,7 @@
 #include <stdio.h>
 #include "evenfeed/ef_table.h"
 #include "evenfeed/host/ef_host.h"
+#include "evenfeed/host/ef_pipeline.h"
 
 /* Exit status: the negated ef_err code (usage errors are EF_ERR_ARG, exit 1). */
 int ef_cli_exit(int code);
@@ -21,5 +22,17 @@ int ef_cmd_segment(int argc, char **argv);
 int ef_cmd_table(int argc, char **argv);
 int ef_cmd_demo(int argc, char **argv);
 int ef_cmd_gcode(int argc, char **argv);
+int ef_cmd_smooth(int argc, char **argv);
+
+/* evenfeed smooth's options (shared with the demo). */
+typedef struct {
+    const char *out; /* -o: .json (moves) or .csv (setpoints); NULL: none */
+    const char *svg; /* --svg: XY plot; NULL: none */
+    ef_pipe_cfg_t cfg;
+} ef_smooth_opts_t;
+/* Defaults: ef_pipe_cfg_default(), built-in tables, both step modes interpolated. */
+void ef_smooth_opts_default(ef_smooth_opts_t *o);
+/* Smooth an opened program, write the outputs, print the summary; the exit status. */
+int ef_cli_smooth_run(ef_gcode_t *r, const char *title, const ef_smooth_opts_t *o);
 
 #endif

@@ -17,8 +17,9 @@ static const char usage[] =
     "commands:\n"
     "  segment   one G1 cubic / G2 quintic segment from end data (table or --optimize)\n"
     "  table     table files: info, verify, build, emit-c\n"
-    "  demo      the built-in default job: sample segments and a table accuracy check\n"
+    "  demo      the built-in default job: smooth the sample part program, write an SVG\n"
     "  gcode     read a part program and print its path items (docs/gcode.md)\n"
+    "  smooth    smooth a part program: planned moves, setpoints, summary, JSON/CSV/SVG\n"
     "\n"
     "Run 'evenfeed COMMAND --help' for a command's options. Exit status: 0 on success,\n"
     "otherwise the negated evenfeed error code (1 = usage or invalid argument).\n";
@@ -92,6 +93,8 @@ int main(int argc, char **argv)
         return ef_cmd_demo(argc - 1, argv + 1);
     if (!strcmp(argv[1], "gcode"))
         return ef_cmd_gcode(argc - 1, argv + 1);
+    if (!strcmp(argv[1], "smooth"))
+        return ef_cmd_smooth(argc - 1, argv + 1);
     fputs(usage, stderr);
     return ef_cli_error(EF_ERR_ARG, "unknown command '%s'", argv[1]);
 }
