@@ -77,15 +77,21 @@ static void ef_interp_eval(ef_interp_t *ip, const ef_move_t *m, float *v)
 {
     float tau_law = 0.0f;
     ef_timelaw_eval(m, ip->t, &tau_law, v);
-    ef_vec3_t d[2];
+    /* The curve is evaluated relative to b0 and b0 added last: at the curve's own scale
+     * float32 resolves one servo period's step far better than at machine coordinates,
+     * where the evaluation's rounding (several ulps of ~100 mm) is a few per cent of a
+     * slow 1 um step. The corrected step's chords need the same resolution. */
+    ef_vec3_t d[2], lb[6];
+    for (int i = 0; i <= m->degree && i < 6; i++)
+        lb[i] = ef_v3_sub(m->b[i], m->b[0]);
     if (ip->mode != EF_STEP_CORRECTED) {
-        ef_bezier_eval(m->b, m->degree, tau_law, 0, d);
+        ef_bezier_eval(lb, m->degree, tau_law, 0, d);
         ip->tau = tau_law;
-        ip->pos = d[0];
+        ip->pos = ef_v3_add(m->b[0], d[0]);
         return;
     }
     /* One Newton-like step on arc length: S (chords so far) towards s(t) = L tau_law. */
-    ef_bezier_eval(m->b, m->degree, ip->tau, 1, d);
+    ef_bezier_eval(lb, m->degree, ip->tau, 1, d);
     float s = tau_law * m->length;
     float sp = ef_v3_norm(d[1]);
     float tn = tau_law;
@@ -95,10 +101,10 @@ static void ef_interp_eval(ef_interp_t *ip, const ef_move_t *m, float *v)
         tn = tau_law;
     tn = ef_maxf(ip->tau, ef_minf(1.0f, tn)); /* never step back */
     ef_vec3_t p[1];
-    ef_bezier_eval(m->b, m->degree, tn, 0, p);
+    ef_bezier_eval(lb, m->degree, tn, 0, p);
     ip->s_done += ef_v3_norm(ef_v3_sub(p[0], d[0]));
     ip->tau = tn;
-    ip->pos = p[0];
+    ip->pos = ef_v3_add(m->b[0], p[0]);
 }
 
 int ef_interp_process(ef_interp_t *ip, uint32_t dt_us, uint32_t *next_us, ef_setpoint_t *sp)
