@@ -30,4 +30,36 @@ if(NOT EF_SANITIZE)
            COMMAND sh ${CMAKE_CURRENT_SOURCE_DIR}/bench/ct_bench.sh $<TARGET_FILE:bench_ct>
                    2000 g1 g2 blend)
   set_tests_properties(fw_constant_time PROPERTIES SKIP_RETURN_CODE 77 TIMEOUT 300)
+
+  # Smoothing benchmarks (tests/bench/run_all.sh, docs/benchmarks-smoothing.md), against the
+  # default tables. bench_blends compares corner treatments with its own geometry (it needs
+  # only ef_blend_corner); with EF_BENCH_SMOOTH it also runs the streaming smoother, and
+  # bench_smooth (reader -> smoother -> interpolator throughput) and bench_ct_path (per-call
+  # instruction counts of the per-move functions) are built. OFF leaves everything that needs
+  # ef_smooth / ef_plan / ef_prim / ef_interp out.
+  option(EF_BENCH_SMOOTH "Smoothing benchmarks that need the runtime smoother" ON)
+  if(TARGET ef_tables_default)
+    add_executable(bench_blends bench/bench_blends.c)
+    target_include_directories(bench_blends PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
+    target_link_libraries(bench_blends PRIVATE ef_fw ef_tables_default m)
+    add_executable(gen_cam bench/gen_cam.c)
+    target_link_libraries(gen_cam PRIVATE m)
+    # The comparison must keep working: E, A and F within P, E and F G2, A not.
+    add_test(NAME bench_blends_smoke COMMAND bench_blends --quick)
+    set_tests_properties(bench_blends_smoke PROPERTIES PASS_REGULAR_EXPRESSION "smoke: OK")
+    # The generated program must stay readable.
+    add_test(NAME bench_gen_cam_smoke
+             COMMAND sh -c "\"$1\" -n 3000 -o \"$3\" && \"$2\" gcode \"$3\" >/dev/null" sh
+                     $<TARGET_FILE:gen_cam> $<TARGET_FILE:evenfeed>
+                     ${CMAKE_CURRENT_BINARY_DIR}/gen_cam_smoke.ngc)
+    if(EF_BENCH_SMOOTH)
+      target_compile_definitions(bench_blends PRIVATE EF_BENCH_SMOOTH)
+      add_executable(bench_smooth bench/bench_smooth.c)
+      target_link_libraries(bench_smooth PRIVATE ef_host ef_tables_default ef_fw m)
+      add_executable(bench_ct_path bench/bench_ct.c)
+      target_include_directories(bench_ct_path PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
+      target_compile_definitions(bench_ct_path PRIVATE EF_BENCH_PATH EF_BENCH_DEFAULT_TABLES)
+      target_link_libraries(bench_ct_path PRIVATE ef_fw_bench ef_tables_default m)
+    endif()
+  endif()
 endif()

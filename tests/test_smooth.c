@@ -60,7 +60,8 @@ static double dist_line(const double *x, const double *a, const double *b)
 static double dist_arc(const double *x, const prog_t *g)
 {
     const ef_prim_t *p = &g->pr;
-    double c[3] = {p->centre.x, p->centre.y, p->centre.z}, ax[3] = {p->axis.x, p->axis.y, p->axis.z};
+    double c[3] = {p->centre.x, p->centre.y, p->centre.z},
+           ax[3] = {p->axis.x, p->axis.y, p->axis.z};
     double r0[3] = {g->a[0] - c[0], g->a[1] - c[1], g->a[2] - c[2]};
     double r = d3norm(r0);
     double e1[3] = {r0[0] / r, r0[1] / r, r0[2] / r};
@@ -192,7 +193,7 @@ static ef_prim_t arc_to(ef_vec3_t from, float cx, float cy, float sweep, float f
 }
 
 typedef struct {
-    double dev_over;  /* max over moves of measured deviation / tolerance */
+    double dev_over; /* max over moves of measured deviation / tolerance */
     int kinds[5];
     int stops;
 } runinfo_t;
@@ -244,11 +245,13 @@ static runinfo_t check_run(ef_vec3_t start, ef_vec3_t end, double tol, const ef_
             if (dv > ri.dev_over)
                 ri.dev_over = dv;
             if (dv > 1.0)
-                fprintf(stderr, "  over: move %d kind %d deg %d flags %u tag %u dev %.4g/P "
-                        "(own estimate %.4g/P) len %.4g\n", i, m->kind, m->degree,
-                        (unsigned)m->flags, (unsigned)m->tag, dv, m->dev / tol, m->length),
-                fprintf(stderr, "    prim kind %d, sweep %g, tol %g\n", P[m->tag].pr.kind,
-                        P[m->tag].pr.sweep, tol);
+                fprintf(stderr,
+                        "  over: move %d kind %d deg %d flags %u tag %u dev %.4g/P "
+                        "(own estimate %.4g/P) len %.4g\n",
+                        i, m->kind, m->degree, (unsigned)m->flags, (unsigned)m->tag, dv,
+                        m->dev / tol, m->length),
+                    fprintf(stderr, "    prim kind %d, sweep %g, tol %g\n", P[m->tag].pr.kind,
+                            P[m->tag].pr.sweep, tol);
         }
         prev = m->b[m->degree];
         vprev = m->v_exit;
@@ -440,7 +443,8 @@ static void test_random(int runs)
                 /* an arc of random radius and sweep starting here */
                 double rr = 0.5 + 20 * urand(), sw = (urand() - 0.5) * 4;
                 double side = sw > 0 ? 1 : -1;
-                float cx = (float)(p.x - side * rr * sin(dir)), cy = (float)(p.y + side * rr * cos(dir));
+                float cx = (float)(p.x - side * rr * sin(dir)),
+                      cy = (float)(p.y + side * rr * cos(dir));
                 pr[i] = arc_to(p, cx, cy, (float)sw, 30, tol);
                 pr[i].centre.z = p.z;
                 dir += sw;
@@ -613,7 +617,8 @@ static void test_with_interp(void)
         int rc = ef_interp_process(&ip, 1000, &nx, &sp);
         if (rc == EF_ERR_UNDERRUN)
             underrun++;
-        if (!isfinite(sp.p.x) || !isfinite(sp.p.y) || ef_v3_norm(ef_v3_sub(sp.p, last)) > 60e-3f * 1.01f)
+        if (!isfinite(sp.p.x) || !isfinite(sp.p.y) ||
+            ef_v3_norm(ef_v3_sub(sp.p, last)) > 60e-3f * 1.01f)
             bad++;
         last = sp.p;
         if (finished && !have_pending && !sp.moving && ef_interp_space(&ip) == EF_INTERP_QUEUE &&
@@ -632,8 +637,8 @@ int main(int argc, char **argv)
     if (!M)
         return 2;
     const char *only = argc > 1 ? argv[1] : "";
-#define RUN(name, call)                                                                        \
-    if (!*only || !strcmp(only, name))                                                         \
+#define RUN(name, call)                                                                            \
+    if (!*only || !strcmp(only, name))                                                             \
         call;
     RUN("square", test_square());
     RUN("reversal", test_reversal());

@@ -198,8 +198,8 @@ static ef_frame_t ef_sm_line_frame(ef_vec3_t p, ef_vec3_t dir)
 
 /* Smooth-vertex test between lines a->b and b->c (the tolerance-gated rule, ef_smooth.h);
  * on success *f is the frame of the circle through a, b, c at b. */
-static int ef_sm_smooth_gate(const ef_smooth_t *s, ef_vec3_t a, ef_vec3_t b, ef_vec3_t c,
-                             float tol, ef_frame_t *f)
+static int ef_sm_smooth_gate(const ef_smooth_t *s, ef_vec3_t a, ef_vec3_t b, ef_vec3_t c, float tol,
+                             ef_frame_t *f)
 {
     float ml = s->cfg.micro_len;
     if (!(ml > 0.0f))
@@ -346,7 +346,8 @@ static int ef_sm_next_move(ef_smooth_t *s, ef_move_t *m)
                  * through at speed. */
                 ef_frame_t f0, f1;
                 float s0 = h->trim_start, s1 = h->len - h->trim_end;
-                ef_prim_frame(h->start, &h->pr, s0 + (s1 - s0) * (float)s->arc_next / (float)n, &f0);
+                ef_prim_frame(h->start, &h->pr, s0 + (s1 - s0) * (float)s->arc_next / (float)n,
+                              &f0);
                 ef_prim_frame(h->start, &h->pr,
                               s0 + (s1 - s0) * (float)(s->arc_next + 1) / (float)n, &f1);
                 ef_move_t *prev = ef_sm_stage_last(s);
@@ -367,8 +368,7 @@ static int ef_sm_next_move(ef_smooth_t *s, ef_move_t *m)
                 ef_frame_t f1 = h->end_smooth ? h->fe : ef_sm_line_frame(b, dir);
                 if (h->trim_start > 0.0f)
                     f0.p = h->blend_in_end; /* exactly where the blend ended */
-                rc = ef_sm_smooth_move(s, m, &f0, &f1, h->start, h->pr.end, h->pr.feed,
-                                       h->pr.tag);
+                rc = ef_sm_smooth_move(s, m, &f0, &f1, h->start, h->pr.end, h->pr.feed, h->pr.tag);
                 if (rc != EF_OK || m->dev > h->pr.tol - h->merge_dev) {
                     /* Not representable within the tolerance: the chord itself, with exact
                      * stops at both ends (tangents differ there). */
@@ -482,7 +482,8 @@ static int ef_sm_try_merge(ef_smooth_t *s, const ef_prim_t *pr)
     ef_vec3_t a = h->start, c = pr->end;
     ef_vec3_t ac = ef_v3_sub(c, a);
     float lac = ef_v3_norm(ac);
-    if (!(lac > EF_MIN_CHORD) || ef_v3_dot(ef_v3_sub(c, h->pr.end), ef_v3_sub(h->pr.end, a)) <= 0.0f)
+    if (!(lac > EF_MIN_CHORD) ||
+        ef_v3_dot(ef_v3_sub(c, h->pr.end), ef_v3_sub(h->pr.end, a)) <= 0.0f)
         return 0;
     /* Every inner vertex, old and new, within qtol of the merged chord, and within half
      * the path tolerance so the blends at the ends keep at least the other half. */

@@ -12,6 +12,15 @@
  *   nodump leaves out the client requests, so a single end-of-run dump holds the sum over
  *   all calls: ct_bench.sh --verify compares it with the sum of the per-call dumps.
  *
+ * Built with EF_BENCH_PATH (the bench_ct_path target, default tables linked) it also takes
+ * the per-move building functions of the runtime smoother (figures, not a constant-time
+ * check):
+ *   bprim_la  ef_blend_prims, a line into an arc       bprim_aa  the same, arc into arc
+ *   arcpiece  ef_blend_arc_piece                        measure   ef_move_measure (quintics)
+ *   smooth    a stream of N CAM-like primitives through ef_smooth_push / ef_smooth_pull; every
+ *             push and every pull is one dump, and stdout lists them in order ("call push",
+ *             "call pull" for a pulled move, "call pull0" for an empty pull)
+ *
  * The configurations cover everything the firmware accepts: planar data (in z = 0 and in
  * rotated planes), twisted 3-D tangents, tangents exactly and nearly along the chord,
  * near-reversals, chords 1e-3..1e3, coordinates up to 1e4, and for G2 curvatures of
@@ -38,6 +47,10 @@
 #include "evenfeed/ef_err.h"
 #include "evenfeed/ef_seg.h"
 #include "evenfeed/ef_table.h"
+#ifdef EF_BENCH_PATH
+#include "evenfeed/ef_path.h"
+#include "evenfeed/ef_smooth.h"
+#endif
 
 #ifdef EF_BENCH_DEFAULT_TABLES
 /* The generated default tables, linked in (tables/). */
@@ -356,16 +369,294 @@ static int run_blend(const ef_table_t *tbl, long n, int dump, unsigned long long
     return 0;
 }
 
+#ifdef EF_BENCH_PATH
+/*
+ * Per-move building functions of the runtime smoother. Geometry is planar in XY at a random
+ * height; arcs turn about +Z.
+ */
+
+/* Arc about +Z through v with unit tangent (tx, ty) there, radius r, signed sweep sw: it starts
+ * at v (at_end 0) or ends at v (at_end 1); *start is where it starts. */
+static void arc_at(ef_vec3_t v, double tx, double ty, double r, double sw, int at_end,
+                   ef_vec3_t *start, ef_prim_t *pr)
+{
+    double sg = sw > 0 ? 1 : -1, rx = sg * ty, ry = -sg * tx; /* unit centre -> v */
+    double cx = v.x - r * rx, cy = v.y - r * ry, av = atan2(ry, rx);
+    double ao = at_end ? av - sw : av + sw;
+    ef_vec3_t o = ef_v3((float)(cx + r * cos(ao)), (float)(cy + r * sin(ao)), v.z);
+    memset(pr, 0, sizeof *pr);
+    pr->kind = EF_PRIM_ARC;
+    pr->centre = ef_v3((float)cx, (float)cy, v.z);
+    pr->axis = ef_v3(0.0f, 0.0f, 1.0f);
+    pr->sweep = (float)sw;
+    pr->feed = 50.0f;
+    pr->tol = 0.01f;
+    *start = at_end ? o : v;
+    pr->end = at_end ? v : o;
+}
+
+static double sgn_rand(unsigned long long *rs)
+{
+    return ef_t_rng(rs) & 1u ? 1.0 : -1.0;
+}
+
+/* ef_blend_prims on N random corners: line -> arc (arcs 0) or arc -> arc (arcs 1). */
+static int run_bprim(const ef_table_t *tbl, long n, int dump, int arcs, unsigned long long *rs)
+{
+    long outcome[4] = {0};
+    for (long i = 0; i < n; i++) {
+        ef_vec3_t v = ef_v3((float)ef_t_uniform(rs, -100, 100), (float)ef_t_uniform(rs, -100, 100),
+                            (float)ef_t_uniform(rs, -20, 20));
+        double hi = ef_t_uniform(rs, -M_PI, M_PI);
+        double th = sgn_rand(rs) * ef_t_uniform(rs, 1e-3, 170.0 * M_PI / 180.0), ho = hi + th;
+        ef_prim_t in, out;
+        ef_vec3_t s_in, s_out;
+        if (arcs) {
+            arc_at(v, cos(hi), sin(hi), exp(ef_t_uniform(rs, log(0.5), log(50.0))),
+                   sgn_rand(rs) * ef_t_uniform(rs, 0.2, 3.0), 1, &s_in, &in);
+        } else {
+            double l = exp(ef_t_uniform(rs, log(0.5), log(50.0)));
+            memset(&in, 0, sizeof in);
+            in.kind = EF_PRIM_LINE;
+            in.end = v;
+            in.feed = 50.0f;
+            in.tol = 0.01f;
+            s_in = ef_v3((float)(v.x - l * cos(hi)), (float)(v.y - l * sin(hi)), v.z);
+        }
+        arc_at(v, cos(ho), sin(ho), exp(ef_t_uniform(rs, log(0.5), log(50.0))),
+               sgn_rand(rs) * ef_t_uniform(rs, 0.2, 3.0), 0, &s_out, &out);
+        float len_in, len_out;
+        int rc = ef_prim_check(s_in, &in, &len_in);
+        if (rc == EF_OK)
+            rc = ef_prim_check(v, &out, &len_out);
+        if (rc != EF_OK) {
+            fprintf(stderr, "bench_ct: corner %ld: primitive rejected: %s\n", i, ef_err_str(rc));
+            return 1;
+        }
+        float tol = (float)exp(ef_t_uniform(rs, log(1e-3), log(0.1)));
+        ef_blend_t bl;
+        if (dump)
+            CALLGRIND_ZERO_STATS;
+        rc = ef_blend_prims(tbl, s_in, &in, len_in, &out, len_out, tol, 0.5f * len_in,
+                            0.5f * len_out, &bl);
+        if (dump)
+            CALLGRIND_DUMP_STATS;
+        if (rc != EF_OK) {
+            fprintf(stderr, "bench_ct: ef_blend_prims call %ld failed: %s\n", i, ef_err_str(rc));
+            return 1;
+        }
+        int o = (bl.flags & EF_BLEND_STRAIGHT)  ? 1
+                : (bl.flags & EF_BLEND_STOP)    ? 2
+                : (bl.flags & EF_BLEND_CLAMPED) ? 3
+                                                : 0;
+        outcome[o]++;
+    }
+    printf("bench_ct %s: %ld calls OK; blend %ld, straight %ld, stop %ld, clamped %ld\n",
+           arcs ? "bprim_aa" : "bprim_la", n, outcome[0], outcome[1], outcome[2], outcome[3]);
+    return 0;
+}
+
+/* ef_blend_arc_piece on N random arcs and pieces (sweep of a piece 0.01..EF_ARC_PIECE_SWEEP). */
+static int run_arcpiece(const ef_table_t *tbl, long n, int dump, unsigned long long *rs)
+{
+    for (long i = 0; i < n; i++) {
+        ef_vec3_t v = ef_v3((float)ef_t_uniform(rs, -100, 100), (float)ef_t_uniform(rs, -100, 100),
+                            (float)ef_t_uniform(rs, -20, 20));
+        double h = ef_t_uniform(rs, -M_PI, M_PI), r = exp(ef_t_uniform(rs, log(0.5), log(50.0)));
+        double sw = sgn_rand(rs) * ef_t_uniform(rs, 0.1, 6.0);
+        ef_prim_t pr;
+        ef_vec3_t st;
+        arc_at(v, cos(h), sin(h), r, sw, 0, &st, &pr);
+        float len;
+        int rc = ef_prim_check(st, &pr, &len);
+        if (rc != EF_OK) {
+            fprintf(stderr, "bench_ct: arc %ld rejected: %s\n", i, ef_err_str(rc));
+            return 1;
+        }
+        double psw = fmin(ef_t_uniform(rs, 0.01, 0.999 * (double)EF_ARC_PIECE_SWEEP), fabs(sw));
+        double pl = (double)len * psw / fabs(sw);
+        double s0 = fmax(0.0, ef_t_uniform(rs, 0, (double)len - pl));
+        float f0 = (float)s0, f1 = (float)fmin(s0 + pl, (double)len);
+        ef_move_t m;
+        if (dump)
+            CALLGRIND_ZERO_STATS;
+        rc = ef_blend_arc_piece(tbl, st, &pr, f0, f1, &m);
+        if (dump)
+            CALLGRIND_DUMP_STATS;
+        if (rc != EF_OK) {
+            fprintf(stderr, "bench_ct: ef_blend_arc_piece call %ld failed: %s\n", i,
+                    ef_err_str(rc));
+            return 1;
+        }
+    }
+    printf("bench_ct arcpiece: %ld calls OK\n", n);
+    return 0;
+}
+
+/* ef_move_measure on N random quintics (chords 1e-2..1e2, turning control polygons). */
+static int run_measure(long n, int dump, unsigned long long *rs)
+{
+    for (long i = 0; i < n; i++) {
+        ef_move_t m;
+        memset(&m, 0, sizeof m);
+        m.degree = 5;
+        m.kind = EF_MOVE_SMOOTH;
+        double step = exp(ef_t_uniform(rs, log(2e-3), log(20.0)));
+        double h = ef_t_uniform(rs, -M_PI, M_PI), dh = ef_t_uniform(rs, -0.6, 0.6);
+        double x = ef_t_uniform(rs, -100, 100), y = ef_t_uniform(rs, -100, 100);
+        double z = ef_t_uniform(rs, -20, 20), dz = ef_t_uniform(rs, -0.2, 0.2) * step;
+        for (int j = 0; j < 6; j++) {
+            m.b[j] = ef_v3((float)x, (float)y, (float)z);
+            x += step * cos(h);
+            y += step * sin(h);
+            z += dz;
+            h += dh;
+        }
+        if (dump)
+            CALLGRIND_ZERO_STATS;
+        int rc = ef_move_measure(&m);
+        if (dump)
+            CALLGRIND_DUMP_STATS;
+        if (rc != EF_OK) {
+            fprintf(stderr, "bench_ct: ef_move_measure call %ld failed: %s\n", i, ef_err_str(rc));
+            return 1;
+        }
+    }
+    printf("bench_ct measure: %ld calls OK\n", n);
+    return 0;
+}
+
+static ef_smooth_t bench_sm;
+
+/* One pull, dumped; prints which kind of call it was. Returns 1 when a move came out. */
+static int smooth_pull(int dump, long *moves)
+{
+    ef_move_t m;
+    if (dump)
+        CALLGRIND_ZERO_STATS;
+    int rc = ef_smooth_pull(&bench_sm, &m);
+    if (dump)
+        CALLGRIND_DUMP_STATS;
+    printf("call %s\n", rc == EF_OK ? "pull" : "pull0");
+    *moves += rc == EF_OK;
+    return rc == EF_OK;
+}
+
+/* N CAM-like primitives (micro-segment curves, collinear splits, corners, arcs) through the
+ * smoother, pulling after every push. */
+static int run_smooth(const ef_table_t *tbl, long n, int dump, unsigned long long *rs)
+{
+    ef_smooth_cfg_t cfg;
+    memset(&cfg, 0, sizeof cfg);
+    cfg.g2 = tbl;
+    for (int k = 0; k < 3; k++) {
+        cfg.lim.v_axis[k] = 200.0f;
+        cfg.lim.a_axis[k] = 1000.0f;
+    }
+    cfg.lim.a_normal_frac = 0.5f;
+    cfg.micro_len = 1.0f;
+    cfg.micro_turn = 0.35f;
+    cfg.smooth_degree = 5;
+    double x = 0, y = 0, h = 0, kap = 0.1;
+    int rc = ef_smooth_init(&bench_sm, &cfg, ef_v3(0.0f, 0.0f, 0.0f));
+    if (rc != EF_OK) {
+        fprintf(stderr, "bench_ct: ef_smooth_init: %s\n", ef_err_str(rc));
+        return 1;
+    }
+    long moves = 0, pushes = 0, run = 0;
+    int what = 0;
+    for (long i = 0; i < n; i++) {
+        if (run == 0) { /* next feature: 0 micro curve, 1 straight split, 2 corner, 3 arc */
+            int f = (int)(ef_t_rng(rs) % 10u);
+            what = f < 6 ? 0 : f < 7 ? 1 : f < 9 ? 2 : 3;
+            run = what == 0 ? 10 + (long)(ef_t_rng(rs) % 40u) : what == 1 ? 3 : 1;
+            kap = ef_t_uniform(rs, -0.5, 0.5);
+            if (x * x + y * y > 2500) /* steer back */
+                kap = (cos(h) * -y - sin(h) * -x) >= 0 ? fabs(kap) : -fabs(kap);
+        }
+        run--;
+        ef_prim_t pr;
+        memset(&pr, 0, sizeof pr);
+        pr.feed = 50.0f;
+        pr.tol = 0.01f;
+        pr.qtol = 0.001f;
+        pr.tag = (uint32_t)i;
+        if (what == 3) {
+            ef_vec3_t st;
+            double r = exp(ef_t_uniform(rs, log(1.0), log(20.0)));
+            arc_at(ef_v3((float)x, (float)y, 0.0f), cos(h), sin(h), r,
+                   sgn_rand(rs) * ef_t_uniform(rs, 0.3, 3.0), 0, &st, &pr);
+            pr.tag = (uint32_t)i;
+            pr.qtol = 0.001f;
+            h += (double)pr.sweep;
+            x = pr.end.x;
+            y = pr.end.y;
+        } else {
+            double c = what == 0 ? ef_t_uniform(rs, 0.1, 0.8) : ef_t_uniform(rs, 1, 10);
+            if (what == 0)
+                h += c * kap;
+            else if (what == 2)
+                h += sgn_rand(rs) * ef_t_uniform(rs, 0.5, 2.5);
+            x += c * cos(h);
+            y += c * sin(h);
+            pr.kind = EF_PRIM_LINE;
+            pr.end = ef_v3((float)x, (float)y, 0.0f);
+        }
+        if (i == 0)
+            pr.flags = EF_PRIM_STOP_BEFORE;
+        for (;;) {
+            if (dump)
+                CALLGRIND_ZERO_STATS;
+            rc = ef_smooth_push(&bench_sm, &pr);
+            if (dump)
+                CALLGRIND_DUMP_STATS;
+            printf("call push\n");
+            pushes++;
+            if (rc != EF_ERR_FULL)
+                break;
+            while (smooth_pull(dump, &moves))
+                ;
+        }
+        if (rc != EF_OK) {
+            fprintf(stderr, "bench_ct: ef_smooth_push %ld failed: %s\n", i, ef_err_str(rc));
+            return 1;
+        }
+        while (smooth_pull(dump, &moves))
+            ;
+    }
+    ef_smooth_finish(&bench_sm);
+    while (smooth_pull(dump, &moves))
+        ;
+    printf("bench_ct smooth: %ld primitives, %ld pushes, %ld moves\n", n, pushes, moves);
+    return 0;
+}
+#endif
+
 /* Parse "g1"/"g2"/"blend" and N, build the table, run the calls, report how many of each kind. */
 int main(int argc, char **argv)
 {
-    if (argc < 3 || (strcmp(argv[1], "g1") != 0 && strcmp(argv[1], "g2") != 0 &&
+    int path_kind = -1;
+#ifdef EF_BENCH_PATH
+    static const char *const path_kinds[5] = {"bprim_la", "bprim_aa", "arcpiece", "measure",
+                                              "smooth"};
+    for (int k = 0; k < 5; k++)
+        if (argc > 1 && strcmp(argv[1], path_kinds[k]) == 0)
+            path_kind = k;
+#endif
+    if (argc < 3 || (path_kind < 0 && strcmp(argv[1], "g1") != 0 && strcmp(argv[1], "g2") != 0 &&
                      strcmp(argv[1], "blend") != 0)) {
+#ifdef EF_BENCH_PATH
+        fprintf(stderr,
+                "usage: %s g1|g2|blend|bprim_la|bprim_aa|arcpiece|measure|smooth N "
+                "[dump|nodump] [seed]\n",
+                argv[0]);
+#else
         fprintf(stderr, "usage: %s g1|g2|blend N [dump|nodump] [seed]\n", argv[0]);
+#endif
         return 2;
     }
     int blend = strcmp(argv[1], "blend") == 0;
-    int g2 = blend || strcmp(argv[1], "g2") == 0;
+    int g2 = blend || path_kind >= 0 || strcmp(argv[1], "g2") == 0;
     long n = strtol(argv[2], NULL, 10);
     int dump = argc < 4 || strcmp(argv[3], "nodump") != 0;
     unsigned long long rs = argc > 4 ? strtoull(argv[4], NULL, 0) : 20240607ull;
@@ -384,6 +675,22 @@ int main(int argc, char **argv)
     }
     if (blend)
         return run_blend(tbl, n, dump, &rs);
+#ifdef EF_BENCH_PATH
+    switch (path_kind) {
+    case 0:
+        return run_bprim(tbl, n, dump, 0, &rs);
+    case 1:
+        return run_bprim(tbl, n, dump, 1, &rs);
+    case 2:
+        return run_arcpiece(tbl, n, dump, &rs);
+    case 3:
+        return run_measure(n, dump, &rs);
+    case 4:
+        return run_smooth(tbl, n, dump, &rs);
+    default:
+        break;
+    }
+#endif
 
     long per_kind[BC_COUNT] = {0}, clamped = 0;
     for (long i = 0; i < n; i++) {

@@ -5,7 +5,12 @@
 # Usage: ct_bench.sh [--targets] [--verify] [--keep DIR] BENCH N KIND...
 #   BENCH     the bench_ct binary (this script builds nothing)
 #   N         calls per kind (random valid configurations, fixed seed)
-#   KIND      g1, g2 or blend (ef_blend_corner) (several may be given; each is run and checked)
+#   KIND      g1, g2 or blend (ef_blend_corner) (several may be given; each is run and checked);
+#             with the bench_ct_path binary also, as figures only (min / median / mean / max,
+#             never a failure): bprim_la, bprim_aa (ef_blend_prims line->arc, arc->arc),
+#             arcpiece (ef_blend_arc_piece), measure (ef_move_measure on quintics), smooth
+#             (N primitives through ef_smooth_push / ef_smooth_pull: per push, per pulled
+#             move, and push+pull instructions per move)
 #   --targets also fail if the max count is above the issue's targets (G1 400, G2 1500)
 #   --verify  also run once without per-call dumps and check that the single dump's total,
 #             and callgrind_annotate's inclusive count for the function, equal the sum of
@@ -42,7 +47,7 @@ while [ $# -gt 0 ]; do
     esac
 done
 if [ $# -lt 3 ]; then
-    echo "usage: ct_bench.sh [--targets] [--verify] [--keep DIR] BENCH N g1|g2|blend..." >&2
+    echo "usage: ct_bench.sh [--targets] [--verify] [--keep DIR] BENCH N g1|g2|blend|bprim_la|bprim_aa|arcpiece|measure|smooth..." >&2
     exit 2
 fi
 bench=$1
@@ -61,11 +66,17 @@ fi
 tmp=$(mktemp -d "${TMPDIR:-/tmp}/ef_ct.XXXXXX")
 trap 'rm -rf "$tmp"' EXIT INT TERM
 
-# Run the bench under callgrind collecting only inside $2; dumps go to $tmp/$3.
+# Run the bench under callgrind collecting only inside $2 (one function, or several separated
+# by commas); dumps go to $tmp/$3.
 run_cg() {
     mode=$1 fn=$2 dir=$3 kind=$4
     mkdir -p "$tmp/$dir"
-    if ! valgrind --tool=callgrind --collect-atstart=no --toggle-collect="$fn" \
+    toggles=
+    for f in $(echo "$fn" | tr ',' ' '); do
+        toggles="$toggles --toggle-collect=$f"
+    done
+    # shellcheck disable=SC2086
+    if ! valgrind --tool=callgrind --collect-atstart=no $toggles \
         --callgrind-out-file="$tmp/$dir/cg.%p" "$bench" "$kind" "$n" "$mode" \
         >"$tmp/$dir/log" 2>&1; then
         cat "$tmp/$dir/log" >&2
@@ -74,14 +85,68 @@ run_cg() {
     fi
 }
 
+# Per-dump totals of $tmp/$1 as "index count" lines, in call order.
+dump_counts() {
+    find "$tmp/$1" -name 'cg.*.*' -exec awk '/^totals:/ { k = split(FILENAME, a, "."); print a[k], $2 }' {} + \
+        | sort -n
+}
+
+# min / median / mean / max of the counts on stdin, with a label.
+stats() {
+    sort -n | awk -v label="$1" '
+        { v[NR] = $1; s += $1 }
+        END {
+            if (NR == 0) { printf "%s: no calls\n", label; exit }
+            med = (NR % 2) ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2
+            printf "%s: %d calls, instructions min %d median %g mean %.0f max %d, max/min %.4f\n",
+                   label, NR, v[1], med, s / NR, v[NR], (v[1] > 0 ? v[NR] / v[1] : 0)
+        }'
+}
+
 status=0
 for kind in "$@"; do
+    info=0
     case "$kind" in
     g1) fn=ef_seg_g1_cubic; label="G1 cubic"; target=$TARGET_G1 ;;
     g2) fn=ef_seg_g2_quintic; label="G2 quintic"; target=$TARGET_G2 ;;
     blend) fn=ef_blend_corner; label="corner blend"; target=$TARGET_BLEND ;;
-    *) echo "ct_bench.sh: kind must be g1, g2 or blend, not $kind" >&2; exit 2 ;;
+    bprim_la) fn=ef_blend_prims; label="blend prims line-arc"; info=1 ;;
+    bprim_aa) fn=ef_blend_prims; label="blend prims arc-arc"; info=1 ;;
+    arcpiece) fn=ef_blend_arc_piece; label="arc piece"; info=1 ;;
+    measure) fn=ef_move_measure; label="move measure (quintic)"; info=1 ;;
+    smooth) fn=ef_smooth_push,ef_smooth_pull; label="smoother"; info=2 ;;
+    *) echo "ct_bench.sh: kind must be g1, g2, blend, bprim_la, bprim_aa, arcpiece, measure or smooth, not $kind" >&2; exit 2 ;;
     esac
+    if [ "$info" -eq 2 ]; then
+        # The log lists the calls in dump order: "call push", "call pull" (a move), "call pull0".
+        run_cg dump "$fn" "$kind" "$kind"
+        dump_counts "$kind" >"$tmp/$kind.idx"
+        grep '^call ' "$tmp/$kind/log" | awk '{ print NR, $2 }' >"$tmp/$kind.calls"
+        if [ "$(wc -l <"$tmp/$kind.idx")" -ne "$(wc -l <"$tmp/$kind.calls")" ]; then
+            echo "ct_bench.sh: $(wc -l <"$tmp/$kind.idx") dumps for $(wc -l <"$tmp/$kind.calls") calls" >&2
+            exit 2
+        fi
+        awk 'NR == FNR { c[$1] = $2; next } { print $1, $2, c[$1] }' "$tmp/$kind.idx" \
+            "$tmp/$kind.calls" >"$tmp/$kind.joined"
+        awk '$2 == "push" { print $3 }' "$tmp/$kind.joined" | stats "smoother push"
+        awk '$2 == "pull" { print $3 }' "$tmp/$kind.joined" | stats "smoother pull (one move)"
+        awk '$2 == "pull0" { print $3 }' "$tmp/$kind.joined" | stats "smoother pull (empty)"
+        awk '{ s += $3 } $2 == "pull" { m++ }
+             END { printf "smoother push+pull per move: %d moves from %s primitives, mean %.0f instructions per move\n",
+                   m, "'"$n"'", m ? s / m : 0 }' "$tmp/$kind.joined"
+        continue
+    fi
+    if [ "$info" -eq 1 ]; then
+        run_cg dump "$fn" "$kind" "$kind"
+        dump_counts "$kind" | awk '{ print $2 }' >"$tmp/$kind.counts"
+        got=$(wc -l <"$tmp/$kind.counts")
+        if [ "$got" -ne "$n" ]; then
+            echo "ct_bench.sh: $got dumps for $n calls (bench built without valgrind/callgrind.h?)" >&2
+            exit 2
+        fi
+        stats "$label" <"$tmp/$kind.counts"
+        continue
+    fi
     run_cg dump "$fn" "$kind" "$kind"
     # Per-call dumps are cg.PID.1 .. cg.PID.N; cg.PID (the exit dump) holds nothing
     # counted, since collection is off outside the function.

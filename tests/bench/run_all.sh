@@ -32,3 +32,39 @@ if [ -x "$b/tests/bench_build" ]; then
 else
     echo "(not built: no libepoxy)"
 fi
+
+echo
+echo "== Corner treatments at the same tolerance P (docs/benchmarks-smoothing.md): E evenfeed G2"
+echo "   blends, A LinuxCNC-rule arcs, F fixed-ratio quintics, S the streaming smoother"
+"$b/tests/bench_blends"
+
+echo
+echo "== Runtime chain on a generated 100 000-line CAM-like program (tests/bench/gen_cam.c)"
+"$b/tests/gen_cam" -n 100000 -o "$b/tests/cam100k.ngc"
+"$ef" gcode "$b/tests/cam100k.ngc" >/dev/null
+if [ -x "$b/tests/bench_smooth" ]; then
+    "$b/tests/bench_smooth" "$b/tests/cam100k.ngc" all 3
+    if command -v valgrind >/dev/null 2>&1; then
+        echo
+        echo "== Instructions per pulled move (callgrind: ef_smooth_push + pull + finish, release"
+        echo "   build), 20 000-line program of the same generator"
+        "$b/tests/gen_cam" -n 20000 -o "$b/tests/cam20k.ngc"
+        cg=$(mktemp -d "${TMPDIR:-/tmp}/ef_cg.XXXXXX")
+        valgrind --tool=callgrind --collect-atstart=no --toggle-collect=ef_smooth_push \
+            --toggle-collect=ef_smooth_pull --toggle-collect=ef_smooth_finish \
+            --callgrind-out-file="$cg/cg.out" "$b/tests/bench_smooth" "$b/tests/cam20k.ngc" \
+            smooth 1 >"$cg/log" 2>&1
+        awk '/^smooth-count:/ { m = $3; p = $5 }
+             /^totals:/ { t = $2 }
+             END { printf "%d instructions for %d moves (%d primitives): %.0f per move, %.0f per primitive\n",
+                   t, m, p, t / m, t / p }' "$cg/log" "$cg/cg.out"
+        rm -rf "$cg"
+        echo
+        echo "== Per-call instructions of the per-move functions (callgrind, firmware at -O2, default"
+        echo "   tables), 1000 random inputs each"
+        sh tests/bench/ct_bench.sh "$b/tests/bench_ct_path" 1000 bprim_la bprim_aa arcpiece \
+            measure smooth
+    fi
+else
+    echo "(bench_smooth not built: EF_BENCH_SMOOTH off)"
+fi
