@@ -1,7 +1,9 @@
 /*
  * Cortex-M4F link check: a complete freestanding image (own vector table and reset code,
  * no C runtime start files) that builds one G1 cubic and one G2 quintic segment through
- * small tables defined here. firmware/arm/build.sh links it against libef_fw.a with
+ * small tables defined here, then runs a short program (lines and an arc) through the
+ * streaming smoother, the feed planner and the interpolator, as a controller would.
+ * firmware/arm/build.sh links it against libef_fw.a with
  * --gc-sections and inspects the result: whatever the library drags in shows up there
  * (heap, stdio, double-precision soft-float helpers would all be failures).
  *
@@ -10,16 +12,17 @@
  */
 #include <stdint.h>
 #include "evenfeed/ef_err.h"
+#include "evenfeed/ef_interp.h"
 #include "evenfeed/ef_seg.h"
+#include "evenfeed/ef_smooth.h"
 #include "evenfeed/ef_table.h"
 
 #define LC_PI 3.14159265f
 
 /* G1 fold table, 3 x 5 nodes over (u, v) in [0, pi/2] x [0, pi]: DOFs (x1_0, x1_1). */
 static const float lc_g1_data[3 * 5 * 2] = {
-    1.0f, 1.0f, 1.1f, 0.9f, 1.2f, 0.8f, 0.9f, 1.1f, 1.0f, 1.0f, 1.1f, 0.9f,
-    0.8f, 1.2f, 0.9f, 1.1f, 1.0f, 1.0f, 0.7f, 1.3f, 0.8f, 1.2f, 0.9f, 1.1f,
-    0.6f, 1.4f, 0.7f, 1.3f, 0.8f, 1.2f,
+    1.0f, 1.0f, 1.1f, 0.9f, 1.2f, 0.8f, 0.9f, 1.1f, 1.0f, 1.0f, 1.1f, 0.9f, 0.8f, 1.2f, 0.9f,
+    1.1f, 1.0f, 1.0f, 0.7f, 1.3f, 0.8f, 1.2f, 0.9f, 1.1f, 0.6f, 1.4f, 0.7f, 1.3f, 0.8f, 1.2f,
 };
 
 static const ef_table_t lc_g1 = {
@@ -64,10 +67,10 @@ static const ef_table_t lc_g2 = {
 };
 
 /* End data in RAM (.data) and results in .bss, volatile so nothing is folded away. */
-static volatile ef_endpoint_t lc_e0 = {{0.0f, 0.0f, 0.0f}, {0.8f, 0.6f, 0.0f},
-                                       {-0.6f, 0.8f, 0.0f}, 0.5f};
-static volatile ef_endpoint_t lc_e1 = {{10.0f, 2.0f, 1.0f}, {0.6f, 0.0f, 0.8f},
-                                       {0.0f, 1.0f, 0.0f}, -0.25f};
+static volatile ef_endpoint_t lc_e0 = {
+    {0.0f, 0.0f, 0.0f}, {0.8f, 0.6f, 0.0f}, {-0.6f, 0.8f, 0.0f}, 0.5f};
+static volatile ef_endpoint_t lc_e1 = {
+    {10.0f, 2.0f, 1.0f}, {0.6f, 0.0f, 0.8f}, {0.0f, 1.0f, 0.0f}, -0.25f};
 static volatile float lc_sink[2 * 6 * 3];
 static volatile int lc_status;
 
@@ -86,7 +89,70 @@ static ef_endpoint_t lc_load(const volatile ef_endpoint_t *v)
     return e;
 }
 
-/* Build both segments and publish their control points. */
+/* The whole runtime: smoother, planner and interpolator in static storage (their sizes
+ * show in the image's .bss), a square with a rounded corner pushed as primitives, the moves
+ * pulled into the interpolator and stepped at 1 ms until the queue is idle. */
+static ef_smooth_t lc_smooth;
+static ef_interp_t lc_interp;
+static volatile float lc_pos[3];
+
+static int lc_run_smoother(void)
+{
+    ef_smooth_cfg_t cfg = {0};
+    cfg.g2 = &lc_g2;
+    cfg.g1 = &lc_g1;
+    for (int i = 0; i < 3; i++) {
+        cfg.lim.v_axis[i] = 100.0f;
+        cfg.lim.a_axis[i] = 1000.0f;
+    }
+    cfg.lim.a_normal_frac = 0.5f;
+    cfg.micro_len = 1.0f;
+    cfg.micro_turn = 0.35f;
+    cfg.smooth_degree = 5;
+    ef_vec3_t home = ef_v3(0.0f, 0.0f, 0.0f);
+    int rc = ef_smooth_init(&lc_smooth, &cfg, home);
+    rc |= ef_interp_init(&lc_interp, home, 1000u, EF_STEP_CORRECTED);
+    ef_prim_t pr[4] = {{0}};
+    for (int i = 0; i < 4; i++) {
+        pr[i].kind = EF_PRIM_LINE;
+        pr[i].feed = 50.0f;
+        pr[i].tol = 0.01f;
+        pr[i].tag = (uint32_t)i;
+    }
+    pr[0].end = ef_v3(20.0f, 0.0f, 0.0f);
+    pr[1].kind = EF_PRIM_ARC; /* quarter circle about (20, 5) */
+    pr[1].centre = ef_v3(20.0f, 5.0f, 0.0f);
+    pr[1].axis = ef_v3(0.0f, 0.0f, 1.0f);
+    pr[1].sweep = 0.5f * LC_PI;
+    pr[1].end = ef_v3(25.0f, 5.0f, 0.0f);
+    pr[2].end = ef_v3(25.0f, 20.0f, 0.0f);
+    pr[3].end = ef_v3(0.0f, 20.0f, 0.0f);
+    ef_move_t m;
+    int have = 0;
+    for (uint32_t tick = 0; tick < 100000u; tick++) {
+        if (tick < 4u && ef_smooth_push(&lc_smooth, &pr[tick]) != EF_OK)
+            return 1;
+        if (tick == 4u)
+            rc |= ef_smooth_finish(&lc_smooth);
+        if (!have)
+            have = ef_smooth_pull(&lc_smooth, &m) == EF_OK;
+        if (have && ef_interp_space(&lc_interp) > 0u) {
+            rc |= ef_interp_push(&lc_interp, &m);
+            have = 0;
+        }
+        ef_setpoint_t sp;
+        uint32_t next_us;
+        rc |= ef_interp_process(&lc_interp, 1000u, &next_us, &sp);
+        lc_pos[0] = sp.p.x;
+        lc_pos[1] = sp.p.y;
+        lc_pos[2] = sp.p.z;
+        if (tick > 4u && !have && !sp.moving && ef_interp_space(&lc_interp) == EF_INTERP_QUEUE)
+            break;
+    }
+    return rc != EF_OK;
+}
+
+/* Build both segments and publish their control points; then run the smoother. */
 int main(void)
 {
     ef_endpoint_t e0 = lc_load(&lc_e0), e1 = lc_load(&lc_e1);
@@ -102,6 +168,7 @@ int main(void)
         lc_sink[18 + 3 * i + 2] = s5.b[i].z;
     }
     lc_status = (rc3 == EF_OK && rc5 == EF_OK) ? 0 : 1;
+    lc_status |= lc_run_smoother() << 1;
     return lc_status;
 }
 
@@ -140,10 +207,20 @@ typedef union {
 
 /* The 16 Cortex-M system vectors; a board would append its interrupt lines. */
 __attribute__((section(".isr_vector"), used)) static const lc_vector_t lc_vectors[16] = {
-    {.stack = &_estack},          {.handler = Reset_Handler},   {.handler = Default_Handler},
-    {.handler = Default_Handler}, {.handler = Default_Handler}, {.handler = Default_Handler},
-    {.handler = Default_Handler}, {.stack = 0},                 {.stack = 0},
-    {.stack = 0},                 {.stack = 0},                 {.handler = Default_Handler},
-    {.handler = Default_Handler}, {.stack = 0},                 {.handler = Default_Handler},
+    {.stack = &_estack},
+    {.handler = Reset_Handler},
+    {.handler = Default_Handler},
+    {.handler = Default_Handler},
+    {.handler = Default_Handler},
+    {.handler = Default_Handler},
+    {.handler = Default_Handler},
+    {.stack = 0},
+    {.stack = 0},
+    {.stack = 0},
+    {.stack = 0},
+    {.handler = Default_Handler},
+    {.handler = Default_Handler},
+    {.stack = 0},
+    {.handler = Default_Handler},
     {.handler = Default_Handler},
 };
