@@ -20,3 +20,12 @@ if(TARGET ef_tables_default)
   set_tests_properties(pipeline_demo PROPERTIES TIMEOUT 600
                        PASS_REGULAR_EXPRESSION "SVG plot written to .*pipeline-demo.svg")
 endif()
+
+# Regression: a very short arc between two corners (both blends use it up) must not stop
+# the smoother; the whole program comes out, ending at rest at its last point.
+if(TARGET ef_tables_default)
+  add_test(NAME pipeline_short_arc
+           COMMAND evenfeed smooth ${CMAKE_CURRENT_LIST_DIR}/data/short_arc.ngc)
+  set_tests_properties(pipeline_short_arc PROPERTIES
+                       PASS_REGULAR_EXPRESSION "end position +63.5911 50.9075 -1.0000")
+endif()

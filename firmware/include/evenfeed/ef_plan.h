@@ -39,7 +39,7 @@
 extern "C" {
 #endif
 
-/** Moves in the planner's look-ahead window (each ef_move_t is about 230 bytes). */
+/** Moves in the planner's look-ahead window (each ef_move_t is 204 bytes). */
 #ifndef EF_LOOKAHEAD
 #define EF_LOOKAHEAD 64
 #endif
