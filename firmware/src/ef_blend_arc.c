@@ -308,8 +308,9 @@ int ef_blend_prims(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in
     if (rc != EF_OK)
         return ef_ba_fail_blend(res, rc);
     /* The lengths must be the primitives' (ef_prim_check()'s, up to rounding). */
-    int lens = (ef_fabsf(len_in - cl_in) <= 1e-5f * cl_in) &
-               (ef_fabsf(len_out - cl_out) <= 1e-5f * cl_out);
+    int lens_in = ef_fabsf(len_in - cl_in) <= 1e-5f * cl_in;
+    int lens_out = ef_fabsf(len_out - cl_out) <= 1e-5f * cl_out;
+    int lens = lens_in & lens_out;
     int range = (tol > 0.0f) & (max_in > 0.0f) & (max_out > 0.0f) & (max_in <= len_in) &
                 (max_out <= len_out);
     if (!(lens & range))
