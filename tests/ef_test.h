@@ -51,6 +51,27 @@ static int ef_t_pass, ef_t_fail;
         }                                                                                      \
     } while (0)
 
+/* Whole file into a malloc'd, NUL-terminated buffer (NULL if it cannot be read). */
+static inline char *ef_t_slurp(const char *path, size_t *len)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return NULL;
+    fseek(f, 0, SEEK_END);
+    long n = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    char *b = n >= 0 ? (char *)malloc((size_t)n + 1) : NULL;
+    if (b && fread(b, 1, (size_t)n, f) != (size_t)n) {
+        free(b);
+        b = NULL;
+    }
+    fclose(f);
+    if (b)
+        b[n] = 0;
+    *len = n > 0 ? (size_t)n : 0;
+    return b;
+}
+
 /* Print the closing line and give the exit status. */
 static inline int ef_test_summary(void)
 {

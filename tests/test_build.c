@@ -32,20 +32,7 @@ static const char *tpath(const char *name)
 /* Whole file into a malloc'd buffer (NULL if it cannot be read). */
 static uint8_t *slurp(const char *path, size_t *len)
 {
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return NULL;
-    fseek(f, 0, SEEK_END);
-    long n = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    uint8_t *p = malloc(n > 0 ? (size_t)n : 1);
-    if (p && fread(p, 1, (size_t)n, f) != (size_t)n) {
-        free(p);
-        p = NULL;
-    }
-    fclose(f);
-    *len = (size_t)n;
-    return p;
+    return (uint8_t *)ef_t_slurp(path, len);
 }
 
 /* Replace a file's contents. */

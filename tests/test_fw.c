@@ -3,6 +3,7 @@
  * folding, wrapping and clamping logic is checked independently of the optimizer. */
 #include <string.h>
 #include "ef_test.h"
+#include "ef_testbez.h"
 #include "evenfeed/ef_bezier.h"
 #include "evenfeed/ef_endpoint.h"
 #include "evenfeed/ef_err.h"
@@ -23,18 +24,7 @@ static double binom(int n, int k)
 static void ref_eval(const ef_vec3_t *b, int d, double t, int k, double out[3])
 {
     double pts[8][3];
-    for (int i = 0; i <= d; i++) {
-        pts[i][0] = b[i].x;
-        pts[i][1] = b[i].y;
-        pts[i][2] = b[i].z;
-    }
-    double f = 1;
-    for (int r = 0; r < k; r++) {
-        for (int i = 0; i < d - r; i++)
-            for (int c = 0; c < 3; c++)
-                pts[i][c] = pts[i + 1][c] - pts[i][c];
-        f *= d - r;
-    }
+    double f = ef_t_bezier_diffs(b, d, k, pts);
     int m = d - k;
     for (int c = 0; c < 3; c++) {
         double s = 0;

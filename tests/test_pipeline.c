@@ -371,25 +371,7 @@ static void test_refused(void)
     EF_CHECK_EQ(ef_pipe_run(NULL, &c, &cb, &ST, &MSG), EF_ERR_ARG);
 }
 
-static char *slurp(const char *path, size_t *len)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return NULL;
-    fseek(f, 0, SEEK_END);
-    long n = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    char *b = malloc((size_t)n + 1);
-    if (b && fread(b, 1, (size_t)n, f) != (size_t)n) {
-        free(b);
-        b = NULL;
-    }
-    fclose(f);
-    if (b)
-        b[n] = 0;
-    *len = (size_t)n;
-    return b;
-}
+#define slurp ef_t_slurp
 
 /* The sample program end to end, both step modes. */
 static void test_bracket(int degree)

@@ -7,26 +7,8 @@ ef=$1
 src=$2
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
-pass=0
-fail=0
-ok() { pass=$((pass + 1)); }
-bad() { fail=$((fail + 1)); echo "FAIL: $*" >&2; }
-
-# expect STATUS PATTERN -- ARGS...: exit status and a pattern in stdout+stderr.
-expect() {
-    local want=$1 pat=$2
-    shift 3
-    local out rc
-    out=$("$ef" "$@" 2>&1)
-    rc=$?
-    if [ "$rc" -ne "$want" ]; then
-        bad "evenfeed $* -> exit $rc, want $want; output: $out"
-    elif ! grep -qE -- "$pat" <<<"$out"; then
-        bad "evenfeed $* -> output lacks /$pat/: $out"
-    else
-        ok
-    fi
-}
+# shellcheck source=tests/cli_lib.sh
+. "$(dirname "$0")/cli_lib.sh"
 
 bracket=$src/samples/bracket.ngc
 have_py=0
