@@ -15,10 +15,11 @@ if(TARGET ef_tables_default)
   set_tests_properties(pipeline_cli PROPERTIES TIMEOUT 600 PASS_REGULAR_EXPRESSION " 0 failed")
   # The demo needs no input file and writes its SVG where it is told.
   add_test(NAME pipeline_demo
-           COMMAND sh -c "$<TARGET_FILE:evenfeed> demo --svg \"$1\" && test -s \"$1\"" sh
-                   ${CMAKE_CURRENT_BINARY_DIR}/pipeline-demo.svg)
+           COMMAND sh -c "$<TARGET_FILE:evenfeed> demo --svg \"$1.svg\" && test -s \"$1.svg\" && test -s \"$1-profile.svg\"" sh
+                   ${CMAKE_CURRENT_BINARY_DIR}/pipeline-demo)
+  # Both programs: the profile's micro-segments become smooth sections, within P.
   set_tests_properties(pipeline_demo PROPERTIES TIMEOUT 600
-                       PASS_REGULAR_EXPRESSION "SVG plot written to .*pipeline-demo.svg")
+                       PASS_REGULAR_EXPRESSION "SVG plot written to .*pipeline-demo.svg.*vertices [^\n]* [1-9][0-9]* smooth\ndeviation [^\n]*, 0 moves over tolerance.*SVG plot written to .*pipeline-demo-profile.svg")
 endif()
 
 # Regression: a very short arc between two corners (both blends use it up) must not stop
