@@ -779,7 +779,7 @@ typedef struct {
     int n, blends, clamped, straight, stop, rev, other;
     double dev_max, v_max, p_max, under_max, g2_t, g2_k, pos;
     double *devs, *hd, free_min;
-    int ndev, nhd, nfree;
+    int ndev, nhd, nfree, tan_stop;
 } stats_t;
 
 static int cmp_d(const void *a, const void *b)
@@ -788,7 +788,9 @@ static int cmp_d(const void *a, const void *b)
     return x < y ? -1 : x > y;
 }
 
-static void corner_case(stats_t *st, unsigned long long *seed, int in_arc, int out_arc, int idx)
+/* One random corner; force_th >= 0 replaces the random turn (tangent joins). */
+static void corner_case(stats_t *st, unsigned long long *seed, int in_arc, int out_arc, int idx,
+                        double force_th)
 {
     int planar = idx & 1;
     dv3 v = d3(ef_t_uniform(seed, -100, 100), ef_t_uniform(seed, -100, 100),
@@ -800,6 +802,7 @@ static void corner_case(stats_t *st, unsigned long long *seed, int in_arc, int o
                 : mode < 8 ? EF_BLEND_MAX_TURN - log_uniform(seed, 1e-5, 3e-2)
                 : mode < 9 ? ef_t_uniform(seed, EF_BLEND_MAX_TURN - 1e-3, M_PI)
                            : log_uniform(seed, 1e-6, 1e-2);
+    th = force_th >= 0.0 ? force_th : th;
     dv3 nrm = planar ? d3(0, 0, 1) : rand_unit(seed);
     dv3 ti = rand_perp(seed, nrm);
     dv3 to = dadd(dscale(ti, cos(th)), dscale(dcross(nrm, ti), sin(th)));
@@ -873,6 +876,7 @@ static void corner_case(stats_t *st, unsigned long long *seed, int in_arc, int o
     }
     if (bl.flags & EF_BLEND_STOP) {
         st->stop++;
+        st->tan_stop += tturn < EF_BLEND_MIN_TURN; /* a tangent join never stops */
         EF_CHECK(bl.seg.degree == 0 && bl.trim_in == 0.0f && bl.trim_out == 0.0f);
         return;
     }
@@ -1016,7 +1020,7 @@ static void test_blend_prims(void)
         st.devs = malloc(sizeof(double) * N);
         st.hd = malloc(sizeof(double) * N);
         for (int i = 0; i < N; i++)
-            corner_case(&st, &seed, kinds[k][0], kinds[k][1], i);
+            corner_case(&st, &seed, kinds[k][0], kinds[k][1], i, -1.0);
         qsort(st.devs, (size_t)st.ndev, sizeof(double), cmp_d);
         double p99 = st.ndev ? st.devs[(int)(0.99 * (st.ndev - 1))] : 0;
         double p50 = st.ndev ? st.devs[(st.ndev - 1) / 2] : 0;
@@ -1042,6 +1046,89 @@ static void test_blend_prims(void)
     }
 }
 
+/* Tangent joins (turn below EF_BLEND_MIN_TURN, different curvature vectors): line-arc,
+ * arc-line, arc-arc (random turning ways, so the same and opposite directions, random radii),
+ * 2-D and 3-D (helices included), turn 0 or tiny. The blend is measured as in corner_case()
+ * (deviation in double <= tol both ways, G2 contact: tangent and curvature vector of the
+ * primitive at both ends, trim limits); ordinary cases must blend. Then cases that stay
+ * straight: collinear lines, an arc continued by itself, a negligible jump (dk tol below
+ * EF_BLEND_MIN_TURN^2). */
+static void test_tangent_joins(void)
+{
+    const int N = 250;
+    const char *names[3] = {"tan line-arc", "tan arc-line", "tan arc-arc"};
+    int kinds[3][2] = {{0, 1}, {1, 0}, {1, 1}};
+    unsigned long long seed = 77;
+    for (int k = 0; k < 3; k++) {
+        stats_t st;
+        memset(&st, 0, sizeof st);
+        st.name = names[k];
+        st.devs = malloc(sizeof(double) * N);
+        st.hd = malloc(sizeof(double) * N);
+        for (int i = 0; i < N; i++) {
+            double th = (i % 3 == 0) ? 0.0 : log_uniform(&seed, 1e-7, 0.5 * EF_BLEND_MIN_TURN);
+            corner_case(&st, &seed, kinds[k][0], kinds[k][1], i, th);
+        }
+        qsort(st.hd, (size_t)st.nhd, sizeof(double), cmp_d);
+        printf("%-12s: %d joins: %d blends (%d clamped), %d straight, %d stop, %d skipped; "
+               "dev/tol max %.6f, two-sided max %.6f median %.4f; G2 ends (err / allowed): "
+               "tangent %.2g, curvature*L %.2g\n",
+               st.name, st.n, st.blends, st.clamped, st.straight, st.stop, st.other, st.dev_max,
+               st.nhd ? st.hd[st.nhd - 1] : 0, st.nhd ? st.hd[(st.nhd - 1) / 2] : 0, st.g2_t,
+               st.g2_k);
+        EF_CHECK_EQ(st.tan_stop, 0);
+        EF_CHECK_EQ(st.rev, 0);
+        EF_CHECK(st.blends >= st.n * 9 / 10);
+        EF_CHECK(st.other < N / 50);
+        EF_CHECK(st.nhd == 0 || st.hd[st.nhd - 1] <= 1.0 + 1e-3);
+        free(st.devs);
+        free(st.hd);
+    }
+
+    /* stay straight */
+    ef_blend_t b;
+    float li, lo;
+    ef_vec3_t s0 = ef_v3(0, 0, 0);
+    ef_prim_t l1 = mk_line(ef_v3(10, 0, 0)), l2 = mk_line(ef_v3(20, 0, 0));
+    ef_prim_check(s0, &l1, &li);
+    ef_prim_check(l1.end, &l2, &lo);
+    EF_CHECK_EQ(ef_blend_prims(G2, s0, &l1, li, &l2, lo, 0.01f, li, lo, &b), EF_OK);
+    EF_CHECK(b.flags & EF_BLEND_STRAIGHT);
+    EF_CHECK(b.seg.degree == 0 && b.trim_in == 0.0f && b.trim_out == 0.0f);
+    /* one circle (r 5 about (3, 4, 0)) in two arcs */
+    ef_prim_t a1 = mk_arc_d(d3(8, 4, 0), d3(3, 4, 0), d3(0, 0, 1), 1.3, 0.0);
+    ef_prim_t a2 = mk_arc_d(dv(a1.end), d3(3, 4, 0), d3(0, 0, 1), 1.1, 0.0);
+    ef_vec3_t sa = ef_v3(8, 4, 0);
+    EF_CHECK_EQ(ef_prim_check(sa, &a1, &li), EF_OK);
+    EF_CHECK_EQ(ef_prim_check(a1.end, &a2, &lo), EF_OK);
+    EF_CHECK_EQ(ef_blend_prims(G2, sa, &a1, li, &a2, lo, 0.01f, li, lo, &b), EF_OK);
+    EF_CHECK(b.flags & EF_BLEND_STRAIGHT);
+    EF_CHECK_EQ(b.seg.degree, 0);
+    /* a line tangent to that circle: a blend at tol 0.01; straight when dk tol < 1e-8 */
+    ef_prim_t ln = mk_line(ef_v3(8, 4, 0));
+    ef_vec3_t sl = ef_v3(8, -6, 0);
+    EF_CHECK_EQ(ef_prim_check(sl, &ln, &li), EF_OK);
+    EF_CHECK_EQ(ef_prim_check(ln.end, &a1, &lo), EF_OK);
+    EF_CHECK_EQ(ef_blend_prims(G2, sl, &ln, li, &a1, lo, 0.01f, li, lo, &b), EF_OK);
+    EF_CHECK_EQ(b.flags & (EF_BLEND_STRAIGHT | EF_BLEND_STOP), 0u);
+    EF_CHECK_EQ(b.seg.degree, 5);
+    EF_CHECK(b.dev <= 0.01f && b.trim_in > 0.0f && b.trim_out > 0.0f);
+    EF_CHECK_EQ(ef_blend_prims(G2, sl, &ln, li, &a1, lo, 4e-8f, li, lo, &b), EF_OK);
+    EF_CHECK(b.flags & EF_BLEND_STRAIGHT); /* no blend fits: straight, never a stop */
+    EF_CHECK_EQ(b.seg.degree, 0);
+    /* arc r 5 into a tangent arc r 5.005 the same way: dk = 2e-4; tol 4e-5 (above the
+     * rounding share, dk tol 8e-9) stays straight, tol 0.01 blends */
+    dv3 ce = dadd(d3(3, 4, 0), dscale(d3(cos(1.3), sin(1.3), 0), 5.0 - 5.005));
+    ef_prim_t a3 = mk_arc_d(dv(a1.end), ce, d3(0, 0, 1), 0.8, 0.0);
+    EF_CHECK_EQ(ef_prim_check(sa, &a1, &li), EF_OK);
+    EF_CHECK_EQ(ef_prim_check(a1.end, &a3, &lo), EF_OK);
+    EF_CHECK_EQ(ef_blend_prims(G2, sa, &a1, li, &a3, lo, 4e-5f, li, lo, &b), EF_OK);
+    EF_CHECK(b.flags & EF_BLEND_STRAIGHT);
+    EF_CHECK_EQ(ef_blend_prims(G2, sa, &a1, li, &a3, lo, 0.01f, li, lo, &b), EF_OK);
+    EF_CHECK_EQ(b.flags & (EF_BLEND_STRAIGHT | EF_BLEND_STOP), 0u);
+    EF_CHECK(b.seg.degree == 5 && b.dev <= 0.01f);
+}
+
 static void test_blend_prims_args(void)
 {
     ef_vec3_t s = ef_v3(0, 0, 0);
@@ -1051,9 +1138,10 @@ static void test_blend_prims_args(void)
     EF_CHECK_EQ(ef_prim_check(s, &in, &li), EF_OK);
     EF_CHECK_EQ(ef_prim_check(in.end, &out, &lo), EF_OK);
     ef_blend_t b;
-    /* tangent join: straight */
+    /* tangent join: a blend (G2 across the curvature jump) */
     EF_CHECK_EQ(ef_blend_prims(G2, s, &in, li, &out, lo, 0.01f, li, lo, &b), EF_OK);
-    EF_CHECK_EQ(b.flags, EF_BLEND_STRAIGHT);
+    EF_CHECK_EQ(b.flags & (EF_BLEND_STRAIGHT | EF_BLEND_STOP), 0u);
+    EF_CHECK_EQ(b.seg.degree, 5);
     EF_CHECK_EQ(ef_blend_prims(G2, s, &in, li, &out, lo, 0.01f, li, lo, NULL), EF_ERR_ARG);
     EF_CHECK_EQ(ef_blend_prims(NULL, s, &in, li, &out, lo, 0.01f, li, lo, &b), EF_ERR_ARG);
     EF_CHECK_EQ(b.flags, 0);
@@ -1108,5 +1196,6 @@ int main(void)
     test_arc_piece();
     test_blend_prims_args();
     test_blend_prims();
+    test_tangent_joins();
     return ef_test_summary();
 }

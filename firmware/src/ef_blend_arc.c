@@ -21,6 +21,17 @@
  * finds the true deviation at most 1.023 x the result (with the 0.99 target, all within
  * 0.981 tol). */
 #define EF_BA_DEV_REL 1.02f
+/* Tangent joins (turn below EF_BLEND_MIN_TURN, ef_blend_prims()): the curvature jump
+ * dk = |kappa_in n_in - kappa_out n_out| is blended when dk tol >= EF_BLEND_MIN_TURN^2, i.e.
+ * when a transition that deviates by tol (trims about sqrt(tol / dk), turning the tangent by
+ * about sqrt(dk tol) across the jump) would turn it by at least what counts as a corner;
+ * below that the jump is as negligible as a straight corner's kink. The jump must also
+ * exceed EF_BA_KAPPA_REL of the larger curvature, well above float32's rounding of the
+ * curvature vectors (an arc split into two at a vertex is no join to blend). */
+#define EF_BA_TANGENT_MIN (EF_BLEND_MIN_TURN * EF_BLEND_MIN_TURN)
+#define EF_BA_KAPPA_REL   1e-4f
+/* First trim estimate for a tangent join: deviation ~ dk L^2 / EF_BA_TANGENT_GAIN. */
+#define EF_BA_TANGENT_GAIN 1.0f
 
 static int ef_ba_finite(float x)
 {
@@ -336,6 +347,14 @@ int ef_blend_prims(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in
         return ef_ba_fail_blend(res, rc);
     float theta = ll.turn;
     int straight = (ll.flags & EF_BLEND_STRAIGHT) != 0u;
+    /* A tangent join: straight, but the curvature vectors differ (a line tangent to an arc,
+     * arcs of different radii or turning ways): blended for G2 like a corner, or left
+     * straight (G1, safe) when no blend fits; never a stop. Lines have kappa 0, n 0. */
+    ef_vec3_t kjump = ef_v3_sub(ef_v3_scale(fi.n, fi.kappa), ef_v3_scale(fo.n, fo.kappa));
+    float dk = ef_v3_norm(kjump);
+    int jump_tol = dk * tol >= EF_BA_TANGENT_MIN;
+    int jump_rel = dk > EF_BA_KAPPA_REL * ef_maxf(fi.kappa, fo.kappa);
+    int tangent = straight & jump_tol & jump_rel;
 
     /* Arc sides are trimmed by at most EF_ARC_PIECE_SWEEP of their sweep, so the replaced
      * piece stays a gentle curve the table can follow. */
@@ -351,11 +370,16 @@ int ef_blend_prims(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in
     /* Trims as a scale lambda of the line–line trim, each side clamped by its own limit.
      * Fixed EF_BLEND_ITER steps: secant through the origin towards 0.99 (tol - q), kept
      * inside the bracket [feasible, infeasible] (geometric bisection when it leaves it);
-     * the longest feasible trial is the result. */
+     * the longest feasible trial is the result. A tangent join has no line–line trim (its
+     * turn is ~0): it starts from sqrt(EF_BA_TANGENT_GAIN tol / dk), where the deviation
+     * of a curvature jump's transition is about tol, and its secant takes the square root
+     * (deviation ~ dk L^2, quadratic in lambda). */
     float l0 = ll.trim_in;
     int have_l0 = (ll.flags & (EF_BLEND_STRAIGHT | EF_BLEND_STOP)) == 0u;
-    l0 = have_l0 ? l0 : ef_minf(cap_in, cap_out); /* STOP from line–line: still try */
-    l0 = ef_maxf(l0, 1e-30f);
+    float l_tan = ef_sqrtf(EF_BA_TANGENT_GAIN * tol / ef_maxf(dk, 1e-30f));
+    float l_none = ef_selectf(tangent, l_tan, ef_minf(cap_in, cap_out));
+    l0 = have_l0 ? l0 : l_none; /* STOP from line–line: still try */
+    l0 = ef_minf(ef_maxf(l0, 1e-30f), EF_MAX_COORD);
     float lam_cap = ef_maxf(cap_in, cap_out) / l0;
     float lam_sym = ef_minf(cap_in, cap_out) / l0; /* largest lambda with equal trims */
     float lam = ef_minf(1.0f, lam_cap), lo_ok = 0.0f, hi_bad = 3.4e38f;
@@ -370,7 +394,9 @@ int ef_blend_prims(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in
         }
         if (!feasible)
             hi_bad = ef_minf(hi_bad, lam);
-        float next = lam * (0.99f * tol_geo / ef_maxf(tr.dev, 1e-30f));
+        float ratio = 0.99f * tol_geo / ef_maxf(tr.dev, 1e-30f);
+        int grow_tan = tangent & (ratio > 1.0f);
+        float next = lam * ef_selectf(grow_tan, ef_sqrtf(ratio), ratio);
         /* a failed trial: back towards symmetric trims (in the table's domain), or halve */
         float back = lam > lam_sym ? ef_maxf(lam_sym, 0.5f * lam) : 0.5f * lam;
         next = tr.ok ? next : back;
@@ -382,7 +408,7 @@ int ef_blend_prims(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in
         lam = ef_maxf(lam, 1e-30f);
     }
 
-    int blend = best.ok & (straight ^ 1) & (tol_geo > 0.0f);
+    int blend = best.ok & ((straight ^ 1) | tangent) & (tol_geo > 0.0f);
     int stop = (straight ^ 1) & (blend ^ 1);
     if (!blend) {
         ef_blend_t zero = {0};

@@ -64,6 +64,21 @@
  * tol - q; if none is, the outcome is ::EF_BLEND_STOP. Trims are limited by max_in and
  * max_out separately (asymmetric trims: a short neighbour on one side shortens only that
  * side, the other keeps the trim the tolerance allows).
+ *
+ * ## Tangent joins (ef_blend_prims())
+ * A vertex whose tangents turn by less than ::EF_BLEND_MIN_TURN but whose curvature vectors
+ * differ (a line tangent to an arc, tangent arcs of different radii or turning ways) is
+ * only G1: the curvature jumps there. When dk = |kappa_in n_in - kappa_out n_out| is large
+ * enough to matter (dk tol >= EF_BLEND_MIN_TURN^2: the transition that deviates by tol
+ * turns the tangent by about sqrt(dk tol), at least a corner's worth; and dk above 1e-4 of
+ * the larger curvature, far above float32's rounding of the curvature vectors), the join is
+ * blended exactly like a corner with arc ends (same G2 quintic, measured deviation within
+ * tol - q, trim search and limits), and flagged as a normal blend. The trims start from
+ * sqrt(tol / dk) (where a transition's deviation, about dk L^2, reaches tol) instead of the
+ * line–line trim, bounded by max_in / max_out and the arc cap. If no blend fits the outcome
+ * is ::EF_BLEND_STRAIGHT (the G1 pass-through is safe), never ::EF_BLEND_STOP. Straight
+ * vertices between two lines, an arc continued by the same circle and negligible jumps stay
+ * ::EF_BLEND_STRAIGHT.
  */
 #ifndef EF_BLEND_H
 #define EF_BLEND_H
@@ -89,7 +104,8 @@ extern "C" {
 
 /** Blend flag: max_in or max_out limited the trim; the deviation is below the tolerance. */
 #define EF_BLEND_CLAMPED 1u
-/** Blend flag: the corner is straight (turn < EF_BLEND_MIN_TURN); no blend, trims 0. */
+/** Blend flag: the corner is straight (turn < EF_BLEND_MIN_TURN; for ef_blend_prims(), a
+ *  tangent join that needs or fits no blend); no blend, trims 0. */
 #define EF_BLEND_STRAIGHT 2u
 /** Blend flag: the blend that fits is below float32 resolution; no blend, trims 0, the
  *  caller stops exactly at the vertex. */
@@ -154,8 +170,11 @@ int ef_blend_corner(const ef_table_t *g2, ef_vec3_t v, ef_vec3_t u_in, ef_vec3_t
  * Details of the measured construction (firmware/src/ef_blend_arc.c):
  * - both primitives are checked again (ef_prim_check(); its error codes are returned) and
  *   len_in / len_out must be their lengths to 1e-5 relative (else EF_ERR_ARG);
- * - outcome STRAIGHT when the vertex tangents turn by less than EF_BLEND_MIN_TURN (a
- *   curvature jump there, e.g. a line tangent to an arc, is left as it is);
+ * - vertex tangents turning by less than EF_BLEND_MIN_TURN: a tangent join (see the file
+ *   comment) when the curvature vectors differ by dk with dk tol >= EF_BLEND_MIN_TURN^2 and
+ *   dk > 1e-4 max(kappa_in, kappa_out): blended as below (trims from sqrt(tol / dk), the
+ *   secant growing lambda by the square root of the deviation ratio), STRAIGHT if no trial
+ *   fits (never STOP); otherwise outcome STRAIGHT;
  * - the trim on an arc side is also at most EF_ARC_PIECE_SWEEP of its sweep;
  * - trims are lambda x (the line–line trim for the vertex tangents), each side clamped by
  *   its own limit; EF_BLEND_ITER trials (secant towards 0.99 (tol - q), bracketed), the
