@@ -135,24 +135,13 @@ static int ef_sm_line_move(ef_move_t *m, ef_vec3_t a, ef_vec3_t b, float feed, u
     return ef_sm_finish_move(m, EF_MOVE_LINE, feed, tag);
 }
 
-/* End data of a frame for the segment builders. */
-static ef_endpoint_t ef_sm_endpoint(const ef_frame_t *f)
-{
-    ef_endpoint_t e;
-    e.p = f->p;
-    e.t = f->t;
-    e.n = f->n;
-    e.kappa = f->kappa;
-    return e;
-}
-
 /* A smooth-section move between two frames on a line primitive a-b; its deviation from
  * the chord is measured. Returns an ef_err code (the caller falls back to a line). */
 static int ef_sm_smooth_move(ef_smooth_t *s, ef_move_t *m, const ef_frame_t *f0,
                              const ef_frame_t *f1, ef_vec3_t a, ef_vec3_t b, float feed,
                              uint32_t tag)
 {
-    ef_endpoint_t e0 = ef_sm_endpoint(f0), e1 = ef_sm_endpoint(f1);
+    ef_endpoint_t e0 = ef_frame_endpoint(f0), e1 = ef_frame_endpoint(f1);
     ef_seg_t seg;
     int rc = s->cfg.smooth_degree == 5 ? ef_seg_g2_quintic(s->cfg.g2, &e0, &e1, &seg)
                                        : ef_seg_g1_cubic(s->cfg.g1, &e0, &e1, &seg);
@@ -183,6 +172,21 @@ static int ef_sm_smooth_move(ef_smooth_t *s, ef_move_t *m, const ef_frame_t *f0,
     float h = 1.0f / (float)EF_BLEND_DEV_SAMPLES;
     m->dev = dmax + (float)(n * (n - 1)) * d2 * h * h * 0.125f;
     return ef_sm_finish_move(m, EF_MOVE_SMOOTH, feed, tag);
+}
+
+/* The fall-back for a piece no curve can represent: its chord a-b, with exact stops at
+ * both ends (the tangents differ there), the previous move marked too while it is still
+ * staged (the stage holds the newest move back for this). */
+static int ef_sm_chord_stop(ef_smooth_t *s, ef_move_t *m, ef_vec3_t a, ef_vec3_t b,
+                            const ef_prim_t *pr)
+{
+    ef_move_t *prev = ef_sm_stage_last(s);
+    if (prev)
+        prev->flags |= EF_MOVE_STOP_END;
+    int rc = ef_sm_line_move(m, a, b, pr->feed, pr->tag);
+    m->flags |= EF_MOVE_STOP_END;
+    s->st.stops += 2;
+    return rc;
 }
 
 /* Frame on a line primitive at a point (tangent = direction, no curvature). */
@@ -350,12 +354,7 @@ static int ef_sm_next_move(ef_smooth_t *s, ef_move_t *m)
                               &f0);
                 ef_prim_frame(h->start, &h->pr,
                               s0 + (s1 - s0) * (float)(s->arc_next + 1) / (float)n, &f1);
-                ef_move_t *prev = ef_sm_stage_last(s);
-                if (prev)
-                    prev->flags |= EF_MOVE_STOP_END;
-                rc = ef_sm_line_move(m, f0.p, f1.p, h->pr.feed, h->pr.tag);
-                m->flags |= EF_MOVE_STOP_END;
-                s->st.stops += 2;
+                rc = ef_sm_chord_stop(s, m, f0.p, f1.p, &h->pr);
                 if (rc == EF_OK && ++s->arc_next < n)
                     return 1;
             }
@@ -372,12 +371,7 @@ static int ef_sm_next_move(ef_smooth_t *s, ef_move_t *m)
                 if (rc != EF_OK || m->dev > h->pr.tol - h->merge_dev) {
                     /* Not representable within the tolerance: the chord itself, with exact
                      * stops at both ends (tangents differ there). */
-                    ef_move_t *prev = ef_sm_stage_last(s);
-                    if (prev)
-                        prev->flags |= EF_MOVE_STOP_END;
-                    rc = ef_sm_line_move(m, f0.p, f1.p, h->pr.feed, h->pr.tag);
-                    m->flags |= EF_MOVE_STOP_END;
-                    s->st.stops += 2;
+                    rc = ef_sm_chord_stop(s, m, f0.p, f1.p, &h->pr);
                 }
             } else {
                 if (h->trim_start > 0.0f)

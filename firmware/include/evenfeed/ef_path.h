@@ -42,6 +42,7 @@
 
 #include <stdint.h>
 #include "ef_config.h"
+#include "ef_endpoint.h"
 #include "ef_math.h"
 
 #ifdef __cplusplus
@@ -74,7 +75,7 @@ typedef enum {
 
 /** One commanded path primitive (float32, program units; speeds in units per second). */
 typedef struct {
-    uint8_t kind;     /**< ::ef_prim_kind_t */
+    uint8_t kind; /**< ::ef_prim_kind_t */
     uint8_t pad[3];
     uint32_t flags;   /**< EF_PRIM_* */
     ef_vec3_t end;    /**< end point */
@@ -90,11 +91,22 @@ typedef struct {
 
 /** Geometry at a point of a primitive or move. */
 typedef struct {
-    ef_vec3_t p;  /**< position */
-    ef_vec3_t t;  /**< unit tangent (direction of travel) */
-    ef_vec3_t n;  /**< unit principal normal (zero vector when kappa == 0) */
-    float kappa;  /**< curvature >= 0 */
+    ef_vec3_t p; /**< position */
+    ef_vec3_t t; /**< unit tangent (direction of travel) */
+    ef_vec3_t n; /**< unit principal normal (zero vector when kappa == 0) */
+    float kappa; /**< curvature >= 0 */
 } ef_frame_t;
+
+/** End data for the segment builders (ef_seg.h) from a frame. */
+static inline ef_endpoint_t ef_frame_endpoint(const ef_frame_t *f)
+{
+    ef_endpoint_t e;
+    e.p = f->p;
+    e.t = f->t;
+    e.n = f->n;
+    e.kappa = f->kappa;
+    return e;
+}
 
 /**
  * @brief Validate a primitive starting at `start` and return its length.
@@ -165,26 +177,26 @@ typedef struct {
 
 /** One emitted move. */
 typedef struct {
-    ef_vec3_t b[6];    /**< control points b[0..degree] (program units) */
-    uint8_t degree;    /**< 1, 3 or 5 */
-    uint8_t kind;      /**< ::ef_move_kind_t */
-    uint16_t flags;    /**< EF_MOVE_* */
-    uint32_t seq;      /**< sequence number, 0, 1, 2, ... in emission order */
-    uint32_t tag;      /**< tag of the primitive the move belongs to (blends: the outgoing
-                            primitive's) */
-    float length;      /**< arc length L of the curve */
-    float kappa_max;   /**< largest curvature on the curve (sampled, see ef_move_measure()) */
-    ef_vec3_t tabs;    /**< largest |tangent component| per axis over the curve (sampled):
-                            the axis speed limits bound the path speed by v_axis_i / tabs_i */
-    float dev;         /**< deviation from the programmed path it replaces (blends: from the
-                            corner; arcs: from the true arc; lines: 0) */
-    float feed;        /**< commanded feed (units/s) */
-    float v_max;       /**< speed limit: feed, axis speeds, centripetal (set by the planner) */
-    float a_max;       /**< tangential acceleration limit (set by the planner) */
-    float v_entry;     /**< planned speed at tau = 0 */
-    float v_exit;      /**< planned speed at tau = 1 */
-    float duration;    /**< seconds, sum of law.dt */
-    ef_timelaw_t law;  /**< tau(t) */
+    ef_vec3_t b[6];   /**< control points b[0..degree] (program units) */
+    uint8_t degree;   /**< 1, 3 or 5 */
+    uint8_t kind;     /**< ::ef_move_kind_t */
+    uint16_t flags;   /**< EF_MOVE_* */
+    uint32_t seq;     /**< sequence number, 0, 1, 2, ... in emission order */
+    uint32_t tag;     /**< tag of the primitive the move belongs to (blends: the outgoing
+                           primitive's) */
+    float length;     /**< arc length L of the curve */
+    float kappa_max;  /**< largest curvature on the curve (sampled, see ef_move_measure()) */
+    ef_vec3_t tabs;   /**< largest |tangent component| per axis over the curve (sampled):
+                           the axis speed limits bound the path speed by v_axis_i / tabs_i */
+    float dev;        /**< deviation from the programmed path it replaces (blends: from the
+                           corner; arcs: from the true arc; lines: 0) */
+    float feed;       /**< commanded feed (units/s) */
+    float v_max;      /**< speed limit: feed, axis speeds, centripetal (set by the planner) */
+    float a_max;      /**< tangential acceleration limit (set by the planner) */
+    float v_entry;    /**< planned speed at tau = 0 */
+    float v_exit;     /**< planned speed at tau = 1 */
+    float duration;   /**< seconds, sum of law.dt */
+    ef_timelaw_t law; /**< tau(t) */
 } ef_move_t;
 
 /**
