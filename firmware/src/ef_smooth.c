@@ -14,6 +14,9 @@ enum {
     EF_V_SMOOTH = 4,   /* smooth vertex: frames fe / fs interpolated */
 };
 
+/* Shortest move handed to the planner (it refuses anything below EF_MIN_CHORD). */
+#define EF_SM_MIN_MOVE (2.0f * EF_MIN_CHORD)
+
 /* Emission phases of the oldest held primitive. */
 enum { EF_E_BODY = 0, EF_E_BLEND = 1, EF_E_DONE = 2 };
 
@@ -89,6 +92,7 @@ int ef_smooth_init(ef_smooth_t *s, const ef_smooth_cfg_t *cfg, ef_vec3_t start)
     s->st = zero;
     s->cfg = *cfg;
     s->pos = start;
+    s->out_end = start;
     return ef_plan_init(&s->plan, &cfg->lim);
 }
 
@@ -102,15 +106,22 @@ static ef_move_t *ef_sm_stage_last(ef_smooth_t *s)
  * move's end so the chain is exactly continuous (they agree to rounding already). */
 static void ef_sm_stage(ef_smooth_t *s, const ef_move_t *m)
 {
-    const ef_move_t *prev = ef_sm_stage_last(s);
+    ef_move_t *prev = ef_sm_stage_last(s);
+    if (m->length < EF_SM_MIN_MOVE) {
+        /* A remnant below float32 resolution (e.g. what two blends leave of a line, to
+         * rounding): not a move a planner or drive can time. Its stop, if any, goes to the
+         * move before it; the next move's start snaps onto that move's end. */
+        if (prev && (m->flags & EF_MOVE_STOP_END))
+            prev->flags |= EF_MOVE_STOP_END;
+        return;
+    }
     ef_move_t *d = &s->stage[(s->sh + s->sn) % EF_SMOOTH_STAGE];
     *d = *m;
-    if (prev) {
-        ef_vec3_t e = prev->b[prev->degree];
-        float sc = ef_maxf(ef_maxf(ef_fabsf(e.x), ef_fabsf(e.y)), ef_fabsf(e.z));
-        if (ef_v3_norm(ef_v3_sub(d->b[0], e)) <= EF_MIN_CHORD + 8.0f * 1.1920929e-7f * sc)
-            d->b[0] = e;
-    }
+    ef_vec3_t e = s->out_end;
+    float sc = ef_maxf(ef_maxf(ef_fabsf(e.x), ef_fabsf(e.y)), ef_fabsf(e.z));
+    if (ef_v3_norm(ef_v3_sub(d->b[0], e)) <= 2.0f * EF_SM_MIN_MOVE + 8.0f * 1.1920929e-7f * sc)
+        d->b[0] = e;
+    s->out_end = d->b[d->degree];
     s->sn++;
     s->st.dev_max = ef_maxf(s->st.dev_max, m->dev);
 }

@@ -133,6 +133,7 @@ typedef struct {
     ef_smooth_prim_t pq[EF_SMOOTH_PRIMS]; /**< held primitives, oldest at ph */
     uint32_t ph, pn;
     ef_vec3_t pos;        /**< end of the last accepted primitive */
+    ef_vec3_t out_end;    /**< where the last emitted move ends (moves chain exactly) */
     ef_move_t stage[EF_SMOOTH_STAGE];
     uint32_t sh, sn;      /**< staged moves waiting for planner room */
     uint32_t arc_next;    /**< arc emission cursor: next piece of the oldest primitive */

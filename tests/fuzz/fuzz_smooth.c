@@ -1,0 +1,266 @@
+/*
+ * libFuzzer target for the runtime chain: the input bytes are decoded into a configuration
+ * and a stream of primitives (lines, arcs, helices; ordinary and hostile values: NaN, inf,
+ * huge coordinates, zero lengths, reversals, zero and negative feeds, inconsistent arcs,
+ * exact stops), pushed through ef_smooth (EF_ERR_FULL handled by draining), the moves into
+ * the interpolator, stepped at 1 ms. Whatever the input, every emitted move must be finite,
+ * start where the previous one ended, keep its speeds within its limit and continuous,
+ * and every setpoint must be finite and move no faster than the fastest limit allows. A
+ * refused primitive must leave the stream usable. Broken invariants abort.
+ *
+ * Built with -DEF_FUZZ_REPLAY_MAIN it is a plain-C replay driver (smooth_fuzz_replay
+ * DIR|FILE...): every seed ("ok-*") must run without breaking an invariant.
+ */
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "evenfeed/ef_err.h"
+#include "evenfeed/ef_interp.h"
+#include "evenfeed/ef_smooth.h"
+
+extern const ef_table_t ef_tbl_g1_default;
+extern const ef_table_t ef_tbl_g2_default;
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+
+/* Report and crash, so the input is saved as a reproducer. */
+static void ef_fz_fail(const char *what, double a)
+{
+    fprintf(stderr, "smooth fuzz invariant broken: %s (%g)\n", what, a);
+    abort();
+}
+
+/* Byte reader: zeros after the end. */
+typedef struct {
+    const uint8_t *d;
+    size_t n, i;
+} ef_fz_in_t;
+
+static uint8_t ef_fz_u8(ef_fz_in_t *in)
+{
+    return in->i < in->n ? in->d[in->i++] : 0;
+}
+
+static int16_t ef_fz_i16(ef_fz_in_t *in)
+{
+    uint16_t a = ef_fz_u8(in), b = ef_fz_u8(in);
+    return (int16_t)(uint16_t)(a | (b << 8));
+}
+
+/* A value: mostly scale * i16 / 32768, sometimes a hostile one. */
+static float ef_fz_val(ef_fz_in_t *in, float scale)
+{
+    uint8_t sel = ef_fz_u8(in);
+    int16_t v = ef_fz_i16(in);
+    switch (sel & 15u) {
+    case 0:
+        return NAN;
+    case 1:
+        return (v & 1) ? INFINITY : -INFINITY;
+    case 2:
+        return 3e7f * (float)v / 32768.0f; /* beyond EF_MAX_COORD */
+    case 3:
+        return 0.0f;
+    case 4:
+        return 1e-7f * (float)v; /* tiny */
+    default:
+        return scale * (float)v / 32768.0f;
+    }
+}
+
+static int ef_fz_finite3(ef_vec3_t a)
+{
+    return isfinite(a.x) && isfinite(a.y) && isfinite(a.z);
+}
+
+typedef struct {
+    ef_vec3_t end;  /* where the last move ended */
+    float v_exit;   /* its exit speed */
+    float v_top;    /* fastest limit seen */
+    ef_vec3_t last; /* last setpoint */
+    int have_sp;
+} ef_fz_state_t;
+
+static ef_smooth_t S;
+static ef_interp_t IP;
+
+/* Check one move against the chain so far. */
+static void ef_fz_move(ef_fz_state_t *st, const ef_move_t *m)
+{
+    if (m->degree != 1 && m->degree != 3 && m->degree != 5)
+        ef_fz_fail("degree", m->degree);
+    for (int k = 0; k <= m->degree; k++)
+        if (!ef_fz_finite3(m->b[k]))
+            ef_fz_fail("control point not finite", k);
+    if (!(m->duration > 0.0f) || !isfinite(m->duration) || !(m->length > 0.0f))
+        ef_fz_fail("duration/length", m->duration);
+    float gap = ef_v3_norm(ef_v3_sub(m->b[0], st->end));
+    if (!(gap <= 1e-6f))
+        ef_fz_fail("move does not start where the previous ended", gap);
+    if (!(fabsf(m->v_entry - st->v_exit) <= 1e-3f * (1.0f + st->v_exit)))
+        ef_fz_fail("entry speed != previous exit speed", m->v_entry - st->v_exit);
+    if (!(m->v_entry <= m->v_max * 1.0001f + 1e-4f) || !(m->v_exit <= m->v_max * 1.0001f + 1e-4f))
+        ef_fz_fail("speed above limit", m->v_max);
+    if ((m->flags & EF_MOVE_STOP_END) && m->v_exit != 0.0f)
+        ef_fz_fail("stop with speed", m->v_exit);
+    st->end = m->b[m->degree];
+    st->v_exit = m->v_exit;
+    if (m->v_max > st->v_top)
+        st->v_top = m->v_max;
+}
+
+/* Advance dt_us; setpoints finite and no faster than the fastest limit allows. */
+static void ef_fz_tick(ef_fz_state_t *st, uint32_t dt_us)
+{
+    ef_setpoint_t sp;
+    uint32_t next;
+    int rc = ef_interp_process(&IP, dt_us, &next, &sp);
+    if (rc != EF_OK && rc != EF_ERR_UNDERRUN)
+        ef_fz_fail("interp", rc);
+    if (!ef_fz_finite3(sp.p))
+        ef_fz_fail("setpoint not finite", 0);
+    if (st->have_sp) {
+        float step = ef_v3_norm(ef_v3_sub(sp.p, st->last));
+        float sc = fmaxf(fmaxf(fabsf(sp.p.x), fabsf(sp.p.y)), fabsf(sp.p.z));
+        if (!(step <= st->v_top * (float)dt_us * 1e-6f * 1.02f + 1e-6f + 4e-7f * sc))
+            ef_fz_fail("setpoint jump", step);
+    }
+    st->last = sp.p;
+    st->have_sp = 1;
+}
+
+/* Pull what the smoother has into the interpolator, stepping it at 1 ms when its queue is
+ * full; after ticks_max such steps (slow feeds make long moves) it skips ahead half an
+ * hour a step, which the interpolator must handle as well. */
+static void ef_fz_drain(ef_fz_state_t *st, int ticks_max)
+{
+    ef_move_t m;
+    int ticks = 0;
+    for (;;) {
+        if (ef_interp_space(&IP) == 0) {
+            ef_fz_tick(st, ticks++ < ticks_max ? 1000u : 2000000000u);
+            continue;
+        }
+        int rc = ef_smooth_pull(&S, &m);
+        if (rc == EF_ERR_AGAIN)
+            return;
+        if (rc != EF_OK)
+            ef_fz_fail("pull", rc);
+        ef_fz_move(st, &m);
+        if (ef_interp_push(&IP, &m) != EF_OK)
+            ef_fz_fail("interp refused a move", m.seq);
+    }
+}
+
+static void ef_fz_run(const uint8_t *data, size_t size)
+{
+    ef_fz_in_t in = {data, size, 0};
+    ef_smooth_cfg_t c;
+    memset(&c, 0, sizeof c);
+    c.g2 = &ef_tbl_g2_default;
+    c.g1 = &ef_tbl_g1_default;
+    uint8_t cf = ef_fz_u8(&in);
+    for (int i = 0; i < 3; i++) {
+        c.lim.v_axis[i] = 50.0f + 10.0f * (float)(ef_fz_u8(&in) & 31u);
+        c.lim.a_axis[i] = 500.0f + 100.0f * (float)(ef_fz_u8(&in) & 31u);
+    }
+    c.lim.j_max = (cf & 1u) ? 0.0f : 20000.0f;
+    c.lim.a_normal_frac = 0.5f;
+    c.micro_len = (cf & 2u) ? 0.0f : 1.0f;
+    c.micro_turn = 0.35f;
+    c.smooth_degree = (cf & 4u) ? 3 : 5;
+    float scale = (cf & 8u) ? 2.0f : 50.0f; /* micro-segments or ordinary moves */
+    if (ef_smooth_init(&S, &c, ef_v3(0, 0, 0)) != EF_OK)
+        ef_fz_fail("init", 0);
+    if (ef_interp_init(&IP, ef_v3(0, 0, 0), 1000u,
+                       (cf & 16u) ? EF_STEP_UNIFORM : EF_STEP_CORRECTED) != EF_OK)
+        ef_fz_fail("interp init", 0);
+    ef_fz_state_t st;
+    memset(&st, 0, sizeof st);
+    ef_vec3_t pos = ef_v3(0, 0, 0);
+    for (int n = 0; n < 400 && in.i < in.n; n++) {
+        uint8_t op = ef_fz_u8(&in);
+        ef_prim_t p;
+        memset(&p, 0, sizeof p);
+        p.kind = (op & 3u) == 3u ? EF_PRIM_ARC : EF_PRIM_LINE;
+        p.flags = (op & 4u) ? EF_PRIM_STOP_BEFORE : 0u;
+        p.feed = (op & 8u) ? ef_fz_val(&in, 100.0f) : 5.0f + (float)(ef_fz_u8(&in) & 63u);
+        p.tol = (op & 16u) ? ef_fz_val(&in, 0.05f) : 0.01f;
+        p.qtol = (op & 32u) ? 0.005f : 0.0f;
+        p.tag = (uint32_t)n;
+        if (op & 64u) { /* finish: an event */
+            if (ef_smooth_finish(&S) != EF_OK)
+                ef_fz_fail("finish", 0);
+        }
+        if (p.kind == EF_PRIM_LINE) {
+            p.end = ef_v3(pos.x + ef_fz_val(&in, scale), pos.y + ef_fz_val(&in, scale),
+                          pos.z + ((op & 128u) ? ef_fz_val(&in, scale) : 0.0f));
+        } else {
+            /* centre offset in the plane, axis +Z (or tilted), sweep, end by rotation (with
+             * an optional radius error) */
+            float cx = ef_fz_val(&in, scale), cy = ef_fz_val(&in, scale);
+            float sw = ef_fz_val(&in, 7.0f);
+            float err = (ef_fz_u8(&in) & 7u) == 0 ? ef_fz_val(&in, 0.1f) : 0.0f;
+            float h = (op & 128u) ? ef_fz_val(&in, scale) : 0.0f;
+            p.centre = ef_v3(pos.x + cx, pos.y + cy, pos.z);
+            p.axis = ef_v3(0, 0, 1);
+            p.sweep = sw;
+            float rx = -cx, ry = -cy;
+            float co = cosf(sw), si = sinf(sw);
+            float r = sqrtf(rx * rx + ry * ry);
+            float k = r > 0.0f ? (r + err) / r : 1.0f;
+            p.end = ef_v3(p.centre.x + k * (co * rx - si * ry),
+                          p.centre.y + k * (si * rx + co * ry), pos.z + h);
+        }
+        int rc = ef_smooth_push(&S, &p);
+        for (int guard = 0; rc == EF_ERR_FULL && guard < 64; guard++) {
+            ef_fz_drain(&st, 2000);
+            rc = ef_smooth_push(&S, &p);
+        }
+        if (rc == EF_ERR_FULL)
+            ef_fz_fail("still full after draining", 0);
+        if (rc == EF_OK)
+            pos = p.end;
+        else if (rc > 0 || !strcmp(ef_err_str(rc), "unknown error"))
+            ef_fz_fail("refusal that is not an ef_err code", rc);
+        ef_fz_drain(&st, 50);
+    }
+    if (ef_smooth_finish(&S) != EF_OK)
+        ef_fz_fail("final finish", 0);
+    ef_fz_drain(&st, 2000);
+    ef_move_t m;
+    if (ef_smooth_pull(&S, &m) != EF_ERR_AGAIN)
+        ef_fz_fail("moves left after the final drain", 0);
+    /* everything accepted came out, ending at rest at the last accepted end */
+    if (!(ef_v3_norm(ef_v3_sub(st.end, pos)) <= 1e-6f))
+        ef_fz_fail("chain does not end at the last accepted end", 0);
+    if (st.v_exit != 0.0f)
+        ef_fz_fail("chain does not end at rest", st.v_exit);
+}
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+    ef_fz_run(data, size);
+    return 0;
+}
+
+#ifdef EF_FUZZ_REPLAY_MAIN
+#include "replay.h"
+
+/* Every input is acceptable; breaking an invariant aborts. */
+static int replay_smooth(const uint8_t *buf, size_t len, char *why, size_t why_len)
+{
+    (void)why;
+    (void)why_len;
+    ef_fz_run(buf, len);
+    return 0;
+}
+
+int main(int argc, char **argv)
+{
+    return ef_replay_main(argc, argv, replay_smooth);
+}
+#endif
