@@ -496,6 +496,9 @@ static void test_bad_input(void)
     bad = arc_to(ef_v3(10, 0, 0), 10, 5, 1.0f, 50, 0.01f);
     bad.end.x += 0.5f; /* end radius differs from the start radius */
     EF_CHECK_EQ(ef_smooth_push(&S, &bad), EF_ERR_ARC);
+    /* an arc whose ends and centre are within EF_MAX_COORD but whose circle reaches beyond */
+    bad = arc_to(ef_v3(10, 0, 0), 9.9e5f, 0, 3.0f, 50, 0.01f);
+    EF_CHECK_EQ(ef_smooth_push(&S, &bad), EF_ERR_NONFINITE);
     bad = line_to(10, 10, 0, 50, NAN);
     EF_CHECK(ef_smooth_push(&S, &bad) < 0);
     EF_CHECK_EQ(ef_smooth_push(NULL, &ok), EF_ERR_ARG);

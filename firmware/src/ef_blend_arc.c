@@ -1,7 +1,9 @@
 /* Corners with arc/helix ends (ef_blend_prims()) and arc pieces as G2 quintics
  * (ef_blend_arc_piece()). Both build the quintic from exact end frames of the primitives
  * (ef_prim_frame()) through the G2 table and measure its deviation, since no closed form
- * exists. See ef_blend.h. */
+ * exists for it; the distance from a point to a line or arc piece is in closed form
+ * (ef_ba_dist_piece(), the pieces prepared once per trial by ef_ba_piece()), and the
+ * quintic is evaluated in Bernstein form (ef_ba_q5()). See ef_blend.h. */
 #include "evenfeed/ef_blend.h"
 #include "evenfeed/ef_bezier.h"
 #include "evenfeed/ef_config.h"
@@ -12,13 +14,18 @@
 #define EF_BA_ROUND_MARGIN (4.0f * 1.1920929e-7f)
 /* Samples of an arc piece's quintic for its deviation from the true arc (fixed count). */
 #define EF_BA_PIECE_SAMPLES 64
+/* Float32 error of ef_prim_frame()'s angle on an arc, in ulp of the angle (ef_ba_piece()):
+ * rounding s / len and sweep * frac, half an ulp each, doubled for len's own rounding.
+ * Empirical, not proven: tests/test_prim.c's 1500 arc pieces (up to 4 turns) find the true
+ * deviation at most 0.998 x the reported one with it, 2.8 x without. */
+#define EF_BA_ANGLE_ULP 2.0f
 /* Extra samples per refined interval, plus one (ef_ba_try()). */
 #define EF_BA_REFINE 8
 /* Points of each replaced piece checked for their distance to the blend (ef_ba_try()). */
 #define EF_BA_PATH_PTS 3
 /* Relative allowance over the blend's bounded deviation: the between-sample term is an
  * estimate (second differences), not a proof. tests/test_prim.c (6000 random corners)
- * finds the true deviation at most 1.023 x the result (with the 0.99 target, all within
+ * finds the true deviation at most 0.984 x the result (with the 0.99 target, all within
  * 0.981 tol). */
 #define EF_BA_DEV_REL 1.02f
 /* Tangent joins (turn below EF_BLEND_MIN_TURN, ef_blend_prims()): the curvature jump
@@ -77,40 +84,143 @@ static float ef_ba_radius(ef_vec3_t start, const ef_prim_t *pr)
     return ef_v3_norm(ef_v3_axpy(d0, -ef_v3_dot(d0, a), a));
 }
 
-/* Distance from q to the piece [sa, sb] of a checked primitive, or an upper bound of it (the
- * distance to a point of the piece, so never below the true distance). Lines: exact. Arcs
- * and helices: the point of the piece at q's polar angle about the axis (relative to the
- * piece's middle, so no large angles), then one Newton step along the curve; the smaller of
- * the two distances. For a circle the first is the exact distance when q's angle is inside
- * the piece. */
-static float ef_ba_dist_piece(ef_vec3_t q, ef_vec3_t start, const ef_prim_t *pr, float len,
-                              float sa, float sb)
+/* Point of the quintic b at t: the control points weighted by the degree-5 Bernstein
+ * polynomials (all positive, so as accurate as de Casteljau's algorithm, without its
+ * copies). */
+static ef_vec3_t ef_ba_q5(const ef_vec3_t *b, float t)
+{
+    float u = 1.0f - t, t2 = t * t, u2 = u * u;
+    float w0 = u2 * u2 * u, w1 = 5.0f * u2 * u2 * t, w2 = 10.0f * u2 * u * t2;
+    float w3 = 10.0f * u2 * t2 * t, w4 = 5.0f * u * t2 * t2, w5 = t2 * t2 * t;
+    ef_vec3_t r = ef_v3_scale(b[0], w0);
+    r = ef_v3_axpy(r, w1, b[1]);
+    r = ef_v3_axpy(r, w2, b[2]);
+    r = ef_v3_axpy(r, w3, b[3]);
+    r = ef_v3_axpy(r, w4, b[4]);
+    return ef_v3_axpy(r, w5, b[5]);
+}
+
+/* The same for the first (degree 4, h1) and second (degree 3, h2) hodographs. */
+static void ef_ba_d12(const ef_vec3_t *h1, const ef_vec3_t *h2, float t, ef_vec3_t *d1,
+                      ef_vec3_t *d2)
+{
+    float u = 1.0f - t, t2 = t * t, u2 = u * u;
+    ef_vec3_t r = ef_v3_scale(h1[0], u2 * u2);
+    r = ef_v3_axpy(r, 4.0f * u2 * u * t, h1[1]);
+    r = ef_v3_axpy(r, 6.0f * u2 * t2, h1[2]);
+    r = ef_v3_axpy(r, 4.0f * u * t2 * t, h1[3]);
+    *d1 = ef_v3_axpy(r, t2 * t2, h1[4]);
+    r = ef_v3_scale(h2[0], u2 * u);
+    r = ef_v3_axpy(r, 3.0f * u2 * t, h2[1]);
+    r = ef_v3_axpy(r, 3.0f * u * t2, h2[2]);
+    *d2 = ef_v3_axpy(r, t2 * t, h2[3]);
+}
+
+/* sin x for |x| <= pi/4 (fdlibm's float kernel, about 1 ulp). */
+static float ef_ba_sin(float x)
+{
+    float z = x * x;
+    return x + x * z *
+                   (-1.6666667163e-01f +
+                    z * (8.3333337680e-03f + z * (-1.9841270114e-04f + z * 2.7183114939e-06f)));
+}
+
+/* cos x for |x| <= pi/4 (fdlibm's float kernel). */
+static float ef_ba_cos(float x)
+{
+    float z = x * x;
+    return 1.0f - 0.5f * z +
+           z * z * (4.1666667908e-02f + z * (-1.3888889225e-03f + z * 2.4801587642e-05f));
+}
+
+/* A replaced piece [sa, sb] of a checked primitive, prepared once per trial for
+ * ef_ba_dist_piece(). Lines: start p0, unit direction t, length l. Arcs and helices (a piece
+ * of at most EF_ARC_PIECE_SWEEP, plus rounding): the axis point cm level with the piece's
+ * middle, the outward radial unit ex there, ey = +-(axis x ex) in the direction of travel,
+ * the unit axis a, radius r, axial rise c per radian of travel, half sweep psi; a point of
+ * the piece is cm + r (cos th ex + sin th ey) + c th a, |th| <= psi. pa, pb: its ends.
+ * err: what ef_prim_frame()'s float32 angle (sweep * s / len, a few ulp of it) can move a
+ * point along an arc, EF_BA_ANGLE_ULP ulp of the angle at the piece's far end times the
+ * radius, added to every distance (the blend's ends come from those frames, so they may lie
+ * that far beyond the true piece's ends); 0 for lines. q: EF_BA_PATH_PTS points of the piece,
+ * evenly spaced (the path-to-blend check of ef_ba_try()). */
+typedef struct {
+    ef_vec3_t p0, t, cm, ex, ey, a, pa, pb;
+    ef_vec3_t q[EF_BA_PATH_PTS]; /* points at k / (EF_BA_PATH_PTS + 1) of the piece */
+    float l, r, c, psi, err;
+    int arc;
+} ef_ba_piece_t;
+
+static void ef_ba_piece(ef_vec3_t start, const ef_prim_t *pr, float len, float sa, float sb,
+                        ef_ba_piece_t *pc)
 {
     ef_frame_t f;
-    if (pr->kind == EF_PRIM_LINE) {
-        ef_prim_frame(start, pr, sa, &f);
-        float s = ef_minf(ef_maxf(ef_v3_dot(ef_v3_sub(q, f.p), f.t), 0.0f), sb - sa);
-        return ef_v3_norm(ef_v3_sub(q, ef_v3_axpy(f.p, s, f.t)));
+    ef_prim_frame(start, pr, sa, &f);
+    pc->p0 = f.p;
+    pc->pa = f.p;
+    pc->t = f.t;
+    pc->l = sb - sa;
+    pc->arc = pr->kind == EF_PRIM_ARC;
+    if (!pc->arc) {
+        pc->pb = ef_v3_axpy(f.p, pc->l, f.t);
+        pc->cm = pc->ex = pc->ey = pc->a = f.p;
+        pc->r = pc->c = pc->psi = pc->err = 0.0f;
+        for (int k = 0; k < EF_BA_PATH_PTS; k++)
+            pc->q[k] = ef_v3_axpy(f.p, pc->l * ((float)(k + 1) / (float)(EF_BA_PATH_PTS + 1)), f.t);
+        return;
     }
-    float r0 = ef_ba_radius(start, pr);
+    ef_prim_frame(start, pr, sb, &f);
+    pc->pb = f.p;
     float aa = ef_v3_dot(pr->axis, pr->axis);
     ef_vec3_t a = ef_v3_scale(pr->axis, 1.0f / ef_sqrtf(ef_maxf(aa, 1e-30f)));
-    float sm = 0.5f * (sa + sb);
-    ef_prim_frame(start, pr, sm, &f);
-    ef_vec3_t em = ef_v3_scale(f.n, -1.0f);  /* outward radial unit at the middle */
-    ef_vec3_t cm = ef_v3_axpy(f.p, -r0, em); /* axis point level with the middle */
-    ef_vec3_t w = ef_v3_sub(q, cm);
-    w = ef_v3_axpy(w, -ef_v3_dot(w, a), a);
-    float dpsi = ef_atan2f(ef_v3_dot(w, ef_v3_cross(a, em)), ef_v3_dot(w, em));
-    float sw = pr->sweep; /* ds/dpsi = len / sweep */
-    float s1 = ef_minf(ef_maxf(sm + dpsi * (len / sw), sa), sb);
-    ef_prim_frame(start, pr, s1, &f);
-    ef_vec3_t d = ef_v3_sub(q, f.p);
-    float d1 = ef_v3_norm(d);
-    float s2 = ef_minf(ef_maxf(s1 + ef_v3_dot(d, f.t), sa), sb);
-    ef_prim_frame(start, pr, s2, &f);
-    float d2 = ef_v3_norm(ef_v3_sub(q, f.p));
-    return ef_minf(d1, d2);
+    float r0 = ef_ba_radius(start, pr);
+    ef_prim_frame(start, pr, 0.5f * (sa + sb), &f);
+    ef_vec3_t ex = ef_v3_scale(f.n, -1.0f);
+    float asw = ef_fabsf(pr->sweep);
+    float h = ef_v3_dot(ef_v3_sub(pr->end, start), a); /* axial rise of the whole primitive */
+    pc->cm = ef_v3_axpy(f.p, -r0, ex);
+    pc->ex = ex;
+    pc->ey = ef_v3_scale(ef_v3_cross(a, ex), pr->sweep < 0.0f ? -1.0f : 1.0f);
+    pc->a = a;
+    pc->r = r0;
+    pc->c = h / asw;
+    pc->psi = 0.5f * asw * ((sb - sa) / len);
+    pc->err = r0 * asw * (sb / len) * (EF_BA_ANGLE_ULP * 1.1920929e-7f);
+    for (int k = 0; k < EF_BA_PATH_PTS; k++) {
+        float th = pc->psi * ((float)(2 * (k + 1)) / (float)(EF_BA_PATH_PTS + 1) - 1.0f);
+        float sn = ef_ba_sin(th), cs = ef_ba_cos(th);
+        ef_vec3_t rad = ef_v3_axpy(ef_v3_scale(ex, cs), sn, pc->ey);
+        pc->q[k] = ef_v3_axpy(ef_v3_axpy(pc->cm, r0, rad), pc->c * th, a);
+    }
+}
+
+/* Distance from q to a piece, or an upper bound of it (the distance to a point of the
+ * piece, so never below the true distance; up to float32 rounding). Lines: exact. Arcs:
+ * with q's cylinder coordinates about the piece's middle (rho, phi, z), the nearer end, and
+ * when |phi| <= psi also the point at angle phi, sqrt((rho - r)^2 + (z - c phi)^2), exact
+ * for a circle; for a helix also the point one Newton step on from phi (clamped to the
+ * piece), |q - P(th)|^2 = (rho - r)^2 + 4 rho r sin^2((th - phi) / 2) + (z - c th)^2. */
+static float ef_ba_dist_piece(ef_vec3_t q, const ef_ba_piece_t *pc)
+{
+    if (!pc->arc) {
+        ef_vec3_t w = ef_v3_sub(q, pc->p0);
+        float s = ef_minf(ef_maxf(ef_v3_dot(w, pc->t), 0.0f), pc->l);
+        return ef_v3_norm(ef_v3_axpy(w, -s, pc->t));
+    }
+    ef_vec3_t da = ef_v3_sub(q, pc->pa), db = ef_v3_sub(q, pc->pb);
+    float e2 = ef_minf(ef_v3_dot(da, da), ef_v3_dot(db, db));
+    ef_vec3_t w = ef_v3_sub(q, pc->cm);
+    float x = ef_v3_dot(w, pc->ex), y = ef_v3_dot(w, pc->ey), z = ef_v3_dot(w, pc->a);
+    float rho = ef_sqrtf(x * x + y * y), r = pc->r, c = pc->c, psi = pc->psi;
+    float phi = ef_atan2f(y, x);
+    float dr = rho - r, dz = z - c * phi;
+    float d1 = dr * dr + dz * dz;
+    float th = ef_minf(ef_maxf(phi + c * dz / ef_maxf(rho * r + c * c, 1e-30f), -psi), psi);
+    float sn = ef_ba_sin(0.5f * (th - phi)), dz2 = z - c * th;
+    float d2 = dr * dr + 4.0f * rho * r * sn * sn + dz2 * dz2;
+    int inside = ef_fabsf(phi) <= psi;
+    float din = ef_minf(d1, d2);
+    return ef_sqrtf(ef_minf(e2, ef_selectf(inside, din, 3.4e38f))) + pc->err;
 }
 
 int ef_blend_arc_piece(const ef_table_t *g2, ef_vec3_t start, const ef_prim_t *pr, float s0,
@@ -144,11 +254,11 @@ int ef_blend_arc_piece(const ef_table_t *g2, ef_vec3_t start, const ef_prim_t *p
 
     /* Deviation from the true arc piece: EF_BA_PIECE_SAMPLES interior samples. */
     float dev = 0.0f;
-    ef_vec3_t pt[1];
+    ef_ba_piece_t pc;
+    ef_ba_piece(start, pr, len, s0, s1, &pc);
     for (int i = 1; i <= EF_BA_PIECE_SAMPLES; i++) {
         float t = (float)i * (1.0f / (float)(EF_BA_PIECE_SAMPLES + 1));
-        ef_bezier_eval(seg.b, 5, t, 0, pt);
-        dev = ef_maxf(dev, ef_ba_dist_piece(pt[0], start, pr, len, s0, s1));
+        dev = ef_maxf(dev, ef_ba_dist_piece(ef_ba_q5(seg.b, t), &pc));
     }
     for (int i = 0; i < 6; i++)
         m->b[i] = seg.b[i];
@@ -198,9 +308,11 @@ static void ef_ba_interval_bounds(const float *fa, const float *fb, int n, float
     }
 }
 
-/* Distance from x to the quintic b (samples cs[0..n-1] at i / (n - 1)), from above: the
- * nearest sample, then one Newton step on |f(t) - x|^2 from it; the smaller distance. */
-static float ef_ba_dist_curve(const ef_vec3_t *b, const ef_vec3_t *cs, int n, ef_vec3_t x)
+/* Distance from x to the quintic (samples cs[0..n-1] at i / (n - 1), hodographs h1, h2),
+ * from above: the nearest sample, then one Newton step on |f(t) - x|^2 from it; the smaller
+ * distance. */
+static float ef_ba_dist_curve(const ef_vec3_t *b, const ef_vec3_t *h1, const ef_vec3_t *h2,
+                              const ef_vec3_t *cs, int n, ef_vec3_t x)
 {
     int j = 0;
     float d2 = 3.4e38f;
@@ -210,15 +322,14 @@ static float ef_ba_dist_curve(const ef_vec3_t *b, const ef_vec3_t *cs, int n, ef
         j = e < d2 ? i : j;
         d2 = ef_minf(d2, e);
     }
-    ef_vec3_t der[3], pt[1];
     float t = (float)j / (float)(n - 1);
-    ef_bezier_eval(b, 5, t, 2, der);
-    ef_vec3_t w = ef_v3_sub(der[0], x);
-    float g = ef_v3_dot(w, der[1]);
-    float gg = ef_maxf(ef_v3_dot(der[1], der[1]) + ef_v3_dot(w, der[2]), 1e-30f);
+    ef_vec3_t der1, der2;
+    ef_ba_d12(h1, h2, t, &der1, &der2);
+    ef_vec3_t w = ef_v3_sub(cs[j], x);
+    float g = ef_v3_dot(w, der1);
+    float gg = ef_maxf(ef_v3_dot(der1, der1) + ef_v3_dot(w, der2), 1e-30f);
     float tn = ef_minf(ef_maxf(t - g / gg, 0.0f), 1.0f);
-    ef_bezier_eval(b, 5, tn, 0, pt);
-    return ef_minf(ef_v3_norm(ef_v3_sub(pt[0], x)), ef_sqrtf(d2));
+    return ef_minf(ef_v3_norm(ef_v3_sub(ef_ba_q5(b, tn), x)), ef_sqrtf(d2));
 }
 
 static void ef_ba_try(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in, float len_in,
@@ -234,6 +345,10 @@ static void ef_ba_try(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t 
     tr->pb = gb.p;
     tr->li = li;
     tr->lo = lo;
+    ef_ba_piece_t pin, pout;
+    ef_ba_piece(start_in, in, len_in, len_in - li, len_in, &pin);
+    ef_ba_piece(v, out, len_out, 0.0f, lo, &pout);
+    const ef_vec3_t *b = tr->seg.b;
     /* Deviation, blend to path: max_t min(f_in(t), f_out(t)), f the distances to the replaced
      * pieces (each an upper bound, see ef_ba_dist_piece()); its top is usually a kink where
      * the two cross, not a sample. EF_BLEND_DEV_SAMPLES + 2 samples (ends included) and a
@@ -241,12 +356,12 @@ static void ef_ba_try(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t 
      * is sampled EF_BA_REFINE - 1 times more and its bound replaced by the finer one. */
     enum { NS = EF_BLEND_DEV_SAMPLES + 2 };
     float fa[NS], fb[NS], bnd[NS - 1];
+    ef_vec3_t cs[NS];
     const float h = 1.0f / (float)(NS - 1);
-    ef_vec3_t pt[1];
     for (int i = 0; i < NS; i++) {
-        ef_bezier_eval(tr->seg.b, 5, (float)i * h, 0, pt);
-        fa[i] = ef_ba_dist_piece(pt[0], start_in, in, len_in, len_in - li, len_in);
-        fb[i] = ef_ba_dist_piece(pt[0], v, out, len_out, 0.0f, lo);
+        cs[i] = ef_ba_q5(b, (float)i * h);
+        fa[i] = ef_ba_dist_piece(cs[i], &pin);
+        fb[i] = ef_ba_dist_piece(cs[i], &pout);
     }
     ef_ba_interval_bounds(fa, fb, NS, bnd);
     int jm = 0;
@@ -259,9 +374,9 @@ static void ef_ba_try(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t 
     gb_[EF_BA_REFINE] = fb[jm + 1];
     for (int k = 1; k < EF_BA_REFINE; k++) {
         float t = ((float)jm + (float)k * (1.0f / (float)EF_BA_REFINE)) * h;
-        ef_bezier_eval(tr->seg.b, 5, t, 0, pt);
-        ga_[k] = ef_ba_dist_piece(pt[0], start_in, in, len_in, len_in - li, len_in);
-        gb_[k] = ef_ba_dist_piece(pt[0], v, out, len_out, 0.0f, lo);
+        ef_vec3_t pt = ef_ba_q5(b, t);
+        ga_[k] = ef_ba_dist_piece(pt, &pin);
+        gb_[k] = ef_ba_dist_piece(pt, &pout);
     }
     ef_ba_interval_bounds(ga_, gb_, EF_BA_REFINE + 1, gbnd);
     float fine = 0.0f;
@@ -275,17 +390,15 @@ static void ef_ba_try(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t 
      * lopsided hairpin blend could otherwise cut the tip short while staying close to one of
      * the two nearly parallel pieces). Checked for the vertex and EF_BA_PATH_PTS points of
      * each replaced piece, by ef_ba_dist_curve() (an upper bound). */
-    ef_vec3_t cs[NS];
-    for (int i = 0; i < NS; i++)
-        ef_bezier_eval(tr->seg.b, 5, (float)i * h, 0, &cs[i]);
-    dev = ef_maxf(dev, ef_ba_dist_curve(tr->seg.b, cs, NS, v));
-    for (int k = 1; k <= EF_BA_PATH_PTS; k++) {
-        float fr = (float)k * (1.0f / (float)(EF_BA_PATH_PTS + 1));
-        ef_frame_t f;
-        ef_prim_frame(start_in, in, len_in - fr * li, &f);
-        dev = ef_maxf(dev, ef_ba_dist_curve(tr->seg.b, cs, NS, f.p));
-        ef_prim_frame(v, out, fr * lo, &f);
-        dev = ef_maxf(dev, ef_ba_dist_curve(tr->seg.b, cs, NS, f.p));
+    ef_vec3_t h1[5], h2[4];
+    for (int i = 0; i < 5; i++)
+        h1[i] = ef_v3_scale(ef_v3_sub(b[i + 1], b[i]), 5.0f);
+    for (int i = 0; i < 4; i++)
+        h2[i] = ef_v3_scale(ef_v3_sub(h1[i + 1], h1[i]), 4.0f);
+    dev = ef_maxf(dev, ef_ba_dist_curve(b, h1, h2, cs, NS, v));
+    for (int k = 0; k < EF_BA_PATH_PTS; k++) {
+        dev = ef_maxf(dev, ef_ba_dist_curve(b, h1, h2, cs, NS, pin.q[k]) + pin.err);
+        dev = ef_maxf(dev, ef_ba_dist_curve(b, h1, h2, cs, NS, pout.q[k]) + pout.err);
     }
     tr->dev = dev * EF_BA_DEV_REL;
     /* A configuration whose tangent angles the table had to clamp (a lopsided hairpin: a

@@ -183,8 +183,12 @@ int ef_blend_corner(const ef_table_t *g2, ef_vec3_t v, ef_vec3_t u_in, ef_vec3_t
  *   a tangent beyond 90 degrees from the chord, would; a clamped curvature is accepted) and
  *   its measured deviation is within tol - q. The deviation is two-sided:
  *   (a) blend to path: the distances of EF_BLEND_DEV_SAMPLES + 2 blend points (ends
- *   included) to each replaced piece, each an upper bound (the distance to an actual point
- *   of the piece); per interval each distance is bounded by its linear interpolant plus
+ *   included) to each replaced piece, in closed form: exact for lines and circles (for an
+ *   arc the radial and axial offset when the point's angle about the axis is inside the
+ *   piece, else the nearer end), for helices the distance to an actual point of the piece
+ *   (an upper bound); on an arc plus 2 ulp of the arc's angle at the piece's far end times
+ *   its radius (the float32 frames place the blend's ends up to that far off the exact
+ *   piece); per interval each distance is bounded by its linear interpolant plus
  *   (local max |second difference|) / 8, and the top of the smaller of the two bounds
  *   (at an end or at their crossing, the blend's middle) is the interval's bound; the
  *   interval with the largest bound is sampled 7 times more and bounded again; times 1.02;
@@ -228,9 +232,12 @@ int ef_blend_prims(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in
  * @param m      out: b, degree 5, kind EF_MOVE_ARC, dev, tag, feed; length and kappa_max
  *               via ef_move_measure(); planner fields zero; flags EF_MOVE_CLAMPED when the
  *               lookup clamped. dev: the largest of 64 interior samples' distances to the
- *               piece (each an upper bound: the distance to a point of the piece; exact
- *               for circles); tests/test_prim.c finds it at least the true maximum less
- *               float32 rounding, and at most 1.7 times it. On error m is all zero.
+ *               piece (closed form as in ef_blend_prims(): exact for circles, an upper
+ *               bound for helices), plus 2 ulp of the arc's angle at s1 times its radius
+ *               (the float32 frames place the quintic's ends up to that far off the exact
+ *               piece); tests/test_prim.c finds it at least the true maximum less float32
+ *               rounding, and at most 5.1 times it (only where both are at float32
+ *               rounding level). On error m is all zero.
  *               The primitive is checked again (ef_prim_check(); its codes are
  *               returned).
  * @retval EF_OK

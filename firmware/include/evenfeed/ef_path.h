@@ -115,7 +115,8 @@ static inline ef_endpoint_t ef_frame_endpoint(const ef_frame_t *f)
  * @param len   out: arc length (helix included), > 0
  * @retval EF_OK
  * @retval EF_ERR_ARG        NULL pointer, unknown kind or flags, tol or qtol < 0
- * @retval EF_ERR_NONFINITE  NaN/inf in any used field, or a coordinate above EF_MAX_COORD
+ * @retval EF_ERR_NONFINITE  NaN/inf in any used field, a coordinate above EF_MAX_COORD, or
+ *                           an arc reaching beyond it (|centre_i| + radius + rise)
  * @retval EF_ERR_FEED       feed <= 0
  * @retval EF_ERR_DEGENERATE line shorter than EF_MIN_CHORD (a zero-length move; callers
  *                           drop it only after reporting it), arc radius below
@@ -127,7 +128,8 @@ static inline ef_endpoint_t ef_frame_endpoint(const ef_frame_t *f)
  * Checks run in this order, so one input has one code: ARG (NULL, kind, flags); NONFINITE
  * (start, end, feed, tol, qtol, and for arcs centre, axis, sweep; a NaN tol is NONFINITE,
  * not ARG); ARG (tol or qtol < 0); FEED; then for lines DEGENERATE; for arcs ARC (axis:
- * | |axis|^2 - 1 | > 2 EF_UNIT_TOL; sweep), DEGENERATE (radius), ARC (radius, angle).
+ * | |axis|^2 - 1 | > 2 EF_UNIT_TOL; sweep), DEGENERATE (radius), ARC (radius, angle),
+ * DEGENERATE (length), NONFINITE (the arc's reach beyond EF_MAX_COORD).
  * A line's arc fields are not looked at. Only the centre's position perpendicular to the
  * axis matters (the axis line through it). The angle test allows the radius tolerance as an
  * arc length, r |d angle| <= max(EF_ARC_ABS_TOL, EF_ARC_REL_TOL r), plus the float32
@@ -206,6 +208,8 @@ typedef struct {
  *
  * Length: 16-node Gauss–Legendre on |f'| (relative error ~2e-7 on evenfeed's curves).
  * kappa_max and tabs: at t = i / EF_MOVE_SAMPLES, i = 0..EF_MOVE_SAMPLES (ends included).
+ * The derivatives come from the hodographs' control points (computed once; a cubic's
+ * elevated to the quintic's degrees) in Bernstein form.
  * A zero speed at a sample (a cusp) gives an infinite curvature: EF_ERR_NONFINITE. On error
  * length, kappa_max and tabs are zero.
  * @param m  move with b and degree set; m->length, m->kappa_max and m->tabs are filled
