@@ -371,6 +371,128 @@ static void test_random_streams(void)
     }
 }
 
+/* ------------------------------------------------------------------ incremental bounds */
+
+/* From-scratch backward pass in double (ef_plan.h): the incremental bounds must match it. */
+static double ref_time(double dv, double a, double j)
+{
+    double t = dv / a;
+    if (j > 0)
+        t = fmax(1.5 * t, sqrt(6 * dv / j));
+    return t;
+}
+
+static double ref_dist(double va, double vb, double a, double j)
+{
+    return 0.5 * (va + vb) * ref_time(fabs(vb - va), a, j);
+}
+
+static double ref_dist_down(double v0, double e, double a, double j)
+{
+    double d = ref_dist(v0, e, a, j);
+    if (j > 0 && v0 > e) {
+        double v = fmax(e, v0 / 3);
+        d = fmax(d, 0.5 * (v0 + v) * sqrt(6 * (v0 - v) / j));
+    }
+    return d;
+}
+
+static double ref_top(double vf, double len, double a, double j)
+{
+    double lo = vf, hi = sqrt(vf * vf + 2 * a * len);
+    if (ref_dist_down(hi, vf, a, j) <= len)
+        return hi;
+    for (int i = 0; i < 80; i++) {
+        double mid = 0.5 * (lo + hi);
+        if (ref_dist_down(mid, vf, a, j) <= len)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
+/* Largest relative difference between the planner's bounds (every move but the oldest,
+ * whose bound is never read) and a from-scratch pass. */
+static double bounds_diff(const ef_plan_t *p)
+{
+    double v_next = 0, worst = 0;
+    for (uint32_t n = p->count; n-- > 0;) {
+        const ef_move_t *q = &p->q[(p->head + n) % EF_LOOKAHEAD];
+        double exit_b = (q->flags & EF_MOVE_STOP_END) ? 0 : v_next;
+        double v = fmin(q->v_max, ref_top(exit_b, q->length, q->a_max, p->lim.j_max));
+        if (n > 0) {
+            const ef_move_t *prev = &p->q[(p->head + n - 1u) % EF_LOOKAHEAD];
+            v = (prev->flags & EF_MOVE_STOP_END) ? 0 : fmin(v, prev->v_max);
+            double got = p->v_lim[(p->head + n) % EF_LOOKAHEAD];
+            worst = fmax(worst, fabs(got - v) / (fabs(v) + 1e-3));
+        }
+        v_next = v;
+    }
+    return worst;
+}
+
+static void test_incremental_bounds(void)
+{
+    static ef_plan_t p;
+    unsigned long long rng = 4242;
+    for (int pass = 0; pass < 2; pass++) {
+        float j = pass ? 3000.0f : 0.0f;
+        ef_limits_t lim = {{300, 200, 100}, {2000, 1500, 800}, j, 0.4f};
+        EF_CHECK_EQ(ef_plan_init(&p, &lim), EF_OK);
+        ef_vec3_t a = ef_v3(0, 0, 0);
+        double worst = 0, worst_exit = 0;
+        int pulls = 0, okc = 1;
+        float v_prev = 0;
+        for (int i = 0; i < 4000; i++) {
+            double len = pow(10, ef_t_uniform(&rng, -3, 1));
+            double th = ef_t_uniform(&rng, 0, 2 * M_PI);
+            ef_vec3_t b = ef_v3_axpy(a, (float)len, ef_v3((float)cos(th), (float)sin(th), 0));
+            float feed = (float)ef_t_uniform(&rng, 5, 400);
+            ef_move_t m =
+                mk_line(a, b, feed, ef_t_uniform(&rng, 0, 1) < 0.01 ? EF_MOVE_STOP_END : 0);
+            if (ef_t_uniform(&rng, 0, 1) < 0.2)
+                m.kappa_max = (float)pow(10, ef_t_uniform(&rng, -2, 2));
+            a = b;
+            if (ef_plan_push(&p, &m) == EF_ERR_FULL) {
+                ef_move_t o;
+                EF_CHECK_EQ(ef_plan_pull(&p, &o), EF_OK);
+                okc &= o.v_entry == v_prev;
+                v_prev = o.v_exit;
+                EF_CHECK_EQ(ef_plan_push(&p, &m), EF_OK);
+            }
+            worst = fmax(worst, bounds_diff(&p));
+            if (ef_t_uniform(&rng, 0, 1) < 0.005)
+                ef_plan_finish(&p);
+            /* Release a random number of moves, checking each exit against the bounds. */
+            int k = (int)ef_t_uniform(&rng, 0, 3);
+            for (int r = 0; r < k && p.count > 0; r++) {
+                const ef_move_t *h = &p.q[p.head];
+                double exit_b = 0;
+                if (!(h->flags & EF_MOVE_STOP_END) && p.count > 1)
+                    exit_b = p.v_lim[(p.head + 1u) % EF_LOOKAHEAD];
+                double want = fmin(fmin(exit_b, ref_top(v_prev, h->length, h->a_max, 0)), h->v_max);
+                int want_known = j == 0; /* the jerk-limited exit is checked by the bounds */
+                ef_move_t o;
+                if (ef_plan_pull(&p, &o) != EF_OK)
+                    break;
+                okc &= o.v_entry == v_prev;
+                if (want_known && !(o.flags & EF_MOVE_STOP_END))
+                    worst_exit = fmax(worst_exit, fabs(o.v_exit - want) / (want + 1e-3));
+                v_prev = o.v_exit;
+                pulls++;
+                worst = fmax(worst, bounds_diff(&p));
+            }
+        }
+        printf("incremental bounds j=%g: %d pulls, worst bound difference %.3g, exit %.3g\n",
+               (double)j, pulls, worst, worst_exit);
+        EF_CHECK(okc);
+        EF_CHECK(pulls > 1000);
+        EF_CHECK(worst <= 1e-5);
+        EF_CHECK(worst_exit <= 1e-5);
+    }
+}
+
 /* ------------------------------------------------------------------ (3) window */
 
 static void test_window(void)
@@ -935,6 +1057,7 @@ int main(int argc, char **argv)
         test_window();
         test_axis_limits();
         test_random_streams();
+        test_incremental_bounds();
     }
     if (interp) {
         test_interp_lines();

@@ -1,8 +1,11 @@
 /* Feed planner: per-move limits, backward/forward passes over the look-ahead window, and
  * the time law of each released move (see ef_plan.h and ef_path.h).
  *
- * Every search is a bisection with a fixed iteration count (EF_PLAN_BISECT), so a pull
- * costs O(EF_LOOKAHEAD * EF_PLAN_BISECT) whatever the data. */
+ * The backward-pass bounds are kept up to date incrementally by each push (from the newest
+ * move back, stopping at the first unchanged bound), so a pull only runs the forward step and
+ * the time law of the oldest move. Without a jerk limit every ramp inversion is closed-form
+ * (plus a fixed few-ulp correction); with one it is a bisection with a fixed iteration count
+ * (EF_PLAN_BISECT). Worst case: a push O(EF_LOOKAHEAD) inversions, a pull O(1). */
 #include "evenfeed/ef_plan.h"
 #include "evenfeed/ef_err.h"
 
@@ -80,9 +83,26 @@ static float ef_ramp_dist_down(float v0, float e, float a, float j)
     return d;
 }
 
+/** Steps of the closed-form answers' downward correction (a few ulps at most). */
+#define EF_PLAN_ULP_STEPS 4
+
+/** Lower a closed-form speed by about one ulp per step (fixed count) until `fits`; returns
+ *  the first fitting value, or a negative value when none of the steps fits. */
+#define EF_PLAN_ULP_DOWN(v, fits)                                                                  \
+    do {                                                                                           \
+        int ef_k_ = 0;                                                                             \
+        for (; ef_k_ < EF_PLAN_ULP_STEPS && !(fits); ef_k_++)                                      \
+            (v) -= (v)*1.2e-7f;                                                                    \
+        if (ef_k_ == EF_PLAN_ULP_STEPS && !(fits))                                                 \
+            (v) = -1.0f;                                                                           \
+    } while (0)
+
 /** Largest v >= vf such that a ramp between v and vf fits in len (either direction: the
  *  distance is symmetric); with `down`, every ramp from v to a speed in [vf, v] must fit
- *  (ef_ramp_dist_down()). The returned value always satisfies the condition. */
+ *  (ef_ramp_dist_down()). The returned value always satisfies the condition. Without a jerk
+ *  limit the answer is closed-form, sqrt(vf^2 + 2 a len), lowered by a few ulps if rounding
+ *  puts it just beyond len; the bisection is only the fallback for that case and the
+ *  search with a jerk limit. */
 static float ef_ramp_top(float vf, float len, float a, float j, int down)
 {
     float lo = vf;
@@ -90,6 +110,12 @@ static float ef_ramp_top(float vf, float len, float a, float j, int down)
     float d = down ? ef_ramp_dist_down(hi, vf, a, j) : ef_ramp_dist(hi, vf, a, j);
     if (d <= len)
         return hi;
+    if (!(j > 0.0f)) {
+        float v = hi;
+        EF_PLAN_ULP_DOWN(v, v >= vf && ef_ramp_dist(v, vf, a, 0.0f) <= len);
+        if (v >= vf)
+            return v;
+    }
     for (int i = 0; i < EF_PLAN_BISECT; i++) {
         float mid = 0.5f * (lo + hi);
         d = down ? ef_ramp_dist_down(mid, vf, a, j) : ef_ramp_dist(mid, vf, a, j);
@@ -144,10 +170,10 @@ static void ef_law_ramp(ef_timelaw_t *law, int k, float va, float vb, float T, f
     }
 }
 
-int ef_plan_timelaw(ef_move_t *m, float j_max)
+/** ef_plan_timelaw() with, when up >= 0, ef_ramp_top(v_entry, length, a_max, j_max, 0)
+ *  already known (the pull computes it for the exit). */
+static int ef_plan_timelaw_up(ef_move_t *m, float j_max, float up)
 {
-    if (!m)
-        return EF_ERR_ARG;
     float len = m->length, v0 = m->v_entry, v1 = m->v_exit, vmax = m->v_max, a = m->a_max;
     int fin = ef_plan_finite(len) & ef_plan_finite(v0) & ef_plan_finite(v1) & ef_plan_finite(vmax) &
               ef_plan_finite(a) & ef_plan_finite(j_max);
@@ -159,7 +185,8 @@ int ef_plan_timelaw(ef_move_t *m, float j_max)
     /* Exit reachable from the entry within the length (rounding-level fixes only when the
      * passes planned it). */
     if (v1 > v0) {
-        float up = ef_ramp_top(v0, len, a, j, 0);
+        if (!(up >= 0.0f))
+            up = ef_ramp_top(v0, len, a, j, 0);
         v1 = ef_minf(v1, up);
     } else if (v1 < v0 && ef_ramp_dist(v0, v1, a, j) > len) {
         v1 = ef_ramp_bottom(v0, len, a, j);
@@ -170,7 +197,15 @@ int ef_plan_timelaw(ef_move_t *m, float j_max)
     float vc = vtop;
     if (ef_ramp_dist(v0, vtop, a, j) + ef_ramp_dist(vtop, v1, a, j) > len) {
         float lo = ef_maxf(v0, v1), hi = vtop;
-        for (int i = 0; i < EF_PLAN_BISECT; i++) {
+        if (!(j > 0.0f)) {
+            /* (2 vc^2 - v0^2 - v1^2) / (2 a) = len, within [lo, vtop] */
+            float v = ef_minf(vtop, ef_sqrtf(0.5f * (v0 * v0 + v1 * v1) + a * len));
+            EF_PLAN_ULP_DOWN(
+                v, v >= lo && ef_ramp_dist(v0, v, a, 0.0f) + ef_ramp_dist(v, v1, a, 0.0f) <= len);
+            if (v >= lo)
+                lo = hi = v;
+        }
+        for (int i = 0; i < EF_PLAN_BISECT && lo < hi; i++) {
             float mid = 0.5f * (lo + hi);
             if (ef_ramp_dist(v0, mid, a, j) + ef_ramp_dist(mid, v1, a, j) <= len)
                 lo = mid;
@@ -224,6 +259,13 @@ int ef_plan_timelaw(ef_move_t *m, float j_max)
     return EF_OK;
 }
 
+int ef_plan_timelaw(ef_move_t *m, float j_max)
+{
+    if (!m)
+        return EF_ERR_ARG;
+    return ef_plan_timelaw_up(m, j_max, -1.0f);
+}
+
 int ef_timelaw_eval(const ef_move_t *m, float t, float *tau, float *v)
 {
     if (!m || !tau)
@@ -258,6 +300,44 @@ int ef_timelaw_eval(const ef_move_t *m, float t, float *tau, float *v)
 }
 
 /* ---------------------------------------------------------------- planner */
+
+/** Backward-pass bound of the move at window position n (0 = oldest) given the bound on the
+ *  entry of the move after it (0 for the newest, which is assumed to end at rest): the
+ *  largest entry speed from which every later move can still be followed and the newest
+ *  stopped at its end. */
+static float ef_plan_bound(const ef_plan_t *p, uint32_t n, float v_next)
+{
+    const ef_move_t *q = &p->q[(p->head + n) % EF_LOOKAHEAD];
+    if (n > 0 && (p->q[(p->head + n - 1u) % EF_LOOKAHEAD].flags & EF_MOVE_STOP_END))
+        return 0.0f;
+    float exit_b = (q->flags & EF_MOVE_STOP_END) ? 0.0f : v_next;
+    float v = ef_minf(q->v_max, ef_ramp_top(exit_b, q->length, q->a_max, p->lim.j_max, 1));
+    if (n > 0)
+        v = ef_minf(v, p->q[(p->head + n - 1u) % EF_LOOKAHEAD].v_max);
+    return v;
+}
+
+/** Incremental backward pass after a push: the newest move's bound, then the earlier ones
+ *  while they change. A bound depends only on its move, the move before it and the next
+ *  bound, so an unchanged bound leaves every earlier one unchanged: v_lim always equals a
+ *  from-scratch pass over the window (the oldest move's bound is never read, so releasing
+ *  it changes nothing). At most count bound computations. */
+static void ef_plan_backward(ef_plan_t *p)
+{
+    uint32_t n = p->count - 1u;
+    float v = ef_plan_bound(p, n, 0.0f);
+    p->v_lim[(p->head + n) % EF_LOOKAHEAD] = v;
+    while (n-- > 0) {
+        uint32_t idx = (p->head + n) % EF_LOOKAHEAD;
+        if (p->q[idx].flags & EF_MOVE_STOP_END)
+            break; /* exit bound 0 whatever follows */
+        float w = ef_plan_bound(p, n, v);
+        if (w == p->v_lim[idx])
+            break;
+        p->v_lim[idx] = w;
+        v = w;
+    }
+}
 
 int ef_plan_init(ef_plan_t *p, const ef_limits_t *lim)
 {
@@ -340,6 +420,7 @@ int ef_plan_push(ef_plan_t *p, const ef_move_t *m)
     if (q->flags & EF_MOVE_STOP_END)
         p->nstops++;
     p->finished = 0;
+    ef_plan_backward(p);
     return EF_OK;
 }
 
@@ -358,33 +439,12 @@ int ef_plan_finish(ef_plan_t *p)
     return EF_OK;
 }
 
-/** Backward pass over the whole window: v_lim[i] is the largest entry speed of move i from
- *  which every later move can still be followed and the newest stopped at its end. */
-static void ef_plan_backward(ef_plan_t *p)
-{
-    float j = p->lim.j_max;
-    float v_next = 0.0f; /* bound on the entry of the move after i (the newest ends at rest) */
-    for (uint32_t n = p->count; n-- > 0;) {
-        uint32_t idx = (p->head + n) % EF_LOOKAHEAD;
-        const ef_move_t *q = &p->q[idx];
-        float exit_b = (q->flags & EF_MOVE_STOP_END) ? 0.0f : v_next;
-        float v = ef_minf(q->v_max, ef_ramp_top(exit_b, q->length, q->a_max, j, 1));
-        if (n > 0) {
-            const ef_move_t *prev = &p->q[(p->head + n - 1u) % EF_LOOKAHEAD];
-            v = (prev->flags & EF_MOVE_STOP_END) ? 0.0f : ef_minf(v, prev->v_max);
-        }
-        p->v_lim[idx] = v;
-        v_next = v;
-    }
-}
-
 int ef_plan_pull(ef_plan_t *p, ef_move_t *out)
 {
     if (!p || !out)
         return EF_ERR_ARG;
     if (p->count == 0 || !(p->count >= EF_LOOKAHEAD || p->nstops > 0 || p->finished))
         return EF_ERR_AGAIN;
-    ef_plan_backward(p);
 
     ef_move_t m = p->q[p->head];
     /* Forward pass for the head: entry committed, exit what the entry can reach within the
@@ -393,10 +453,11 @@ int ef_plan_pull(ef_plan_t *p, ef_move_t *out)
     if (!(m.flags & EF_MOVE_STOP_END) && p->count > 1)
         exit_b = p->v_lim[(p->head + 1u) % EF_LOOKAHEAD];
     float v0 = p->v_last;
-    float v1 = ef_minf(exit_b, ef_ramp_top(v0, m.length, m.a_max, p->lim.j_max, 0));
+    float up = ef_ramp_top(v0, m.length, m.a_max, p->lim.j_max, 0);
+    float v1 = ef_minf(exit_b, up);
     m.v_entry = v0;
     m.v_exit = ef_minf(v1, m.v_max);
-    int rc = ef_plan_timelaw(&m, p->lim.j_max);
+    int rc = ef_plan_timelaw_up(&m, p->lim.j_max, up);
     if (rc != EF_OK)
         return rc; /* not reachable for data push accepted; state unchanged */
     if (m.flags & EF_MOVE_STOP_END) {

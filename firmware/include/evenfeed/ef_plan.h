@@ -27,7 +27,16 @@
  * the last released move. ef_plan_pull() releases the oldest move when the window is full,
  * when an exact stop lies in the window, or after ef_plan_finish(); its entry speed is then
  * final, and its exit speed is final too (the backward pass already ensured the next move
- * can stop in time). Cost per push O(1); per pull O(EF_LOOKAHEAD), bounded.
+ * can stop in time).
+ *
+ * ## Cost
+ * The backward bounds (v_lim) are maintained incrementally: a push recomputes the newest
+ * move's bound and then earlier ones only while they change (a bound depends only on its
+ * move, the one before it and the next bound, so an unchanged bound stops the pass; the
+ * result equals a from-scratch pass). A push costs amortised O(1) ramp inversions in
+ * ordinary streams, O(EF_LOOKAHEAD) at worst (a long braking tail); a pull costs O(1) (the
+ * oldest move's forward step and time law). Without a jerk limit each ramp inversion is
+ * closed-form; with one it is a fixed-count bisection. Every loop has a fixed bound.
  */
 #ifndef EF_PLAN_H
 #define EF_PLAN_H
@@ -67,7 +76,8 @@ int ef_limits_check(const ef_limits_t *lim);
 typedef struct {
     ef_limits_t lim;
     ef_move_t q[EF_LOOKAHEAD]; /**< window, oldest at head */
-    float v_lim[EF_LOOKAHEAD]; /**< backward-pass bound on each move's entry speed */
+    float v_lim[EF_LOOKAHEAD]; /**< backward-pass bound on each move's entry speed, kept
+                                    current by each push (the oldest move's is unused) */
     uint32_t head;             /**< index of the oldest move */
     uint32_t count;            /**< moves in the window */
     uint32_t nstops;           /**< moves in the window with EF_MOVE_STOP_END */
@@ -97,7 +107,8 @@ int ef_plan_init(ef_plan_t *p, const ef_limits_t *lim);
  *                          point beyond EF_MAX_COORD
  * @retval EF_ERR_FEED      feed <= 0
  * @retval EF_ERR_FULL      window full: pull first (nothing changed)
- * On any error the planner is unchanged.
+ * On any error the planner is unchanged. On success the backward bounds are updated from the
+ * new move back while they change (see Cost above).
  */
 int ef_plan_push(ef_plan_t *p, const ef_move_t *m);
 
@@ -115,8 +126,8 @@ int ef_plan_finish(ef_plan_t *p);
  * @retval EF_OK       out filled
  * @retval EF_ERR_ARG  NULL pointer
  * @retval EF_ERR_AGAIN nothing releasable yet (window not full, no stop in it, not finished)
- * The pass recomputes the backward bounds of the whole window: O(EF_LOOKAHEAD) ramp
- * searches, each a fixed-count bisection.
+ * The backward bounds are already current (kept by ef_plan_push()): O(1), at most three ramp
+ * searches (closed-form without a jerk limit, fixed-count bisections with one).
  */
 int ef_plan_pull(ef_plan_t *p, ef_move_t *out);
 
