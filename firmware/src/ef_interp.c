@@ -7,6 +7,11 @@
  *  tau is used for that sample). */
 #define EF_INTERP_MIN_DERIV 1e-12f
 
+/** Largest parameter step the corrected mode takes with its chord measure; beyond it the
+ *  parameter resynchronises with the time law (1/64 of a curve: the chord of a quintic
+ *  over that span is within a few 1e-5 of its arc length). */
+#define EF_INTERP_RESYNC (1.0f / 64.0f)
+
 static int ef_interp_finite(float x)
 {
     return (x - x) == 0.0f;
@@ -100,6 +105,17 @@ static void ef_interp_eval(ef_interp_t *ip, const ef_move_t *m, float *v)
     if (!ef_interp_finite(tn))
         tn = tau_law;
     tn = ef_maxf(ip->tau, ef_minf(1.0f, tn)); /* never step back */
+    if (tn - ip->tau > EF_INTERP_RESYNC) {
+        /* A step over a large part of the curve (a late call, or entering a move part-way
+         * through): the chord would understate the arc length reached and the next steps
+         * would rush to make it up. Take the law's parameter and its arc length instead. */
+        tn = tau_law;
+        ip->tau = tn;
+        ip->s_done = s;
+        ef_bezier_eval(lb, m->degree, tn, 0, d);
+        ip->pos = ef_v3_add(m->b[0], d[0]);
+        return;
+    }
     ef_vec3_t p[1];
     ef_bezier_eval(lb, m->degree, tn, 0, p);
     ip->s_done += ef_v3_norm(ef_v3_sub(p[0], d[0]));

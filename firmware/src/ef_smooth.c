@@ -301,13 +301,22 @@ static void ef_sm_decide(ef_smooth_t *s, ef_smooth_prim_t *a, ef_smooth_prim_t *
     s->st.blends++;
 }
 
+/* Arc length bounds of piece i (0-based) of n of an arc body; the last piece ends exactly
+ * at the body's end, so the chain meets the next move without a rounding gap. */
+static void ef_sm_piece_bounds(const ef_smooth_prim_t *h, uint32_t i, uint32_t n, float *a,
+                               float *b)
+{
+    float s0 = h->trim_start, s1 = h->len - h->trim_end;
+    *a = s0 + (s1 - s0) * (float)i / (float)n;
+    *b = (i + 1 == n) ? s1 : s0 + (s1 - s0) * (float)(i + 1) / (float)n;
+}
+
 /* Move i (0-based) of n pieces of the oldest (arc) primitive's body. */
 static int ef_sm_arc_piece(ef_smooth_t *s, ef_smooth_prim_t *h, uint32_t i, uint32_t n,
                            ef_move_t *m)
 {
-    float s0 = h->trim_start, s1 = h->len - h->trim_end;
-    float a = s0 + (s1 - s0) * (float)i / (float)n;
-    float b = (i + 1 == n) ? s1 : s0 + (s1 - s0) * (float)(i + 1) / (float)n;
+    float a, b;
+    ef_sm_piece_bounds(h, i, n, &a, &b);
     return ef_blend_arc_piece(s->cfg.g2, h->start, &h->pr, a, b, m);
 }
 
@@ -360,11 +369,10 @@ static int ef_sm_next_move(ef_smooth_t *s, ef_move_t *m)
                  * chord, with exact stops at both ends, so no tangent break is driven
                  * through at speed. */
                 ef_frame_t f0, f1;
-                float s0 = h->trim_start, s1 = h->len - h->trim_end;
-                ef_prim_frame(h->start, &h->pr, s0 + (s1 - s0) * (float)s->arc_next / (float)n,
-                              &f0);
-                ef_prim_frame(h->start, &h->pr,
-                              s0 + (s1 - s0) * (float)(s->arc_next + 1) / (float)n, &f1);
+                float a, b;
+                ef_sm_piece_bounds(h, s->arc_next, n, &a, &b);
+                ef_prim_frame(h->start, &h->pr, a, &f0);
+                ef_prim_frame(h->start, &h->pr, b, &f1);
                 rc = ef_sm_chord_stop(s, m, f0.p, f1.p, &h->pr);
                 if (rc == EF_OK && ++s->arc_next < n)
                     return 1;
