@@ -150,8 +150,8 @@ int ef_prim_check(ef_vec3_t start, const ef_prim_t *pr, float *len)
     /* Every point of the arc, not only its ends and centre, within EF_MAX_COORD: the
      * circle's reach from the centre (radius plus the helix's rise) bounds it. Without this
      * a large arc near the limit makes pieces and blends no move may hold. */
-    float cm = ef_maxf(ef_maxf(ef_fabsf(pr->centre.x), ef_fabsf(pr->centre.y)),
-                       ef_fabsf(pr->centre.z));
+    float cm =
+        ef_maxf(ef_maxf(ef_fabsf(pr->centre.x), ef_fabsf(pr->centre.y)), ef_fabsf(pr->centre.z));
     if (!(cm + g.r0 + rtol + ef_fabsf(g.h) <= EF_MAX_COORD))
         return EF_ERR_NONFINITE;
     *len = g.len;
@@ -304,6 +304,7 @@ int ef_move_measure(ef_move_t *m)
         len += ef_gl16[i][1] * (a + b);
     }
     float kmax = 0.0f;
+    float ilen = 1.0f / ef_maxf(len, 1e-30f);
     ef_vec3_t tabs = ef_v3(0.0f, 0.0f, 0.0f);
     for (int i = 0; i <= EF_MOVE_SAMPLES; i++) {
         float t = (float)i * (1.0f / (float)EF_MOVE_SAMPLES);
@@ -312,9 +313,14 @@ int ef_move_measure(ef_move_t *m)
         float isp = 1.0f / ef_maxf(sp, 1e-30f);
         float k = ef_v3_norm(ef_v3_cross(d1, d2)) * isp * isp * isp;
         kmax = ef_maxf(kmax, k);
-        tabs.x = ef_maxf(tabs.x, ef_fabsf(d1.x) * isp);
-        tabs.y = ef_maxf(tabs.y, ef_fabsf(d1.y) * isp);
-        tabs.z = ef_maxf(tabs.z, ef_fabsf(d1.z) * isp);
+        /* Per axis, the larger of |t_i| (what arc-length stepping moves the axis by per unit
+         * path speed) and |f'_i| / L (what stepping tau uniformly by the time law does, where
+         * the curve's parametric speed exceeds its mean): the planner's axis limits then
+         * hold for both interpolator modes. */
+        float w = ef_maxf(isp, ilen);
+        tabs.x = ef_maxf(tabs.x, ef_fabsf(d1.x) * w);
+        tabs.y = ef_maxf(tabs.y, ef_fabsf(d1.y) * w);
+        tabs.z = ef_maxf(tabs.z, ef_fabsf(d1.z) * w);
     }
     if (!ef_prim_finite(len) || !ef_prim_finite(kmax))
         return ef_move_measure_fail(m, EF_ERR_NONFINITE);

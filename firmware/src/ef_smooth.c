@@ -14,8 +14,8 @@ enum {
     EF_V_SMOOTH = 4,   /* smooth vertex: frames fe / fs interpolated */
 };
 
-/* Shortest move handed to the planner (it refuses anything below EF_MIN_CHORD). */
-#define EF_SM_MIN_MOVE (2.0f * EF_MIN_CHORD)
+/* Shortest move handed to the planner (it refuses anything shorter). */
+#define EF_SM_MIN_MOVE EF_MIN_CHORD
 
 /* Emission phases of the oldest held primitive. */
 enum { EF_E_BODY = 0, EF_E_BLEND = 1, EF_E_DONE = 2 };
@@ -109,10 +109,16 @@ static void ef_sm_stage(ef_smooth_t *s, const ef_move_t *m)
     ef_move_t *prev = ef_sm_stage_last(s);
     if (m->length < EF_SM_MIN_MOVE) {
         /* A remnant below float32 resolution (e.g. what two blends leave of a line, to
-         * rounding): not a move a planner or drive can time. Its stop, if any, goes to the
-         * move before it; the next move's start snaps onto that move's end. */
-        if (prev && (m->flags & EF_MOVE_STOP_END))
-            prev->flags |= EF_MOVE_STOP_END;
+         * rounding): not a move a planner or drive can time. The move before it is
+         * stretched to its end (by less than EF_MIN_CHORD, while that move is still
+         * staged) and takes over its stop, if any; otherwise the next move's start snaps
+         * over the gap. */
+        if (prev) {
+            prev->b[prev->degree] = m->b[m->degree];
+            prev->flags |= (uint16_t)(m->flags & EF_MOVE_STOP_END);
+            (void)ef_move_measure(prev); /* valid before, moved by < EF_MIN_CHORD */
+            s->out_end = m->b[m->degree];
+        }
         return;
     }
     ef_move_t *d = &s->stage[(s->sh + s->sn) % EF_SMOOTH_STAGE];
@@ -124,6 +130,16 @@ static void ef_sm_stage(ef_smooth_t *s, const ef_move_t *m)
     s->out_end = d->b[d->degree];
     s->sn++;
     s->st.dev_max = ef_maxf(s->st.dev_max, m->dev);
+}
+
+/* A built move the planner and a drive can take: control points within EF_MAX_COORD,
+ * measurable, and not shorter than the planner accepts. Measures m as a side effect. */
+static int ef_sm_move_ok(ef_move_t *m)
+{
+    for (int i = 0; i <= m->degree && i < 6; i++)
+        if (!ef_sm_v3_ok(m->b[i]))
+            return 0;
+    return ef_move_measure(m) == EF_OK && m->length >= EF_SM_MIN_MOVE;
 }
 
 /* Fill the measured fields of a move built from control points; 0 on success. */
@@ -295,6 +311,16 @@ static void ef_sm_decide(ef_smooth_t *s, ef_smooth_prim_t *a, ef_smooth_prim_t *
         s->st.straight++;
         return;
     }
+    /* A blend as wide as a huge tolerance allows can reach beyond the coordinate range
+     * (its control points are not bounded by the path's): not a move anything can hold. */
+    ef_move_t probe = {0};
+    for (int i = 0; i < 6; i++)
+        probe.b[i] = a->blend.seg.b[i];
+    probe.degree = 5;
+    if (!ef_sm_move_ok(&probe)) {
+        s->st.stops++;
+        return;
+    }
     a->end_kind = EF_V_BLEND;
     a->trim_end = a->blend.trim_in;
     b->trim_start = a->blend.trim_out;
@@ -360,6 +386,8 @@ static int ef_sm_next_move(ef_smooth_t *s, ef_move_t *m)
             }
             uint32_t n = s->arc_n;
             rc = ef_sm_arc_piece(s, h, s->arc_next, n, m);
+            if (rc == EF_OK && !ef_sm_move_ok(m))
+                rc = EF_ERR_NONFINITE;
             if (rc == EF_OK) {
                 s->st.arc_pieces++;
                 if (++s->arc_next < n)
@@ -387,7 +415,7 @@ static int ef_sm_next_move(ef_smooth_t *s, ef_move_t *m)
                 if (h->trim_start > 0.0f)
                     f0.p = h->blend_in_end; /* exactly where the blend ended */
                 rc = ef_sm_smooth_move(s, m, &f0, &f1, h->start, h->pr.end, h->pr.feed, h->pr.tag);
-                if (rc != EF_OK || m->dev > h->pr.tol - h->merge_dev) {
+                if (rc != EF_OK || !ef_sm_move_ok(m) || m->dev > h->pr.tol - h->merge_dev) {
                     /* Not representable within the tolerance: the chord itself, with exact
                      * stops at both ends (tangents differ there). */
                     rc = ef_sm_chord_stop(s, m, f0.p, f1.p, &h->pr);

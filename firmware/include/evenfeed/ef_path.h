@@ -188,8 +188,11 @@ typedef struct {
                            primitive's) */
     float length;     /**< arc length L of the curve */
     float kappa_max;  /**< largest curvature on the curve (sampled, see ef_move_measure()) */
-    ef_vec3_t tabs;   /**< largest |tangent component| per axis over the curve (sampled):
-                           the axis speed limits bound the path speed by v_axis_i / tabs_i */
+    ef_vec3_t tabs;   /**< per axis, the largest over the curve (sampled) of |t_i| and
+                           |f'_i(tau)| / L: the axis moves at most tabs_i times the planned
+                           path speed whether tau is stepped by arc length or uniformly by
+                           the time law, so v <= v_axis_i / tabs_i keeps every axis within
+                           its limit (for evenfeed's curves the two agree to ~0.2 %) */
     float dev;        /**< deviation from the programmed path it replaces (blends: from the
                            corner; arcs: from the true arc; lines: 0) */
     float feed;       /**< commanded feed (units/s) */

@@ -5,7 +5,8 @@
  *
  * ## Limits of a move (set by ef_plan_push())
  * - v_max = min(feed, min_i v_axis_i / tabs_i, sqrt(a_n / kappa_max)), where tabs_i is the
- *   largest |tangent component| on axis i over the move and a_n = a_normal_frac x a_path
+ *   largest |tangent component| on axis i over the move (and of |f'_i| / L: ef_path.h)
+ *   and a_n = a_normal_frac x a_path
  *   the centripetal share of the acceleration budget;
  * - a_max = (1 - a_normal_frac) x a_path, the tangential share, with
  *   a_path = min_i a_axis_i / tabs_i (so every axis stays within its own limit when the
