@@ -7,10 +7,12 @@
  *  tau is used for that sample). */
 #define EF_INTERP_MIN_DERIV 1e-12f
 
-/** Largest parameter step the corrected mode takes with its chord measure; beyond it the
- *  parameter resynchronises with the time law (1/64 of a curve: the chord of a quintic
- *  over that span is within a few 1e-5 of its arc length). */
+/** Largest parameter step of the corrected mode (1/64 of a curve: the chord of a quintic
+ *  over that span is within a few 1e-5 of its arc length); a deficit larger than that share
+ *  of the length resynchronises with the time law. */
 #define EF_INTERP_RESYNC (1.0f / 64.0f)
+/** Chords measuring the arc passed over in a resynchronisation. */
+#define EF_INTERP_RESYNC_CHORDS 16
 
 static int ef_interp_finite(float x)
 {
@@ -98,24 +100,32 @@ static void ef_interp_eval(ef_interp_t *ip, const ef_move_t *m, float *v)
     /* One Newton-like step on arc length: S (chords so far) towards s(t) = L tau_law. */
     ef_bezier_eval(lb, m->degree, ip->tau, 1, d);
     float s = tau_law * m->length;
+    float gap = s - ip->s_done;
+    if (gap > EF_INTERP_RESYNC * m->length && tau_law > ip->tau) {
+        /* Far behind (a late call, or a move entered part-way through): go to the law's
+         * parameter, measuring the arc passed with EF_INTERP_RESYNC_CHORDS chords, so S
+         * stays an arc length the next steps can correct from. */
+        float t0 = ip->tau, step = (tau_law - t0) * (1.0f / (float)EF_INTERP_RESYNC_CHORDS);
+        ef_vec3_t q0 = d[0], q1;
+        for (int k = 1; k <= EF_INTERP_RESYNC_CHORDS; k++) {
+            float tk = k == EF_INTERP_RESYNC_CHORDS ? tau_law : t0 + step * (float)k;
+            ef_bezier_eval(lb, m->degree, tk, 0, &q1);
+            ip->s_done += ef_v3_norm(ef_v3_sub(q1, q0));
+            q0 = q1;
+        }
+        ip->tau = tau_law;
+        ip->pos = ef_v3_add(m->b[0], q0);
+        return;
+    }
     float sp = ef_v3_norm(d[1]);
     float tn = tau_law;
     if (sp > EF_INTERP_MIN_DERIV)
-        tn = ip->tau + (s - ip->s_done) / sp;
+        tn = ip->tau + gap / sp;
     if (!ef_interp_finite(tn))
         tn = tau_law;
-    tn = ef_maxf(ip->tau, ef_minf(1.0f, tn)); /* never step back */
-    if (tn - ip->tau > EF_INTERP_RESYNC) {
-        /* A step over a large part of the curve (a late call, or entering a move part-way
-         * through): the chord would understate the arc length reached and the next steps
-         * would rush to make it up. Take the law's parameter and its arc length instead. */
-        tn = tau_law;
-        ip->tau = tn;
-        ip->s_done = s;
-        ef_bezier_eval(lb, m->degree, tn, 0, d);
-        ip->pos = ef_v3_add(m->b[0], d[0]);
-        return;
-    }
+    /* Never step back; never more than EF_INTERP_RESYNC of the curve in one sample (where
+     * |f'| is small the Newton step would overshoot). */
+    tn = ef_maxf(ip->tau, ef_minf(ef_minf(1.0f, ip->tau + EF_INTERP_RESYNC), tn));
     ef_vec3_t p[1];
     ef_bezier_eval(lb, m->degree, tn, 0, p);
     ip->s_done += ef_v3_norm(ef_v3_sub(p[0], d[0]));

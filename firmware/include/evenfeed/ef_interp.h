@@ -12,9 +12,9 @@
  *   fluctuation is the curve's own speed variation.
  * - ::EF_STEP_CORRECTED: one correction step per sample: with S the arc length reached so
  *   far (chords accumulated), tau_next = tau + (s(t) - S) / |f'(tau)|. It removes most of
- *   the residual at the cost of one derivative evaluation. A step over more than 1/64 of a
- *   curve (a late call, a very short move) resynchronises with the time law instead, since
- *   a chord that long no longer measures the arc length reached.
+ *   the residual at the cost of one derivative evaluation. A step is at most 1/64 of the
+ *   curve; a deficit larger than 1/64 of its length (a late call, a move entered part-way
+ *   through) resynchronises with the time law, measuring the arc passed with 16 chords.
  *
  * A move starts where the previous one ended (checked at push). When the queue runs dry
  * while the last move ended moving (v_exit > 0), the setpoint holds the end position and
