@@ -11,8 +11,6 @@
  *  over that span is within a few 1e-5 of its arc length); a deficit larger than that share
  *  of the length resynchronises with the time law. */
 #define EF_INTERP_RESYNC (1.0f / 64.0f)
-/** Chords measuring the arc passed over in a resynchronisation. */
-#define EF_INTERP_RESYNC_CHORDS 16
 
 static int ef_interp_finite(float x)
 {
@@ -36,6 +34,7 @@ int ef_interp_init(ef_interp_t *ip, ef_vec3_t home, uint32_t period_us, int mode
     ip->mode = mode;
     ip->period_us = period_us;
     ip->t = ip->tau = ip->s_done = 0.0f;
+    ip->t_c = ip->s_c = 0.0f;
     ip->pos = ip->end = home;
     ip->v_end = 0.0f;
     ip->last_seq = ip->last_tag = 0;
@@ -71,12 +70,24 @@ int ef_interp_push(ef_interp_t *ip, const ef_move_t *m)
         return EF_ERR_FULL;
     if (ip->count == 0) {
         ip->t = ip->tau = ip->s_done = 0.0f;
+        ip->t_c = ip->s_c = 0.0f;
     }
     ip->q[(ip->head + ip->count) % EF_INTERP_QUEUE] = *m;
     ip->count++;
     ip->end = m->b[m->degree];
     ip->v_end = m->v_exit;
     return EF_OK;
+}
+
+/* Compensated (Kahan) sum *sum += x: the running error *c is fed back, so adding many
+ * small steps to a large total keeps full precision (the firmware is never built with
+ * -ffast-math, which would undo it). */
+static void ef_interp_kahan(float *sum, float *c, float x)
+{
+    float y = x - *c;
+    float t = *sum + y;
+    *c = (t - *sum) - y;
+    *sum = t;
 }
 
 /** Position on the head move at time ip->t (uniform or corrected parameter step). */
@@ -103,17 +114,34 @@ static void ef_interp_eval(ef_interp_t *ip, const ef_move_t *m, float *v)
     float gap = s - ip->s_done;
     if (gap > EF_INTERP_RESYNC * m->length && tau_law > ip->tau) {
         /* Far behind (a late call, or a move entered part-way through): go to the law's
-         * parameter, measuring the arc passed with EF_INTERP_RESYNC_CHORDS chords, so S
-         * stays an arc length the next steps can correct from. */
-        float t0 = ip->tau, step = (tau_law - t0) * (1.0f / (float)EF_INTERP_RESYNC_CHORDS);
-        ef_vec3_t q0 = d[0], q1;
-        for (int k = 1; k <= EF_INTERP_RESYNC_CHORDS; k++) {
-            float tk = k == EF_INTERP_RESYNC_CHORDS ? tau_law : t0 + step * (float)k;
-            ef_bezier_eval(lb, m->degree, tk, 0, &q1);
-            ip->s_done += ef_v3_norm(ef_v3_sub(q1, q0));
-            q0 = q1;
+         * parameter, adding the arc passed by 8-point Gauss-Legendre quadrature of |f'|
+         * (chords would understate a long span), so S stays an arc length the next steps
+         * can correct from. */
+        static const float gx[4] = {0.1834346425f, 0.5255324099f, 0.7966664774f,
+                                    0.9602898565f}; /* abscissae on [-1, 1] */
+        static const float gw[4] = {0.1813418917f, 0.1568533229f, 0.1111905172f,
+                                    0.0506142681f}; /* half weights */
+        float t0 = ip->tau, span = tau_law - t0, arc = 0.0f;
+        for (int k = 0; k < 4; k++) {
+            ef_vec3_t e[2], f[2];
+            ef_bezier_eval(lb, m->degree, t0 + span * (0.5f - 0.5f * gx[k]), 1, e);
+            ef_bezier_eval(lb, m->degree, t0 + span * (0.5f + 0.5f * gx[k]), 1, f);
+            arc += gw[k] * (ef_v3_norm(e[1]) + ef_v3_norm(f[1]));
         }
-        ip->tau = tau_law;
+        ef_interp_kahan(&ip->s_done, &ip->s_c, arc * span);
+        /* The law's parameter is where s would be if the speed were exactly uniform; one
+         * Newton step from there lands where the arc length is s. */
+        ef_vec3_t e[2];
+        ef_bezier_eval(lb, m->degree, tau_law, 1, e);
+        float sp0 = ef_v3_norm(e[1]), rest = s - ip->s_done, tn = tau_law;
+        if (sp0 > EF_INTERP_MIN_DERIV)
+            tn = ef_maxf(t0, ef_minf(1.0f, tau_law + rest / sp0));
+        if (!ef_interp_finite(tn))
+            tn = tau_law;
+        ef_interp_kahan(&ip->s_done, &ip->s_c, (tn - tau_law) * sp0);
+        ef_vec3_t q0;
+        ef_bezier_eval(lb, m->degree, tn, 0, &q0);
+        ip->tau = tn;
         ip->pos = ef_v3_add(m->b[0], q0);
         return;
     }
@@ -128,7 +156,7 @@ static void ef_interp_eval(ef_interp_t *ip, const ef_move_t *m, float *v)
     tn = ef_maxf(ip->tau, ef_minf(ef_minf(1.0f, ip->tau + EF_INTERP_RESYNC), tn));
     ef_vec3_t p[1];
     ef_bezier_eval(lb, m->degree, tn, 0, p);
-    ip->s_done += ef_v3_norm(ef_v3_sub(p[0], d[0]));
+    ef_interp_kahan(&ip->s_done, &ip->s_c, ef_v3_norm(ef_v3_sub(p[0], d[0])));
     ip->tau = tn;
     ip->pos = ef_v3_add(m->b[0], p[0]);
 }
@@ -142,17 +170,18 @@ int ef_interp_process(ef_interp_t *ip, uint32_t dt_us, uint32_t *next_us, ef_set
     int rc = EF_OK;
     float v = 0.0f;
     if (ip->count > 0) {
-        ip->t += (float)dt_us * 1e-6f;
+        ef_interp_kahan(&ip->t, &ip->t_c, (float)dt_us * 1e-6f);
         /* Finish every move the elapsed time covers; the leftover carries into the next. */
         for (uint32_t i = 0; i < EF_INTERP_QUEUE && ip->count > 0; i++) {
             const ef_move_t *m = &ip->q[ip->head];
             if (ip->t < m->duration)
                 break;
-            ip->t -= m->duration;
+            ef_interp_kahan(&ip->t, &ip->t_c, -m->duration);
             ip->pos = m->b[m->degree];
             ip->last_seq = m->seq;
             ip->last_tag = m->tag;
             ip->tau = ip->s_done = 0.0f;
+            ip->s_c = 0.0f;
             ip->head = (ip->head + 1u) % EF_INTERP_QUEUE;
             ip->count--;
         }
@@ -166,7 +195,7 @@ int ef_interp_process(ef_interp_t *ip, uint32_t dt_us, uint32_t *next_us, ef_set
             sp->moving = 1;
             return EF_OK;
         }
-        ip->t = 0.0f;
+        ip->t = ip->t_c = 0.0f;
         ip->pos = ip->end;
     }
     if (ip->v_end > 0.0f)

@@ -14,7 +14,7 @@
  *   far (chords accumulated), tau_next = tau + (s(t) - S) / |f'(tau)|. It removes most of
  *   the residual at the cost of one derivative evaluation. A step is at most 1/64 of the
  *   curve; a deficit larger than 1/64 of its length (a late call, a move entered part-way
- *   through) resynchronises with the time law, measuring the arc passed with 16 chords.
+ *   through) resynchronises with the time law, measuring the arc passed by quadrature.
  *
  * A move starts where the previous one ended (checked at push). When the queue runs dry
  * while the last move ended moving (v_exit > 0), the setpoint holds the end position and
@@ -63,8 +63,11 @@ typedef struct {
     int mode;           /**< ::ef_step_mode_t */
     uint32_t period_us; /**< servo period (what next_us returns) */
     float t;            /**< time into the head move (s) */
+    float t_c;          /**< compensation (Kahan) of t: a 1 ms step added to a time of
+                             1000 s would otherwise lose 6 % of itself to rounding */
     float tau;          /**< corrected mode: current parameter */
     float s_done;       /**< corrected mode: arc length reached on the head move */
+    float s_c;          /**< compensation (Kahan) of s_done, for long moves likewise */
     ef_vec3_t pos;      /**< last setpoint position */
     ef_vec3_t end;      /**< where the last queued move ends */
     float v_end;        /**< exit speed of the last queued move */
