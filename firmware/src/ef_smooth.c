@@ -358,6 +358,22 @@ static uint32_t ef_sm_arc_pieces(const ef_smooth_prim_t *h)
     return k ? k : 1u;
 }
 
+static int ef_sm_next_move(ef_smooth_t *s, ef_move_t *m);
+
+/* The oldest primitive has no body left between its blends: go on with its end blend, or,
+ * when its end is an exact stop, put that stop on the move before (the newest staged one:
+ * the stage holds it back for this), so the run still ends at rest. */
+static int ef_sm_skip_body(ef_smooth_t *s, ef_smooth_prim_t *h, ef_move_t *m)
+{
+    if (h->end_kind == EF_V_STOP) {
+        ef_move_t *prev = ef_sm_stage_last(s);
+        if (prev)
+            prev->flags |= EF_MOVE_STOP_END;
+    }
+    s->emitting = EF_E_BLEND;
+    return ef_sm_next_move(s, m);
+}
+
 /* Build the next move of the oldest held primitive (whose two vertices are decided) into
  * *m. Returns 1 when a move was built, 0 when the primitive had nothing more (it is then
  * popped), or a negative ef_err code. */
@@ -369,8 +385,7 @@ static int ef_sm_next_move(ef_smooth_t *s, ef_move_t *m)
         if (h->pr.kind == EF_PRIM_ARC) {
             if (h->len - h->trim_start - h->trim_end < EF_MIN_CHORD) {
                 /* Both blends took the whole arc: nothing of it is left between them. */
-                s->emitting = EF_E_BLEND;
-                return ef_sm_next_move(s, m);
+                return ef_sm_skip_body(s, h, m);
             }
             if (s->arc_next == 0) {
                 /* Piece count: by sweep, then doubled until a piece is within the budget
@@ -425,8 +440,7 @@ static int ef_sm_next_move(ef_smooth_t *s, ef_move_t *m)
                     a = h->blend_in_end;
                 if (ef_v3_norm(ef_v3_sub(b, a)) < EF_MIN_CHORD) {
                     /* Both blends took the whole line: nothing straight is left. */
-                    s->emitting = EF_E_BLEND;
-                    return ef_sm_next_move(s, m);
+                    return ef_sm_skip_body(s, h, m);
                 }
                 rc = ef_sm_line_move(m, a, b, h->pr.feed, h->pr.tag);
             }
