@@ -80,6 +80,7 @@ typedef struct {
     ef_vec3_t end;   /* where the last move ended */
     float v_exit;    /* its exit speed */
     float v_axis[3]; /* the axis speed limits */
+    float scale;     /* largest coordinate magnitude of any move so far */
     ef_vec3_t last;  /* last setpoint */
     int have_sp;
 } ef_fz_state_t;
@@ -108,6 +109,9 @@ static void ef_fz_move(ef_fz_state_t *st, const ef_move_t *m)
         ef_fz_fail("stop with speed", m->v_exit);
     st->end = m->b[m->degree];
     st->v_exit = m->v_exit;
+    for (int k = 0; k <= m->degree; k++)
+        st->scale =
+            fmaxf(st->scale, fmaxf(fmaxf(fabsf(m->b[k].x), fabsf(m->b[k].y)), fabsf(m->b[k].z)));
 }
 
 /* Advance dt_us; setpoints finite and no faster than the fastest limit allows. */
@@ -121,12 +125,14 @@ static void ef_fz_tick(ef_fz_state_t *st, uint32_t dt_us)
     if (!ef_fz_finite3(sp.p))
         ef_fz_fail("setpoint not finite", 0);
     if (st->have_sp) {
-        /* no axis faster than its limit (plus float32 resolution at these coordinates) */
+        /* no axis faster than its limit, plus float32 resolution: a few ulps of the
+         * coordinates and of the moves' extent (a setpoint of a 800 m line is rounded at
+         * that scale, wherever on it) */
         float d[3] = {sp.p.x - st->last.x, sp.p.y - st->last.y, sp.p.z - st->last.z};
         float c[3] = {sp.p.x, sp.p.y, sp.p.z};
         for (int i = 0; i < 3; i++)
-            if (!(fabsf(d[i]) <=
-                  st->v_axis[i] * (float)dt_us * 1e-6f * 1.02f + 1e-6f + 4e-7f * fabsf(c[i])))
+            if (!(fabsf(d[i]) <= st->v_axis[i] * (float)dt_us * 1e-6f * 1.02f + 1e-6f +
+                                     4e-7f * (fabsf(c[i]) + st->scale)))
                 ef_fz_fail("axis faster than its limit", d[i]);
     }
     st->last = sp.p;
