@@ -11,6 +11,8 @@
  *  over that span is within a few 1e-5 of its arc length); a deficit larger than that share
  *  of the length resynchronises with the time law. */
 #define EF_INTERP_RESYNC (1.0f / 64.0f)
+/** Newton steps of a resynchronisation. */
+#define EF_INTERP_RESYNC_ITER 3
 
 static int ef_interp_finite(float x)
 {
@@ -90,6 +92,24 @@ static void ef_interp_kahan(float *sum, float *c, float x)
     *sum = t;
 }
 
+/* Arc length of the curve between parameters a and b by 8-point Gauss-Legendre quadrature
+ * of |f'| (exact to float rounding for the smooth speeds of degree <= 5 curves). */
+static float ef_interp_arc(const ef_vec3_t *lb, int degree, float a, float b)
+{
+    static const float gx[4] = {0.1834346425f, 0.5255324099f, 0.7966664774f,
+                                0.9602898565f}; /* abscissae on [-1, 1] */
+    static const float gw[4] = {0.1813418917f, 0.1568533229f, 0.1111905172f,
+                                0.0506142681f}; /* weights / 2 */
+    float span = b - a, mid = 0.5f * (a + b), sum = 0.0f;
+    for (int k = 0; k < 4; k++) {
+        ef_vec3_t e[2], f[2];
+        ef_bezier_eval(lb, degree, mid - 0.5f * span * gx[k], 1, e);
+        ef_bezier_eval(lb, degree, mid + 0.5f * span * gx[k], 1, f);
+        sum += gw[k] * (ef_v3_norm(e[1]) + ef_v3_norm(f[1]));
+    }
+    return sum * span;
+}
+
 /** Position on the head move at time ip->t (uniform or corrected parameter step). */
 static void ef_interp_eval(ef_interp_t *ip, const ef_move_t *m, float *v)
 {
@@ -112,33 +132,25 @@ static void ef_interp_eval(ef_interp_t *ip, const ef_move_t *m, float *v)
     ef_bezier_eval(lb, m->degree, ip->tau, 1, d);
     float s = tau_law * m->length;
     float gap = s - ip->s_done;
-    if (gap > EF_INTERP_RESYNC * m->length && tau_law > ip->tau) {
-        /* Far behind (a late call, or a move entered part-way through): go to the law's
-         * parameter, adding the arc passed by 8-point Gauss-Legendre quadrature of |f'|
-         * (chords would understate a long span), so S stays an arc length the next steps
-         * can correct from. */
-        static const float gx[4] = {0.1834346425f, 0.5255324099f, 0.7966664774f,
-                                    0.9602898565f}; /* abscissae on [-1, 1] */
-        static const float gw[4] = {0.1813418917f, 0.1568533229f, 0.1111905172f,
-                                    0.0506142681f}; /* half weights */
-        float t0 = ip->tau, span = tau_law - t0, arc = 0.0f;
-        for (int k = 0; k < 4; k++) {
-            ef_vec3_t e[2], f[2];
-            ef_bezier_eval(lb, m->degree, t0 + span * (0.5f - 0.5f * gx[k]), 1, e);
-            ef_bezier_eval(lb, m->degree, t0 + span * (0.5f + 0.5f * gx[k]), 1, f);
-            arc += gw[k] * (ef_v3_norm(e[1]) + ef_v3_norm(f[1]));
+    float law_ds = *v * (float)ip->period_us * 1e-6f; /* the law's distance per period */
+    if (gap > ef_maxf(EF_INTERP_RESYNC * m->length, 4.0f * law_ds) && tau_law > ip->tau) {
+        /* Far behind (a late call, or a move entered part-way through): find the parameter
+         * whose arc length is s by EF_INTERP_RESYNC_ITER Newton steps from the law's, the
+         * arc from here measured by quadrature each time (chords would understate a long
+         * span, one linear step misses on an uneven curve), so S stays a true arc length. */
+        float t0 = ip->tau, s0 = ip->s_done, tn = tau_law, arc = 0.0f;
+        for (int it = 0; it < EF_INTERP_RESYNC_ITER; it++) {
+            arc = ef_interp_arc(lb, m->degree, t0, tn);
+            ef_vec3_t e[2];
+            ef_bezier_eval(lb, m->degree, tn, 1, e);
+            float sp0 = ef_v3_norm(e[1]);
+            float next = tn;
+            if (sp0 > EF_INTERP_MIN_DERIV)
+                next = tn + (s - s0 - arc) / sp0;
+            tn = ef_interp_finite(next) ? ef_maxf(t0, ef_minf(1.0f, next)) : tn;
         }
-        ef_interp_kahan(&ip->s_done, &ip->s_c, arc * span);
-        /* The law's parameter is where s would be if the speed were exactly uniform; one
-         * Newton step from there lands where the arc length is s. */
-        ef_vec3_t e[2];
-        ef_bezier_eval(lb, m->degree, tau_law, 1, e);
-        float sp0 = ef_v3_norm(e[1]), rest = s - ip->s_done, tn = tau_law;
-        if (sp0 > EF_INTERP_MIN_DERIV)
-            tn = ef_maxf(t0, ef_minf(1.0f, tau_law + rest / sp0));
-        if (!ef_interp_finite(tn))
-            tn = tau_law;
-        ef_interp_kahan(&ip->s_done, &ip->s_c, (tn - tau_law) * sp0);
+        arc = ef_interp_arc(lb, m->degree, t0, tn);
+        ef_interp_kahan(&ip->s_done, &ip->s_c, arc);
         ef_vec3_t q0;
         ef_bezier_eval(lb, m->degree, tn, 0, &q0);
         ip->tau = tn;
@@ -151,9 +163,12 @@ static void ef_interp_eval(ef_interp_t *ip, const ef_move_t *m, float *v)
         tn = ip->tau + gap / sp;
     if (!ef_interp_finite(tn))
         tn = tau_law;
-    /* Never step back; never more than EF_INTERP_RESYNC of the curve in one sample (where
-     * |f'| is small the Newton step would overshoot). */
-    tn = ef_maxf(ip->tau, ef_minf(ef_minf(1.0f, ip->tau + EF_INTERP_RESYNC), tn));
+    /* Never step back; never more than the larger of EF_INTERP_RESYNC of the curve and four
+     * times the law's own step per servo period (where |f'| is small the Newton step would
+     * overshoot; a fixed cap alone would hold back a short curve that slows parametrically). */
+    float law_step = law_ds / ef_maxf(m->length, 1e-30f);
+    float cap = ef_maxf(EF_INTERP_RESYNC, 4.0f * law_step);
+    tn = ef_maxf(ip->tau, ef_minf(ef_minf(1.0f, ip->tau + cap), tn));
     ef_vec3_t p[1];
     ef_bezier_eval(lb, m->degree, tn, 0, p);
     ef_interp_kahan(&ip->s_done, &ip->s_c, ef_v3_norm(ef_v3_sub(p[0], d[0])));

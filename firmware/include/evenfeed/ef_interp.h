@@ -12,9 +12,10 @@
  *   fluctuation is the curve's own speed variation.
  * - ::EF_STEP_CORRECTED: one correction step per sample: with S the arc length reached so
  *   far (chords accumulated), tau_next = tau + (s(t) - S) / |f'(tau)|. It removes most of
- *   the residual at the cost of one derivative evaluation. A step is at most 1/64 of the
- *   curve; a deficit larger than 1/64 of its length (a late call, a move entered part-way
- *   through) resynchronises with the time law, measuring the arc passed by quadrature.
+ *   the residual at the cost of one derivative evaluation. A step is at most the larger of
+ *   1/64 of the curve and four times the law's step; a deficit larger than that (a late
+ *   call, a move entered part-way through) resynchronises: three Newton steps on the arc
+ *   length, measured by quadrature, find where the arc length is s(t).
  *
  * A move starts where the previous one ended (checked at push). When the queue runs dry
  * while the last move ended moving (v_exit > 0), the setpoint holds the end position and
