@@ -365,9 +365,14 @@ static int ef_sm_next_move(ef_smooth_t *s, ef_move_t *m);
  * the stage holds it back for this), so the run still ends at rest. */
 static int ef_sm_skip_body(ef_smooth_t *s, ef_smooth_prim_t *h, ef_move_t *m)
 {
-    if (h->end_kind == EF_V_STOP) {
-        ef_move_t *prev = ef_sm_stage_last(s);
-        if (prev)
+    ef_move_t *prev = ef_sm_stage_last(s);
+    if (prev && h->end_kind != EF_V_BLEND) {
+        /* What is left (under EF_MIN_CHORD) is taken by the move before, which then ends
+         * exactly at the primitive's end, and its stop with it. */
+        prev->b[prev->degree] = h->pr.end;
+        (void)ef_move_measure(prev);
+        s->out_end = h->pr.end;
+        if (h->end_kind == EF_V_STOP)
             prev->flags |= EF_MOVE_STOP_END;
     }
     s->emitting = EF_E_BLEND;
