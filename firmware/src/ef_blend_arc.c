@@ -40,17 +40,20 @@
 /* First trim estimate for a tangent join: deviation ~ dk L^2 / EF_BA_TANGENT_GAIN. */
 #define EF_BA_TANGENT_GAIN 1.0f
 
+/* Finite test without libm (NaN fails x == x, inf fails x - x == 0). */
 static int ef_ba_finite(float x)
 {
     return (x == x) & (x - x == 0.0f);
 }
 
+/* Zero a move, so a failed arc piece hands back no partial data. */
 static void ef_ba_zero_move(ef_move_t *m)
 {
     ef_move_t zero = {0};
     *m = zero;
 }
 
+/* Zero the blend result and return rc: the single failure exit of ef_blend_prims(). */
 static int ef_ba_fail_blend(ef_blend_t *res, int rc)
 {
     ef_blend_t zero = {0};
@@ -58,16 +61,7 @@ static int ef_ba_fail_blend(ef_blend_t *res, int rc)
     return rc;
 }
 
-static ef_endpoint_t ef_ba_end(const ef_frame_t *f)
-{
-    ef_endpoint_t e;
-    e.p = f->p;
-    e.t = f->t;
-    e.n = f->n;
-    e.kappa = f->kappa;
-    return e;
-}
-
+/* Largest coordinate magnitude, to scale the float32 rounding margin. */
 static float ef_ba_maxabs(ef_vec3_t a)
 {
     return ef_maxf(ef_maxf(ef_fabsf(a.x), ef_fabsf(a.y)), ef_fabsf(a.z));
@@ -151,6 +145,7 @@ typedef struct {
     int arc;
 } ef_ba_piece_t;
 
+/* Prepare the replaced piece [sa, sb] of a primitive for ef_ba_dist_piece(). */
 static void ef_ba_piece(ef_vec3_t start, const ef_prim_t *pr, float len, float sa, float sb,
                         ef_ba_piece_t *pc)
 {
@@ -223,6 +218,7 @@ static float ef_ba_dist_piece(ef_vec3_t q, const ef_ba_piece_t *pc)
     return ef_sqrtf(ef_minf(e2, ef_selectf(inside, din, 3.4e38f))) + pc->err;
 }
 
+/* An arc piece as a measured G2 quintic move (contract in ef_blend.h). */
 int ef_blend_arc_piece(const ef_table_t *g2, ef_vec3_t start, const ef_prim_t *pr, float s0,
                        float s1, ef_move_t *m)
 {
@@ -246,7 +242,7 @@ int ef_blend_arc_piece(const ef_table_t *g2, ef_vec3_t start, const ef_prim_t *p
     ef_frame_t f0, f1;
     ef_prim_frame(start, pr, s0, &f0);
     ef_prim_frame(start, pr, s1, &f1);
-    ef_endpoint_t e0 = ef_ba_end(&f0), e1 = ef_ba_end(&f1);
+    ef_endpoint_t e0 = ef_frame_endpoint(&f0), e1 = ef_frame_endpoint(&f1);
     ef_seg_t seg;
     rc = ef_seg_g2_quintic(g2, &e0, &e1, &seg);
     if (rc != EF_OK)
@@ -332,6 +328,7 @@ static float ef_ba_dist_curve(const ef_vec3_t *b, const ef_vec3_t *h1, const ef_
     return ef_minf(ef_v3_norm(ef_v3_sub(ef_ba_q5(b, tn), x)), ef_sqrtf(d2));
 }
 
+/* Build one trial blend for trims (li, lo) and bound its two-way deviation. */
 static void ef_ba_try(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in, float len_in,
                       const ef_prim_t *out, float len_out, float li, float lo, ef_ba_trial_t *tr)
 {
@@ -339,7 +336,7 @@ static void ef_ba_try(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t 
     ef_frame_t ga, gb;
     ef_prim_frame(start_in, in, len_in - li, &ga);
     ef_prim_frame(v, out, lo, &gb);
-    ef_endpoint_t e0 = ef_ba_end(&ga), e1 = ef_ba_end(&gb);
+    ef_endpoint_t e0 = ef_frame_endpoint(&ga), e1 = ef_frame_endpoint(&gb);
     int rc = ef_seg_g2_quintic(g2, &e0, &e1, &tr->seg);
     tr->pa = ga.p;
     tr->pb = gb.p;
@@ -410,6 +407,7 @@ static void ef_ba_try(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t 
              ((tr->seg.clamp & bad) == 0u);
 }
 
+/* G2 blend of a corner or tangent join with arc ends (contract in ef_blend.h). */
 int ef_blend_prims(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in, float len_in,
                    const ef_prim_t *out, float len_out, float tol, float max_in, float max_out,
                    ef_blend_t *res)

@@ -14,11 +14,13 @@
 /** Newton steps of a resynchronisation. */
 #define EF_INTERP_RESYNC_ITER 3
 
+/* Finite test without libm, for validating pushed moves. */
 static int ef_interp_finite(float x)
 {
     return (x - x) == 0.0f;
 }
 
+/* A point finite and within EF_MAX_COORD on every axis. */
 static int ef_interp_vok(ef_vec3_t v)
 {
     return ef_interp_finite(v.x) & ef_interp_finite(v.y) & ef_interp_finite(v.z) &
@@ -26,6 +28,7 @@ static int ef_interp_vok(ef_vec3_t v)
            (ef_fabsf(v.z) <= EF_MAX_COORD);
 }
 
+/* Start an empty interpolator at rest at home (contract in ef_interp.h). */
 int ef_interp_init(ef_interp_t *ip, ef_vec3_t home, uint32_t period_us, int mode)
 {
     if (!ip || period_us == 0u || (mode != EF_STEP_UNIFORM && mode != EF_STEP_CORRECTED))
@@ -43,11 +46,13 @@ int ef_interp_init(ef_interp_t *ip, ef_vec3_t home, uint32_t period_us, int mode
     return EF_OK;
 }
 
+/* Free queue slots, so callers push only when there is room (see ef_interp.h). */
 uint32_t ef_interp_space(const ef_interp_t *ip)
 {
     return ip ? (uint32_t)EF_INTERP_QUEUE - ip->count : 0u;
 }
 
+/* Queue a planned move that joins the previous end (contract in ef_interp.h). */
 int ef_interp_push(ef_interp_t *ip, const ef_move_t *m)
 {
     if (!ip || !m)
@@ -176,6 +181,7 @@ static void ef_interp_eval(ef_interp_t *ip, const ef_move_t *m, float *v)
     ip->pos = ef_v3_add(m->b[0], p[0]);
 }
 
+/* Advance by dt_us and give the next setpoint (contract in ef_interp.h). */
 int ef_interp_process(ef_interp_t *ip, uint32_t dt_us, uint32_t *next_us, ef_setpoint_t *sp)
 {
     if (!ip || !sp)

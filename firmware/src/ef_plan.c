@@ -20,11 +20,13 @@
  *  coefficients would only carry rounding noise). */
 #define EF_PLAN_DV_REL 1e-6f
 
+/* Finite test without libm, for validating limits and moves. */
 static int ef_plan_finite(float x)
 {
     return (x - x) == 0.0f; /* NaN and +-inf give NaN */
 }
 
+/* A point finite and within EF_MAX_COORD on every axis. */
 static int ef_plan_vfinite(ef_vec3_t v)
 {
     return ef_plan_finite(v.x) & ef_plan_finite(v.y) & ef_plan_finite(v.z) &
@@ -32,6 +34,7 @@ static int ef_plan_vfinite(ef_vec3_t v)
            (ef_fabsf(v.z) <= EF_MAX_COORD);
 }
 
+/* Validate machine limits (contract in ef_plan.h). */
 int ef_limits_check(const ef_limits_t *lim)
 {
     if (!lim)
@@ -259,6 +262,7 @@ static int ef_plan_timelaw_up(ef_move_t *m, float j_max, float up)
     return EF_OK;
 }
 
+/* Time law of a move from its entry/exit speeds (contract in ef_plan.h). */
 int ef_plan_timelaw(ef_move_t *m, float j_max)
 {
     if (!m)
@@ -266,6 +270,7 @@ int ef_plan_timelaw(ef_move_t *m, float j_max)
     return ef_plan_timelaw_up(m, j_max, -1.0f);
 }
 
+/* Curve parameter and path speed at time t of a move (contract in ef_path.h). */
 int ef_timelaw_eval(const ef_move_t *m, float t, float *tau, float *v)
 {
     if (!m || !tau)
@@ -339,6 +344,7 @@ static void ef_plan_backward(ef_plan_t *p)
     }
 }
 
+/* Start an empty planner with checked limits (contract in ef_plan.h). */
 int ef_plan_init(ef_plan_t *p, const ef_limits_t *lim)
 {
     if (!p)
@@ -355,11 +361,13 @@ int ef_plan_init(ef_plan_t *p, const ef_limits_t *lim)
     return EF_OK;
 }
 
+/* Free look-ahead slots, so callers push only when there is room (see ef_plan.h). */
 uint32_t ef_plan_space(const ef_plan_t *p)
 {
     return p ? (uint32_t)EF_LOOKAHEAD - p->count : 0u;
 }
 
+/* Queue a move with its speed/acceleration limits, update bounds (see ef_plan.h). */
 int ef_plan_push(ef_plan_t *p, const ef_move_t *m)
 {
     if (!p || !m)
@@ -424,6 +432,7 @@ int ef_plan_push(ef_plan_t *p, const ef_move_t *m)
     return EF_OK;
 }
 
+/* Mark the end of the program: the last move stops, all can drain (see ef_plan.h). */
 int ef_plan_finish(ef_plan_t *p)
 {
     if (!p)
@@ -439,6 +448,7 @@ int ef_plan_finish(ef_plan_t *p)
     return EF_OK;
 }
 
+/* Release the oldest move with its final speeds and time law (see ef_plan.h). */
 int ef_plan_pull(ef_plan_t *p, ef_move_t *out)
 {
     if (!p || !out)

@@ -29,6 +29,7 @@ static inline int ef_prim_v3_ok(ef_vec3_t a)
     return ox & oy & oz;
 }
 
+/* All three components finite (no range bound), to reject NaN/inf control points. */
 static inline int ef_prim_v3_finite(ef_vec3_t a)
 {
     return ef_prim_finite(a.x) & ef_prim_finite(a.y) & ef_prim_finite(a.z);
@@ -68,6 +69,7 @@ typedef struct {
     float r0, h, len;
 } ef_arc_geo_t;
 
+/* Fill an arc's frame (ef_arc_geo_t) from its start point, shared by check and frame. */
 static void ef_arc_geo(ef_vec3_t start, const ef_prim_t *pr, ef_arc_geo_t *g)
 {
     float aa = ef_v3_dot(pr->axis, pr->axis);
@@ -89,6 +91,7 @@ static void ef_arc_geo(ef_vec3_t start, const ef_prim_t *pr, ef_arc_geo_t *g)
     g->len = ef_sqrtf(ang * ang + h * h);
 }
 
+/* Validate a primitive and give its length (contract in ef_path.h). */
 int ef_prim_check(ef_vec3_t start, const ef_prim_t *pr, float *len)
 {
     if (!len)
@@ -158,6 +161,7 @@ int ef_prim_check(ef_vec3_t start, const ef_prim_t *pr, float *len)
     return EF_OK;
 }
 
+/* Exact position, tangent, normal, curvature at arc length s (contract in ef_path.h). */
 int ef_prim_frame(ef_vec3_t start, const ef_prim_t *pr, float s, ef_frame_t *out)
 {
     if (!out)
@@ -230,6 +234,7 @@ static ef_vec3_t ef_mm_b4(const ef_vec3_t *p, float t)
     return ef_v3_axpy(r, t2 * t2, p[4]);
 }
 
+/* Cubic Bernstein evaluation, for the second hodograph in ef_move_measure(). */
 static ef_vec3_t ef_mm_b3(const ef_vec3_t *p, float t)
 {
     float u = 1.0f - t;
@@ -249,6 +254,7 @@ static void ef_mm_elevate(ef_vec3_t *p, int n)
     }
 }
 
+/* Clear a move's measured fields and pass rc on, so failures leave no stale data. */
 static int ef_move_measure_fail(ef_move_t *m, int rc)
 {
     m->length = 0.0f;
@@ -257,6 +263,7 @@ static int ef_move_measure_fail(ef_move_t *m, int rc)
     return rc;
 }
 
+/* Measure a move's length, curvature bound and tangent bounds (contract in ef_path.h). */
 int ef_move_measure(ef_move_t *m)
 {
     if (!m)

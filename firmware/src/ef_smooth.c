@@ -26,6 +26,7 @@ static int ef_sm_coord_ok(float x)
     return ef_fabsf(x) <= EF_MAX_COORD;
 }
 
+/* A point usable by the smoother: every coordinate finite and within EF_MAX_COORD. */
 static int ef_sm_v3_ok(ef_vec3_t a)
 {
     return ef_sm_coord_ok(a.x) && ef_sm_coord_ok(a.y) && ef_sm_coord_ok(a.z);

@@ -30,6 +30,7 @@ typedef struct {
     size_t n, cap;
 } ef_dvec_t;
 
+/* Append k doubles, growing the array geometrically; EF_ERR_NOMEM on failure. */
 static int ef_dvec_push(ef_dvec_t *d, const double *x, size_t k)
 {
     if (d->n + k > d->cap) {
@@ -70,6 +71,7 @@ typedef struct {
     double dt;
 } ef_smooth_ctx_t;
 
+/* Fix the output units from the first units seen (mm unless G20) and the scale. */
 static int ef_sm_units(ef_smooth_ctx_t *c, int units)
 {
     if (!c->units) {
@@ -119,6 +121,7 @@ static int ef_sm_item(void *user, const ef_gcode_item_t *it)
     return 0;
 }
 
+/* Write a point as a JSON [x, y, z] array in program units. */
 static void ef_sm_json_vec(FILE *fp, ef_vec3_t v, double f)
 {
     fputc('[', fp);
@@ -145,6 +148,7 @@ static ef_vec3_t ef_sm_bez(const ef_move_t *m, double t)
     return q[0];
 }
 
+/* Move callback: JSON segment record, blend polyline and stop point for the SVG. */
 static int ef_sm_move(void *user, const ef_move_t *m, const ef_pipe_move_info_t *mi)
 {
     ef_smooth_ctx_t *c = user;
@@ -215,6 +219,7 @@ static int ef_sm_move(void *user, const ef_move_t *m, const ef_pipe_move_info_t 
     return 0;
 }
 
+/* Setpoint callback: CSV row with measured feed, and speed samples for the SVG. */
 static int ef_sm_setpoint(void *user, double t, const ef_setpoint_t *sp,
                           const ef_pipe_move_info_t *mi)
 {
@@ -241,6 +246,7 @@ static int ef_sm_setpoint(void *user, double t, const ef_setpoint_t *sp,
     return 0;
 }
 
+/* Note callback: print reader notes on stderr. */
 static int ef_sm_note(void *user, const ef_gcode_item_t *it, const char *text)
 {
     (void)user;
@@ -271,6 +277,7 @@ static void ef_sm_colour(double x, char out[8])
 
 #define SVG_BUCKETS 16
 
+/* Write the XY plot: programmed path, speed-coloured setpoints, blends, stops. */
 static int ef_sm_write_svg(ef_smooth_ctx_t *c, const char *path, const char *title,
                            const ef_pipe_stats_t *st)
 {
@@ -476,12 +483,14 @@ static void ef_sm_summary(const ef_smooth_ctx_t *c, const char *title, const ef_
     }
 }
 
+/* Whether s ends in ext (case-insensitive), to pick the -o output format. */
 static int ef_sm_ends(const char *s, const char *ext)
 {
     size_t n = strlen(s), e = strlen(ext);
     return n >= e && !strcasecmp(s + n - e, ext);
 }
 
+/* Default smooth options with built-in tables and both step modes (see cli.h). */
 void ef_smooth_opts_default(ef_smooth_opts_t *o)
 {
     memset(o, 0, sizeof *o);
@@ -491,6 +500,7 @@ void ef_smooth_opts_default(ef_smooth_opts_t *o)
     o->cfg.interp_modes = EF_PIPE_INTERP_UNIFORM | EF_PIPE_INTERP_CORRECTED;
 }
 
+/* Smooth one opened program, write the -o/--svg outputs, print a summary (cli.h). */
 int ef_cli_smooth_run(ef_gcode_t *r, const char *title, const ef_smooth_opts_t *o)
 {
     if (!o->cfg.g2 || (o->cfg.smooth_degree == 3 && !o->cfg.g1))
@@ -615,6 +625,7 @@ static int ef_sm_num(const char *opt, const char *s, double lo, int strict, doub
     return 0;
 }
 
+/* Entry point of `evenfeed smooth`: parse options, open the input, run it. */
 int ef_cmd_smooth(int argc, char **argv)
 {
     const char *path = NULL;

@@ -44,6 +44,7 @@ typedef struct {
     int units_set;
 } ef_pipe_t;
 
+/* Fill a pipeline configuration with the documented defaults (see ef_pipeline.h). */
 void ef_pipe_cfg_default(ef_pipe_cfg_t *cfg)
 {
     if (!cfg)
@@ -66,6 +67,7 @@ void ef_pipe_cfg_default(ef_pipe_cfg_t *cfg)
     cfg->interp_modes = 0;
 }
 
+/* Name of a move kind for JSON and messages (see ef_pipeline.h). */
 const char *ef_pipe_move_kind_name(int kind)
 {
     switch (kind) {
@@ -82,6 +84,7 @@ const char *ef_pipe_move_kind_name(int kind)
     }
 }
 
+/* Convert a G-code path item to a firmware primitive in mm/s (see ef_pipeline.h). */
 int ef_pipe_item_prim(const ef_gcode_item_t *it, double rapid_speed, ef_prim_t *pr)
 {
     if (!it || !pr)
@@ -129,6 +132,7 @@ static ef_pipe_move_info_t ef_pipe_tag_info(const ef_pipe_t *P, uint32_t tag)
     return none;
 }
 
+/* What is remembered about move seq for its setpoints; NULL once overwritten. */
 static const ef_pipe_seq_t *ef_pipe_seq_info(const ef_pipe_t *P, uint32_t seq)
 {
     const ef_pipe_seq_t *s = &P->seqs[seq % EF_PIPE_SEQS];
@@ -280,6 +284,7 @@ static int ef_pipe_drain(ef_pipe_t *P, ef_msg_t *m)
     return EF_OK;
 }
 
+/* Count a note and pass it to the note callback as "file:line:col: text". */
 static int ef_pipe_note(ef_pipe_t *P, const ef_gcode_item_t *it, const char *text, ef_msg_t *m)
 {
     P->st.notes++;
@@ -356,6 +361,7 @@ static int ef_pipe_prim(ef_pipe_t *P, const ef_gcode_item_t *it, ef_msg_t *m)
     return ef_pipe_pull(P, NULL, m);
 }
 
+/* Reject a bad configuration with a message before anything is allocated. */
 static int ef_pipe_check_cfg(const ef_pipe_cfg_t *c, const ef_pipe_cb_t *cb, ef_msg_t *m)
 {
     if (!c->g2)
@@ -449,6 +455,7 @@ static int ef_pipe_loop(ef_pipe_t *P, ef_msg_t *m)
     }
 }
 
+/* Run a whole program through smoother and interpolators (see ef_pipeline.h). */
 int ef_pipe_run(ef_gcode_t *r, const ef_pipe_cfg_t *cfg, const ef_pipe_cb_t *cb,
                 ef_pipe_stats_t *st, ef_msg_t *m)
 {
