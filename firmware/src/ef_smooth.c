@@ -318,7 +318,11 @@ static void ef_sm_decide(ef_smooth_t *s, ef_smooth_prim_t *a, ef_smooth_prim_t *
     for (int i = 0; i < 6; i++)
         probe.b[i] = a->blend.seg.b[i];
     probe.degree = 5;
-    if (!ef_sm_move_ok(&probe)) {
+    /* ... or loop far from the path it replaces (a huge tolerance lets the trial trims grow
+     * into configurations the table clamps): a blend longer than twice the trimmed path is
+     * not a rounded corner, and its speed peaks between the samples the limits rely on. */
+    if (!ef_sm_move_ok(&probe) ||
+        !(probe.length <= 2.0f * (a->blend.trim_in + a->blend.trim_out) + EF_MIN_CHORD)) {
         s->st.stops++;
         return;
     }
