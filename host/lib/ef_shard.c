@@ -27,53 +27,6 @@ static const uint8_t ef_magic_table[8] = {0x45, 0x46, 0x54, 0x42, 0x0D, 0x0A, 0x
 #define EF_SHARD_MAX_FILE                                                                          \
     ((size_t)EF_EFILE_MAX_HEADER + 4u * (size_t)EF_TABLE_MAX_NODES * EF_TABLE_MAX_DOF + 4u)
 
-/* Little-endian stores and loads: files are the same bytes on any host. */
-void ef_le_put32(uint8_t *p, uint32_t v)
-{
-    p[0] = (uint8_t)v;
-    p[1] = (uint8_t)(v >> 8);
-    p[2] = (uint8_t)(v >> 16);
-    p[3] = (uint8_t)(v >> 24);
-}
-
-/* 32-bit little-endian load. */
-uint32_t ef_le_get32(const uint8_t *p)
-{
-    return (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) |
-           ((uint32_t)p[3] << 24);
-}
-
-/* 16-bit little-endian store. */
-static void ef_le_put16(uint8_t *p, uint32_t v)
-{
-    p[0] = (uint8_t)v;
-    p[1] = (uint8_t)(v >> 8);
-}
-
-/* 16-bit little-endian load. */
-static uint32_t ef_le_get16(const uint8_t *p)
-{
-    return (uint32_t)p[0] | ((uint32_t)p[1] << 8);
-}
-
-/* f64 through its bit pattern, so every double (and -0) survives exactly. */
-static void ef_le_putf64(uint8_t *p, double d)
-{
-    uint64_t u;
-    memcpy(&u, &d, sizeof u);
-    ef_le_put32(p, (uint32_t)u);
-    ef_le_put32(p + 4, (uint32_t)(u >> 32));
-}
-
-/* f64 little-endian load. */
-static double ef_le_getf64(const uint8_t *p)
-{
-    uint64_t u = (uint64_t)ef_le_get32(p) | ((uint64_t)ef_le_get32(p + 4) << 32);
-    double d;
-    memcpy(&d, &u, sizeof d);
-    return d;
-}
-
 /* Bitwise double equality: a spec is equal only if it encodes to the same bytes. */
 static int ef_same_f64(double a, double b)
 {

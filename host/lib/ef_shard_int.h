@@ -6,6 +6,7 @@
 
 #include <stddef.h>
 #include <stdint.h>
+#include "ef_le_int.h"
 #include "evenfeed/host/ef_build.h"
 #include "ef_file_int.h"
 
@@ -44,10 +45,6 @@ typedef struct {
 
 extern const uint8_t ef_magic_journal[8];
 extern const uint8_t ef_magic_shard[8];
-
-/* Little-endian field access. */
-void ef_le_put32(uint8_t *p, uint32_t v);
-uint32_t ef_le_get32(const uint8_t *p);
 
 /* The spec record of a created table built by a named backend; EF_ERR_ARG if the name is
  * empty, too long or not printable. */

@@ -18,6 +18,7 @@
 
 #include "evenfeed/host/ef_tfile.h"
 #include "ef_file_int.h"
+#include "ef_le_int.h"
 
 #define EF_TF_PAD8(n) (((n) + 7u) & ~(uint64_t)7u)
 /* Largest file any valid table can be: reading stops before allocating more than this. */
@@ -63,44 +64,6 @@ typedef struct {
     uint32_t prov_len;
 } ef_tf_hdr_t;
 
-/* Little-endian stores, so files are identical whatever the host's byte order. */
-static void ef_tf_put16(uint8_t *p, uint32_t v)
-{
-    p[0] = (uint8_t)v;
-    p[1] = (uint8_t)(v >> 8);
-}
-
-/* 32-bit little-endian store. */
-static void ef_tf_put32(uint8_t *p, uint32_t v)
-{
-    ef_tf_put16(p, v & 0xFFFFu);
-    ef_tf_put16(p + 2, v >> 16);
-}
-
-/* f64 little-endian store through its bit pattern. */
-static void ef_tf_putf64(uint8_t *p, double d)
-{
-    uint64_t u;
-    memcpy(&u, &d, sizeof u);
-    ef_tf_put32(p, (uint32_t)u);
-    ef_tf_put32(p + 4, (uint32_t)(u >> 32));
-}
-
-/* Little-endian loads matching the stores. */
-static uint32_t ef_tf_get32(const uint8_t *p)
-{
-    return (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) | ((uint32_t)p[3] << 24);
-}
-
-/* f64 little-endian load. */
-static double ef_tf_getf64(const uint8_t *p)
-{
-    uint64_t u = (uint64_t)ef_tf_get32(p) | ((uint64_t)ef_tf_get32(p + 4) << 32);
-    double d;
-    memcpy(&d, &u, sizeof d);
-    return d;
-}
-
 /* Field lookup by any byte inside it, so corrupted multi-byte fields are named too. */
 static const ef_tf_field_t *ef_tf_field_at(uint32_t offset)
 {
@@ -141,12 +104,12 @@ static int ef_tf_report(ef_msg_t *m, int code, const char *who, const uint8_t *b
         const uint8_t *p = b + f->off;
         if (f->type == 'd') {
             return ef_fail(m, code, "%s: field '%s' (offset %" PRIu32 "): %s (%.17g)", who, f->name,
-                           f->off, what, ef_tf_getf64(p));
+                           f->off, what, ef_le_getf64(p));
         }
         if (f->type == 'u') {
             uint32_t v = f->size == 1   ? p[0]
                          : f->size == 2 ? (uint32_t)p[0] | ((uint32_t)p[1] << 8)
-                                        : ef_tf_get32(p);
+                                        : ef_le_get32(p);
             return ef_fail(m, code, "%s: field '%s' (offset %" PRIu32 "): %s (%" PRIu32 ")", who,
                            f->name, f->off, what, v);
         }
@@ -159,14 +122,14 @@ static int ef_tf_report(ef_msg_t *m, int code, const char *who, const uint8_t *b
         return ef_fail(m, code, "%s: offset %" PRIu32 ": %s", who, off, what);
     }
     /* Past the header: name the part of the body, which the parser has sized already. */
-    prov_len = ef_tf_get32(b + 56);
+    prov_len = ef_le_get32(b + 56);
     data_off = EF_TABLE_HEADER_SIZE + (uint32_t)EF_TF_PAD8(prov_len);
     ndof = b[17] ? b[17] : 1u;
     if (code == EF_ERR_TBL_CRC) {
         return ef_fail(m, code,
                        "%s: field 'crc' (offset %" PRIu32 "): %s (stored %08" PRIx32
                        ", computed %08" PRIx32 ")",
-                       who, off, what, ef_tf_get32(b + off), ef_crc32(0, b, off));
+                       who, off, what, ef_le_get32(b + off), ef_crc32(0, b, off));
     }
     if (off < EF_TABLE_HEADER_SIZE + prov_len) {
         return ef_fail(m, code,
@@ -199,27 +162,27 @@ static void ef_tf_put_header(uint8_t *p, const ef_tf_hdr_t *h)
 
     memset(p, 0, EF_TABLE_HEADER_SIZE);
     memcpy(p, magic, sizeof magic);
-    ef_tf_put16(p + 8, EF_TABLE_VERSION);
-    ef_tf_put16(p + 10, EF_TABLE_HEADER_SIZE);
-    ef_tf_put16(p + 12, h->kind);
-    ef_tf_put16(p + 14, EF_TABLE_F32);
+    ef_le_put16(p + 8, EF_TABLE_VERSION);
+    ef_le_put16(p + 10, EF_TABLE_HEADER_SIZE);
+    ef_le_put16(p + 12, h->kind);
+    ef_le_put16(p + 14, EF_TABLE_F32);
     p[16] = h->naxes;
     p[17] = h->ndof;
-    ef_tf_put16(p + 18, h->symmetry);
-    ef_tf_put16(p + 20, EF_FUNCTIONAL_CONSTANT_SPEED);
-    ef_tf_put16(p + 22, EF_QUAD_GAUSS_LEGENDRE);
-    ef_tf_put16(p + 24, h->quad_nodes);
-    ef_tf_put32(p + 28, h->nodes);
-    ef_tf_putf64(p + 32, h->x1_min);
-    ef_tf_putf64(p + 40, h->x1_max);
-    ef_tf_putf64(p + 48, h->x2_max);
-    ef_tf_put32(p + 56, h->prov_len);
+    ef_le_put16(p + 18, h->symmetry);
+    ef_le_put16(p + 20, EF_FUNCTIONAL_CONSTANT_SPEED);
+    ef_le_put16(p + 22, EF_QUAD_GAUSS_LEGENDRE);
+    ef_le_put16(p + 24, h->quad_nodes);
+    ef_le_put32(p + 28, h->nodes);
+    ef_le_putf64(p + 32, h->x1_min);
+    ef_le_putf64(p + 40, h->x1_max);
+    ef_le_putf64(p + 48, h->x2_max);
+    ef_le_put32(p + 56, h->prov_len);
     for (i = 0; i < EF_TABLE_MAX_AXES; i++) {
         uint8_t *a = p + 64 + 24 * i;
-        ef_tf_putf64(a, h->lo[i]);
-        ef_tf_putf64(a + 8, h->hi[i]);
-        ef_tf_put32(a + 16, h->axis_nodes[i]);
-        ef_tf_put32(a + 20, h->axis_flags[i]);
+        ef_le_putf64(a, h->lo[i]);
+        ef_le_putf64(a + 8, h->hi[i]);
+        ef_le_put32(a + 16, h->axis_nodes[i]);
+        ef_le_put32(a + 20, h->axis_flags[i]);
     }
 }
 
@@ -251,7 +214,7 @@ static int ef_tf_image(const ef_tf_hdr_t *h, const float *values, uint8_t **blob
             memcpy(p + data_off + 4u * (size_t)k, &v, sizeof v);
         }
     }
-    ef_tf_put32(p + n - 4u, ef_crc32(0, p, (uint32_t)(n - 4u)));
+    ef_le_put32(p + n - 4u, ef_crc32(0, p, (uint32_t)(n - 4u)));
     *blob = p;
     *len = n;
     return EF_OK;
@@ -602,12 +565,12 @@ int ef_tfile_load(const char *path, ef_tfile_t *t, ef_msg_t *m)
     t->view = view;
     t->values = (float *)(void *)(buf + data_off);
     for (i = 0; i < EF_TABLE_MAX_AXES; i++) {
-        t->lo[i] = ef_tf_getf64(buf + 64 + 24 * i);
-        t->hi[i] = ef_tf_getf64(buf + 64 + 24 * i + 8);
+        t->lo[i] = ef_le_getf64(buf + 64 + 24 * i);
+        t->hi[i] = ef_le_getf64(buf + 64 + 24 * i + 8);
     }
-    t->x1_min = ef_tf_getf64(buf + 32);
-    t->x1_max = ef_tf_getf64(buf + 40);
-    t->x2_max = ef_tf_getf64(buf + 48);
+    t->x1_min = ef_le_getf64(buf + 32);
+    t->x1_max = ef_le_getf64(buf + 40);
+    t->x2_max = ef_le_getf64(buf + 48);
     memcpy(t->provenance, view.provenance, view.provenance_len);
     t->provenance[view.provenance_len] = '\0';
     return EF_OK;
