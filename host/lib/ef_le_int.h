@@ -29,8 +29,7 @@ static inline uint32_t ef_le_get16(const uint8_t *p)
 /* 32-bit load. */
 static inline uint32_t ef_le_get32(const uint8_t *p)
 {
-    return (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) |
-           ((uint32_t)p[3] << 24);
+    return (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) | ((uint32_t)p[3] << 24);
 }
 
 /* f64 through its bit pattern, so every double (and -0) survives exactly. */
