@@ -15,40 +15,40 @@
 
 static int ef_t_pass, ef_t_fail;
 
-#define EF_CHECK(cond)                                                                         \
-    do {                                                                                       \
-        if (cond) {                                                                            \
-            ef_t_pass++;                                                                       \
-        } else {                                                                               \
-            ef_t_fail++;                                                                       \
-            fprintf(stderr, "%s:%d: check failed: %s\n", __FILE__, __LINE__, #cond);           \
-        }                                                                                      \
+#define EF_CHECK(cond)                                                                             \
+    do {                                                                                           \
+        if (cond) {                                                                                \
+            ef_t_pass++;                                                                           \
+        } else {                                                                                   \
+            ef_t_fail++;                                                                           \
+            fprintf(stderr, "%s:%d: check failed: %s\n", __FILE__, __LINE__, #cond);               \
+        }                                                                                          \
     } while (0)
 
 /* |a - b| <= tol, reporting both values on failure. */
-#define EF_CHECK_NEAR(a, b, tol)                                                               \
-    do {                                                                                       \
-        double ef_a_ = (double)(a), ef_b_ = (double)(b), ef_tol_ = (double)(tol);             \
-        if (fabs(ef_a_ - ef_b_) <= ef_tol_) {                                                  \
-            ef_t_pass++;                                                                       \
-        } else {                                                                               \
-            ef_t_fail++;                                                                       \
-            fprintf(stderr, "%s:%d: %s = %.10g, %s = %.10g, |diff| %.3g > %.3g\n", __FILE__,   \
-                    __LINE__, #a, ef_a_, #b, ef_b_, fabs(ef_a_ - ef_b_), ef_tol_);             \
-        }                                                                                      \
+#define EF_CHECK_NEAR(a, b, tol)                                                                   \
+    do {                                                                                           \
+        double ef_a_ = (double)(a), ef_b_ = (double)(b), ef_tol_ = (double)(tol);                  \
+        if (fabs(ef_a_ - ef_b_) <= ef_tol_) {                                                      \
+            ef_t_pass++;                                                                           \
+        } else {                                                                                   \
+            ef_t_fail++;                                                                           \
+            fprintf(stderr, "%s:%d: %s = %.10g, %s = %.10g, |diff| %.3g > %.3g\n", __FILE__,       \
+                    __LINE__, #a, ef_a_, #b, ef_b_, fabs(ef_a_ - ef_b_), ef_tol_);                 \
+        }                                                                                          \
     } while (0)
 
 /* Integer equality, reporting both values on failure. */
-#define EF_CHECK_EQ(a, b)                                                                      \
-    do {                                                                                       \
-        long long ef_a_ = (long long)(a), ef_b_ = (long long)(b);                              \
-        if (ef_a_ == ef_b_) {                                                                  \
-            ef_t_pass++;                                                                       \
-        } else {                                                                               \
-            ef_t_fail++;                                                                       \
-            fprintf(stderr, "%s:%d: %s = %lld, expected %s = %lld\n", __FILE__, __LINE__, #a,  \
-                    ef_a_, #b, ef_b_);                                                         \
-        }                                                                                      \
+#define EF_CHECK_EQ(a, b)                                                                          \
+    do {                                                                                           \
+        long long ef_a_ = (long long)(a), ef_b_ = (long long)(b);                                  \
+        if (ef_a_ == ef_b_) {                                                                      \
+            ef_t_pass++;                                                                           \
+        } else {                                                                                   \
+            ef_t_fail++;                                                                           \
+            fprintf(stderr, "%s:%d: %s = %lld, expected %s = %lld\n", __FILE__, __LINE__, #a,      \
+                    ef_a_, #b, ef_b_);                                                             \
+        }                                                                                          \
     } while (0)
 
 /* Whole file into a malloc'd, NUL-terminated buffer (NULL if it cannot be read). */
@@ -91,6 +91,30 @@ static inline unsigned long long ef_t_rng(unsigned long long *s)
 static inline double ef_t_uniform(unsigned long long *s, double lo, double hi)
 {
     return lo + (hi - lo) * (double)(ef_t_rng(s) >> 11) * (1.0 / 9007199254740992.0);
+}
+
+/* A 3x3 rotation (row-major), for tests that place configurations in random frames. */
+typedef struct {
+    double m[3][3];
+} ef_t_rot3_t;
+
+/* Uniformly random rotation, from a random unit quaternion (rejection sampling). */
+static inline ef_t_rot3_t ef_t_rot_random(unsigned long long *rs)
+{
+    double q[4], n;
+    do {
+        n = 0;
+        for (int i = 0; i < 4; i++) {
+            q[i] = ef_t_uniform(rs, -1, 1);
+            n += q[i] * q[i];
+        }
+    } while (n > 1 || n < 1e-6);
+    n = sqrt(n);
+    double w = q[0] / n, x = q[1] / n, y = q[2] / n, z = q[3] / n;
+    ef_t_rot3_t r = {{{1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)},
+                      {2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)},
+                      {2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)}}};
+    return r;
 }
 
 #endif /* EF_TEST_H */

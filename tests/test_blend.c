@@ -157,29 +157,7 @@ static void test_table_symmetry(void)
 
 /* ---- random corners ---------------------------------------------------------------- */
 
-typedef struct {
-    double m[3][3];
-} rot3_t;
-
-static rot3_t rot_random(unsigned long long *rs)
-{
-    double q[4], n;
-    do {
-        n = 0;
-        for (int i = 0; i < 4; i++) {
-            q[i] = ef_t_uniform(rs, -1, 1);
-            n += q[i] * q[i];
-        }
-    } while (n > 1 || n < 1e-6);
-    n = sqrt(n);
-    double w = q[0] / n, x = q[1] / n, y = q[2] / n, z = q[3] / n;
-    rot3_t r = {{{1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)},
-                 {2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)},
-                 {2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)}}};
-    return r;
-}
-
-static ef_vec3_t rot_apply(const rot3_t *r, double x, double y)
+static ef_vec3_t rot_apply(const ef_t_rot3_t *r, double x, double y)
 {
     return ef_v3((float)(r->m[0][0] * x + r->m[0][1] * y), (float)(r->m[1][0] * x + r->m[1][1] * y),
                  (float)(r->m[2][0] * x + r->m[2][1] * y));
@@ -236,7 +214,7 @@ static void test_random_corners(void)
             ui = ef_v3((float)cos(a0), (float)sin(a0), 0);
             uo = ef_v3((float)cos(a0 + sg * theta), (float)sin(a0 + sg * theta), 0);
         } else {
-            rot3_t r = rot_random(&rs);
+            ef_t_rot3_t r = ef_t_rot_random(&rs);
             ui = rot_apply(&r, 1, 0);
             uo = rot_apply(&r, cos(theta), sin(theta));
         }

@@ -62,11 +62,11 @@ extern const ef_table_t ef_tbl_g2_default;
 /* Synthetic tables of the default shapes. Instruction counts do not depend on the stored
  * values (the lookup reads a fixed set of nodes and blends them), only on the shape, so
  * arbitrary in-bounds values give the figures a real table will give. */
-#define EF_G1_NU 33u
-#define EF_G1_NV 65u
-#define EF_G2_NA 7u
-#define EF_G2_NB 13u
-#define EF_G2_NK 9u
+#define EF_G1_NU    33u
+#define EF_G1_NV    65u
+#define EF_G2_NA    7u
+#define EF_G2_NB    13u
+#define EF_G2_NK    9u
 static float g1_data[EF_G1_NU * EF_G1_NV * 2];
 static float g2_data[EF_G2_NA * EF_G2_NB * EF_G2_NK * EF_G2_NK * 4];
 static ef_table_t g1_syn, g2_syn;
@@ -74,8 +74,8 @@ static ef_table_t g1_syn, g2_syn;
 #define EF_BENCH_G2 (&g2_syn)
 
 /* Fill a view the way generated sources do: strides axis 0 fastest, inv_step derived. */
-static void syn_table(ef_table_t *t, int kind, int sym, int naxes, const float *lo,
-                      const float *hi, const uint32_t *n, float *data, unsigned long long *rs)
+static void syn_table(ef_table_t *t, int kind, int sym, int naxes, const float *lo, const float *hi,
+                      const uint32_t *n, float *data, unsigned long long *rs)
 {
     memset(t, 0, sizeof *t);
     t->kind = (uint16_t)kind;
@@ -130,12 +130,8 @@ enum {
     BC_COUNT
 };
 
-typedef struct {
-    double m[3][3];
-} rot3_t;
-
 /* 3x3 rotation applied to a canonical-frame vector. */
-static ef_vec3_t rot_apply(const rot3_t *r, const double v[3])
+static ef_vec3_t rot_apply(const ef_t_rot3_t *r, const double v[3])
 {
     double o[3];
     for (int i = 0; i < 3; i++)
@@ -144,30 +140,13 @@ static ef_vec3_t rot_apply(const rot3_t *r, const double v[3])
 }
 
 /* Rotation about z by phi: keeps planar data in z = 0. */
-static rot3_t rot_z(double phi)
+static ef_t_rot3_t rot_z(double phi)
 {
-    rot3_t r = {{{cos(phi), -sin(phi), 0}, {sin(phi), cos(phi), 0}, {0, 0, 1}}};
+    ef_t_rot3_t r = {{{cos(phi), -sin(phi), 0}, {sin(phi), cos(phi), 0}, {0, 0, 1}}};
     return r;
 }
 
 /* Uniformly random rotation, from a random unit quaternion. */
-static rot3_t rot_random(unsigned long long *rs)
-{
-    double q[4], n = 0;
-    do {
-        n = 0;
-        for (int i = 0; i < 4; i++) {
-            q[i] = ef_t_uniform(rs, -1, 1);
-            n += q[i] * q[i];
-        }
-    } while (n > 1 || n < 1e-6);
-    n = sqrt(n);
-    double w = q[0] / n, x = q[1] / n, y = q[2] / n, z = q[3] / n;
-    rot3_t r = {{{1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)},
-                 {2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)},
-                 {2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)}}};
-    return r;
-}
 
 /* Random unit vector (canonical frame). */
 static void unit_random(unsigned long long *rs, double v[3])
@@ -220,12 +199,17 @@ static double norm_curvature(unsigned long long *rs, int *zero)
     int c = (int)(ef_t_rng(rs) % 6u);
     *zero = c == 0;
     switch (c) {
-    case 0: return 0;
+    case 0:
+        return 0;
     case 1:
-    case 2: return ef_t_uniform(rs, -2, 2);
-    case 3: return ef_t_uniform(rs, -10, 10);
-    case 4: return (ef_t_rng(rs) & 1u ? 1 : -1) * exp(ef_t_uniform(rs, log(2.0), log(900.0)));
-    default: return ef_t_uniform(rs, -0.1, 0.1);
+    case 2:
+        return ef_t_uniform(rs, -2, 2);
+    case 3:
+        return ef_t_uniform(rs, -10, 10);
+    case 4:
+        return (ef_t_rng(rs) & 1u ? 1 : -1) * exp(ef_t_uniform(rs, log(2.0), log(900.0)));
+    default:
+        return ef_t_uniform(rs, -0.1, 0.1);
     }
 }
 
@@ -252,20 +236,22 @@ static void make_config(unsigned long long *rs, int kind, int g2, ef_endpoint_t 
     int planar_xy = kind == BC_PLANAR_XY || kind == BC_ALONG_AXIS;
     if (planar_xy)
         p0[2] = 0;
-    rot3_t r;
+    ef_t_rot3_t r;
     if (kind == BC_ALONG_AXIS)
         r = rot_z(0);
     else if (kind == BC_PLANAR_XY)
         r = rot_z(ef_t_uniform(rs, -M_PI, M_PI));
     else
-        r = rot_random(rs);
+        r = ef_t_rot_random(rs);
 
     /* Tangents in the canonical frame: chord along +x, reference plane xy. */
     double t0[3], t1[3];
     double al = ef_t_uniform(rs, -M_PI, M_PI), be = ef_t_uniform(rs, -M_PI, M_PI);
     double tw = 0;
     switch (kind) {
-    case BC_TWISTED: tw = ef_t_uniform(rs, 1e-3, M_PI - 1e-3); break;
+    case BC_TWISTED:
+        tw = ef_t_uniform(rs, 1e-3, M_PI - 1e-3);
+        break;
     case BC_ALONG_AXIS:
     case BC_ALONG_ROT:
         al = ef_t_rng(rs) & 1u ? 0 : M_PI;
@@ -279,7 +265,8 @@ static void make_config(unsigned long long *rs, int kind, int g2, ef_endpoint_t 
         al = near_axis_angle(rs, 1);
         be = near_axis_angle(rs, 1);
         break;
-    default: break;
+    default:
+        break;
     }
     t0[0] = cos(al), t0[1] = sin(al), t0[2] = 0;
     t1[0] = cos(be), t1[1] = sin(be) * cos(tw), t1[2] = sin(be) * sin(tw);
@@ -330,7 +317,7 @@ static void make_corner(unsigned long long *rs, long i, ef_vec3_t *v, ef_vec3_t 
         th = exp(ef_t_uniform(rs, log(1e-6), log(1e-1)));
     else
         th = EF_BLEND_MAX_TURN - exp(ef_t_uniform(rs, log(1e-5), log(3e-2)));
-    rot3_t r = (i / 4) % 2 ? rot_random(rs) : rot_z(ef_t_uniform(rs, -M_PI, M_PI));
+    ef_t_rot3_t r = (i / 4) % 2 ? ef_t_rot_random(rs) : rot_z(ef_t_uniform(rs, -M_PI, M_PI));
     const double a[3] = {1, 0, 0}, b[3] = {cos(th), sin(th), 0};
     *ui = rot_apply(&r, a);
     *uo = rot_apply(&r, b);
@@ -360,8 +347,10 @@ static int run_blend(const ef_table_t *tbl, long n, int dump, unsigned long long
             fprintf(stderr, "bench_ct: blend call %ld failed: %s\n", i, ef_err_str(rc));
             return 1;
         }
-        int o = (bl.flags & EF_BLEND_STRAIGHT) ? 1 : (bl.flags & EF_BLEND_STOP) ? 2
-                : (bl.flags & EF_BLEND_CLAMPED) ? 3 : 0;
+        int o = (bl.flags & EF_BLEND_STRAIGHT)  ? 1
+                : (bl.flags & EF_BLEND_STOP)    ? 2
+                : (bl.flags & EF_BLEND_CLAMPED) ? 3
+                                                : 0;
         outcome[o]++;
     }
     printf("bench_ct blend: %ld calls OK; blend %ld, straight %ld, stop %ld, clamped %ld\n", n,
