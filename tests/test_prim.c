@@ -1008,6 +1008,23 @@ static void corner_case(stats_t *st, unsigned long long *seed, int in_arc, int o
                 st->name, idx, r, tturn, tol, mi.r0, mo.r0, bl.trim_in, bl.trim_out, bl.dev);
 }
 
+/* Fresh statistics for n corners of one kind (the sample arrays are the caller's to free
+ * with stats_free()). */
+static void stats_init(stats_t *st, const char *name, int n)
+{
+    memset(st, 0, sizeof *st);
+    st->name = name;
+    st->devs = malloc(sizeof(double) * (size_t)n);
+    st->hd = malloc(sizeof(double) * (size_t)n);
+}
+
+/* Release what stats_init() allocated. */
+static void stats_free(stats_t *st)
+{
+    free(st->devs);
+    free(st->hd);
+}
+
 static void test_blend_prims(void)
 {
     const int N = 2000;
@@ -1016,10 +1033,7 @@ static void test_blend_prims(void)
     unsigned long long seed = 2024;
     for (int k = 0; k < 3; k++) {
         stats_t st;
-        memset(&st, 0, sizeof st);
-        st.name = names[k];
-        st.devs = malloc(sizeof(double) * N);
-        st.hd = malloc(sizeof(double) * N);
+        stats_init(&st, names[k], N);
         for (int i = 0; i < N; i++)
             corner_case(&st, &seed, kinds[k][0], kinds[k][1], i, -1.0);
         qsort(st.devs, (size_t)st.ndev, sizeof(double), cmp_d);
@@ -1042,8 +1056,7 @@ static void test_blend_prims(void)
                st.nhd ? st.hd[(int)(0.99 * (st.nhd - 1))] : 0, st.nhd ? st.hd[(st.nhd - 1) / 2] : 0,
                st.nfree, st.free_min);
         EF_CHECK(st.nhd == 0 || st.hd[st.nhd - 1] <= 1.0 + 1e-3);
-        free(st.devs);
-        free(st.hd);
+        stats_free(&st);
     }
 }
 
@@ -1062,10 +1075,7 @@ static void test_tangent_joins(void)
     unsigned long long seed = 77;
     for (int k = 0; k < 3; k++) {
         stats_t st;
-        memset(&st, 0, sizeof st);
-        st.name = names[k];
-        st.devs = malloc(sizeof(double) * N);
-        st.hd = malloc(sizeof(double) * N);
+        stats_init(&st, names[k], N);
         for (int i = 0; i < N; i++) {
             double th = (i % 3 == 0) ? 0.0 : log_uniform(&seed, 1e-7, 0.5 * EF_BLEND_MIN_TURN);
             corner_case(&st, &seed, kinds[k][0], kinds[k][1], i, th);
@@ -1082,8 +1092,7 @@ static void test_tangent_joins(void)
         EF_CHECK(st.blends >= st.n * 9 / 10);
         EF_CHECK(st.other < N / 50);
         EF_CHECK(st.nhd == 0 || st.hd[st.nhd - 1] <= 1.0 + 1e-3);
-        free(st.devs);
-        free(st.hd);
+        stats_free(&st);
     }
 
     /* stay straight */
