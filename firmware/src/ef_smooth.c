@@ -326,6 +326,9 @@ static void ef_sm_decide(ef_smooth_t *s, ef_smooth_prim_t *a, ef_smooth_prim_t *
         s->st.stops++;
         return;
     }
+    a->blend_len = probe.length;
+    a->blend_kmax = probe.kappa_max;
+    a->blend_tabs = probe.tabs;
     a->end_kind = EF_V_BLEND;
     a->trim_end = a->blend.trim_in;
     b->trim_start = a->blend.trim_out;
@@ -477,10 +480,12 @@ static int ef_sm_next_move(ef_smooth_t *s, ef_move_t *m)
         if (h->blend.flags & EF_BLEND_TBL_CLAMPED)
             m->flags |= EF_MOVE_CLAMPED;
         ef_smooth_prim_t *nx = ef_sm_held(s, 1);
-        float feed = ef_minf(h->pr.feed, nx->pr.feed);
-        int rc = ef_sm_finish_move(m, EF_MOVE_BLEND, feed, nx->pr.tag);
-        if (rc != EF_OK)
-            return rc;
+        m->kind = EF_MOVE_BLEND;
+        m->feed = ef_minf(h->pr.feed, nx->pr.feed);
+        m->tag = nx->pr.tag;
+        m->length = h->blend_len; /* measured when the vertex was decided */
+        m->kappa_max = h->blend_kmax;
+        m->tabs = h->blend_tabs;
         nx->blend_in_end = m->b[5];
         s->emitting = EF_E_DONE;
         return 1;

@@ -96,33 +96,36 @@ typedef struct {
 
 /** Counters, for summaries and tests. */
 typedef struct {
-    uint32_t prims;       /**< primitives accepted */
-    uint32_t moves;       /**< moves emitted (pulled) */
-    uint32_t blends;      /**< corners blended */
-    uint32_t straight;    /**< vertices passed straight (turn below EF_BLEND_MIN_TURN) */
-    uint32_t stops;       /**< exact stops (requested, reversal, too small, finish) */
-    uint32_t reversals;   /**< of those, reversals */
-    uint32_t merged;      /**< vertices removed by collinear collapse */
-    uint32_t smooth;      /**< smooth vertices */
-    uint32_t arc_pieces;  /**< arc pieces emitted */
-    float dev_max;        /**< largest deviation of any emitted move from the programmed path */
+    uint32_t prims;      /**< primitives accepted */
+    uint32_t moves;      /**< moves emitted (pulled) */
+    uint32_t blends;     /**< corners blended */
+    uint32_t straight;   /**< vertices passed straight (turn below EF_BLEND_MIN_TURN) */
+    uint32_t stops;      /**< exact stops (requested, reversal, too small, finish) */
+    uint32_t reversals;  /**< of those, reversals */
+    uint32_t merged;     /**< vertices removed by collinear collapse */
+    uint32_t smooth;     /**< smooth vertices */
+    uint32_t arc_pieces; /**< arc pieces emitted */
+    float dev_max;       /**< largest deviation of any emitted move from the programmed path */
 } ef_smooth_stats_t;
 
 /** One held primitive with what the geometry stage has decided about it. */
 typedef struct {
     ef_prim_t pr;
-    ef_vec3_t start;     /**< where it starts */
-    float len;           /**< its length */
-    float trim_start;    /**< length taken by the blend at its start */
-    float trim_end;      /**< length taken by the blend at its end */
-    uint8_t end_kind;    /**< how its end vertex was resolved (internal) */
+    ef_vec3_t start;                  /**< where it starts */
+    float len;                        /**< its length */
+    float trim_start;                 /**< length taken by the blend at its start */
+    float trim_end;                   /**< length taken by the blend at its end */
+    uint8_t end_kind;                 /**< how its end vertex was resolved (internal) */
     uint8_t start_smooth, end_smooth; /**< smooth vertex at start / end */
-    ef_frame_t fs, fe;   /**< smooth vertex frames at start / end */
-    ef_blend_t blend;    /**< blend at its end (when end_kind says so) */
-    ef_vec3_t blend_in_end; /**< where the blend at its start ended (its first point) */
-    uint32_t nmerged;    /**< inner vertices merged into it */
-    float merge_dev;     /**< largest distance of those vertices from it: the blends and
-                              smooth sections at its ends get only tol - merge_dev */
+    ef_frame_t fs, fe;                /**< smooth vertex frames at start / end */
+    ef_blend_t blend;                 /**< blend at its end (when end_kind says so) */
+    ef_vec3_t blend_in_end;           /**< where the blend at its start ended (its first point) */
+    float blend_len;      /**< end blend's length (measured once, when the vertex is decided) */
+    float blend_kmax;     /**< end blend's curvature bound (likewise) */
+    ef_vec3_t blend_tabs; /**< end blend's axis tangent bounds (likewise) */
+    uint32_t nmerged;     /**< inner vertices merged into it */
+    float merge_dev;      /**< largest distance of those vertices from it: the blends and
+                               smooth sections at its ends get only tol - merge_dev */
     ef_vec3_t merged[EF_SMOOTH_MERGE_MAX]; /**< those vertices (for the Q check) */
 } ef_smooth_prim_t;
 
@@ -132,13 +135,13 @@ typedef struct {
     ef_plan_t plan;
     ef_smooth_prim_t pq[EF_SMOOTH_PRIMS]; /**< held primitives, oldest at ph */
     uint32_t ph, pn;
-    ef_vec3_t pos;        /**< end of the last accepted primitive */
-    ef_vec3_t out_end;    /**< where the last emitted move ends (moves chain exactly) */
+    ef_vec3_t pos;     /**< end of the last accepted primitive */
+    ef_vec3_t out_end; /**< where the last emitted move ends (moves chain exactly) */
     ef_move_t stage[EF_SMOOTH_STAGE];
-    uint32_t sh, sn;      /**< staged moves waiting for planner room */
-    uint32_t arc_next;    /**< arc emission cursor: next piece of the oldest primitive */
-    uint32_t arc_n;       /**< pieces the oldest primitive's arc is split into */
-    int emitting;         /**< the oldest primitive is partly emitted */
+    uint32_t sh, sn;   /**< staged moves waiting for planner room */
+    uint32_t arc_next; /**< arc emission cursor: next piece of the oldest primitive */
+    uint32_t arc_n;    /**< pieces the oldest primitive's arc is split into */
+    int emitting;      /**< the oldest primitive is partly emitted */
     ef_smooth_stats_t st;
 } ef_smooth_t;
 
