@@ -133,14 +133,14 @@ static void ef_sm_stage(ef_smooth_t *s, const ef_move_t *m)
     s->st.dev_max = ef_maxf(s->st.dev_max, m->dev);
 }
 
-/* A built move the planner and a drive can take: control points within EF_MAX_COORD,
- * measurable, and not shorter than the planner accepts. Measures m as a side effect. */
-static int ef_sm_move_ok(ef_move_t *m)
+/* A built, measured move the planner and a drive can take: control points within
+ * EF_MAX_COORD and not shorter than the planner accepts (every builder measures already). */
+static int ef_sm_move_ok(const ef_move_t *m)
 {
     for (int i = 0; i <= m->degree && i < 6; i++)
         if (!ef_sm_v3_ok(m->b[i]))
             return 0;
-    return ef_move_measure(m) == EF_OK && m->length >= EF_SM_MIN_MOVE;
+    return m->length >= EF_SM_MIN_MOVE;
 }
 
 /* Fill the measured fields of a move built from control points; 0 on success. */
@@ -321,7 +321,7 @@ static void ef_sm_decide(ef_smooth_t *s, ef_smooth_prim_t *a, ef_smooth_prim_t *
     /* ... or loop far from the path it replaces (a huge tolerance lets the trial trims grow
      * into configurations the table clamps): a blend longer than twice the trimmed path is
      * not a rounded corner, and its speed peaks between the samples the limits rely on. */
-    if (!ef_sm_move_ok(&probe) ||
+    if (ef_move_measure(&probe) != EF_OK || !ef_sm_move_ok(&probe) ||
         !(probe.length <= 2.0f * (a->blend.trim_in + a->blend.trim_out) + EF_MIN_CHORD)) {
         s->st.stops++;
         return;
