@@ -2,7 +2,9 @@
  * Cortex-M4F link check: a complete freestanding image (own vector table and reset code,
  * no C runtime start files) that builds one G1 cubic and one G2 quintic segment through
  * small tables defined here, then runs a short program (lines and an arc) through the
- * streaming smoother, the feed planner and the interpolator, as a controller would.
+ * streaming smoother, the feed planner and the interpolator, as a controller would; and a
+ * drive-side Modbus register device (ef_modbus.h, ef_drive.h) that receives one encoded
+ * straight-line slot and executes it.
  * firmware/arm/build.sh links it against libef_fw.a with
  * --gc-sections and inspects the result: whatever the library drags in shows up there
  * (heap, stdio, double-precision soft-float helpers would all be failures).
@@ -13,6 +15,7 @@
 #include <stdint.h>
 #include "evenfeed/ef_err.h"
 #include "evenfeed/ef_interp.h"
+#include "evenfeed/ef_modbus.h"
 #include "evenfeed/ef_seg.h"
 #include "evenfeed/ef_smooth.h"
 #include "evenfeed/ef_table.h"
@@ -152,7 +155,51 @@ static int lc_run_smoother(void)
     return rc != EF_OK;
 }
 
-/* Build both segments and publish their control points; then run the smoother. */
+/* The drive side: a register device in static storage, enabled and started through the
+ * control word, one straight-line segment written as an encoded slot, then stepped at
+ * 1 ms until the segment is done. */
+static ef_mbdev_t lc_dev;
+
+static int lc_run_drive(void)
+{
+    ef_servo_cfg_t cfg;
+    ef_servo_cfg_default(&cfg);
+    ef_vec3_t home = ef_v3(0.0f, 0.0f, 0.0f);
+    int rc = ef_mbdev_init(&lc_dev, &cfg, home, 1000u, 0x5A5Au);
+    uint8_t exc = 0u;
+    uint16_t ctl = EF_MB_CTL_ENABLE;
+    rc |= ef_mbdev_write(&lc_dev, EF_MB_REG_CONTROL, 1u, &ctl, &exc);
+    ef_move_t m = {0};
+    m.degree = 1;
+    m.flags = EF_MOVE_STOP_END;
+    m.b[0] = home;
+    m.b[1] = ef_v3(3.0f, 4.0f, 0.0f);
+    m.length = 5.0f;
+    m.duration = 0.2f; /* tau = 2u/D - (u/D)^2: from 50 units/s down to rest */
+    m.law.dt[0] = 0.2f;
+    m.law.c[0][1] = 10.0f;
+    m.law.c[0][2] = -25.0f;
+    static uint16_t slot[EF_MB_SLOT_WORDS];
+    rc |= ef_mb_slot_encode(&m, slot);
+    rc |= ef_mbdev_write(&lc_dev, EF_MB_REG_SLOT0, EF_MB_SLOT_WORDS, slot, &exc);
+    ctl = EF_MB_CTL_ENABLE | EF_MB_CTL_START;
+    rc |= ef_mbdev_write(&lc_dev, EF_MB_REG_CONTROL, 1u, &ctl, &exc);
+    uint16_t done[2] = {0u, 0u};
+    for (uint32_t tick = 0; tick < 1000u; tick++) {
+        uint32_t next_us;
+        rc |= ef_mbdev_process(&lc_dev, 1000u, &next_us);
+        rc |= ef_mbdev_read(&lc_dev, EF_MB_REG_DONE_SEQ, 2u, done, &exc);
+        if (ef_mb_get_u32(done) == 0u)
+            break;
+    }
+    lc_pos[0] = lc_dev.drv.act.x;
+    lc_pos[1] = lc_dev.drv.act.y;
+    lc_pos[2] = lc_dev.drv.act.z;
+    return rc != EF_OK || ef_mb_get_u32(done) != 0u;
+}
+
+/* Build both segments and publish their control points; then run the smoother and the
+ * drive. */
 int main(void)
 {
     ef_endpoint_t e0 = lc_load(&lc_e0), e1 = lc_load(&lc_e1);
@@ -169,6 +216,7 @@ int main(void)
     }
     lc_status = (rc3 == EF_OK && rc5 == EF_OK) ? 0 : 1;
     lc_status |= lc_run_smoother() << 1;
+    lc_status |= lc_run_drive() << 2;
     return lc_status;
 }
 

@@ -24,6 +24,13 @@ const char *ef_err_str(int err)
     case EF_ERR_FEED: return "feed or motion limit not positive and finite";
     case EF_ERR_UNDERRUN: return "interpolator ran out of moves while moving";
     case EF_ERR_STATE: return "call not allowed in the current state";
+    case EF_ERR_CRC: return "checksum mismatch";
+    case EF_ERR_SEQ: return "segment sequence number out of order";
+    case EF_ERR_DUP: return "segment already accepted (duplicate)";
+    case EF_ERR_TIMEOUT: return "timed out";
+    case EF_ERR_PROTO: return "protocol error or exception reply";
+    case EF_ERR_DRIVE: return "drive fault";
+    case EF_ERR_DISCONNECT: return "connection lost";
     case EF_ERR_TBL_TRUNCATED: return "table truncated";
     case EF_ERR_TBL_MAGIC: return "not an evenfeed table (bad magic)";
     case EF_ERR_TBL_VERSION: return "unsupported table format version";

@@ -23,6 +23,11 @@ int ef_cmd_table(int argc, char **argv);
 int ef_cmd_demo(int argc, char **argv);
 int ef_cmd_gcode(int argc, char **argv);
 int ef_cmd_smooth(int argc, char **argv);
+int ef_cmd_stream(int argc, char **argv);
+int ef_cmd_sim_drive(int argc, char **argv);
+/* Smoothing options shared by smooth and stream: -1 if a is not one, else 0 or an exit
+ * status; *used = option values consumed. */
+int ef_cli_pipe_opt(const char *cmd, const char *a, const char *v, ef_pipe_cfg_t *cfg, int *used);
 
 /* evenfeed smooth's options (shared with the demo). */
 typedef struct {

@@ -613,15 +613,75 @@ int ef_cli_smooth_run(ef_gcode_t *r, const char *title, const ef_smooth_opts_t *
 }
 
 /* Parse a double option value; also checks lo <= v (strict when strict is set). */
-static int ef_sm_num(const char *opt, const char *s, double lo, int strict, double *out)
+static int ef_sm_num(const char *cmd, const char *opt, const char *s, double lo, int strict,
+                     double *out)
 {
     if (!s)
-        return ef_cli_error(EF_ERR_ARG, "smooth: %s needs a value", opt);
+        return ef_cli_error(EF_ERR_ARG, "%s: %s needs a value", cmd, opt);
     if (ef_cli_double(opt, s, out))
         return ef_cli_exit(EF_ERR_ARG);
     if (strict ? !(*out > lo) : !(*out >= lo))
-        return ef_cli_error(EF_ERR_ARG, "smooth: %s %s: must be %s %g", opt, s,
+        return ef_cli_error(EF_ERR_ARG, "%s: %s %s: must be %s %g", cmd, opt, s,
                             strict ? ">" : ">=", lo);
+    return 0;
+}
+
+/* The smoothing options shared by `smooth` and `stream` (docs/smoothing-cli.md): -1 when a
+ * is not one of them, else 0 or an exit status; *used is set to the values consumed. */
+int ef_cli_pipe_opt(const char *cmd, const char *a, const char *v, ef_pipe_cfg_t *cfg, int *used)
+{
+    double x;
+    int rc;
+    *used = 0;
+    if (!strcmp(a, "--tol")) {
+        if ((rc = ef_sm_num(cmd, a, v, 0, 0, &x)))
+            return rc;
+        cfg->tol_default = x;
+        *used = 1;
+    } else if (!strcmp(a, "--vmax")) {
+        if ((rc = ef_sm_num(cmd, a, v, 0, 1, &x)))
+            return rc;
+        for (int i = 0; i < 3; i++)
+            cfg->lim.v_axis[i] = (float)x;
+        cfg->rapid_speed = x;
+        *used = 1;
+    } else if (!strcmp(a, "--amax")) {
+        if ((rc = ef_sm_num(cmd, a, v, 0, 1, &x)))
+            return rc;
+        for (int i = 0; i < 3; i++)
+            cfg->lim.a_axis[i] = (float)x;
+        *used = 1;
+    } else if (!strcmp(a, "--jerk")) {
+        if ((rc = ef_sm_num(cmd, a, v, 0, 0, &x)))
+            return rc;
+        cfg->lim.j_max = (float)x;
+        *used = 1;
+    } else if (!strcmp(a, "--period-us")) {
+        if ((rc = ef_sm_num(cmd, a, v, 1, 0, &x)))
+            return rc;
+        if (x != floor(x) || x > 1e6)
+            return ef_cli_error(EF_ERR_ARG, "%s: --period-us %s: a whole number 1..1000000", cmd,
+                                v);
+        cfg->period_us = (uint32_t)x;
+        *used = 1;
+    } else if (!strcmp(a, "--step")) {
+        if (v && !strcmp(v, "uniform"))
+            cfg->step_mode = EF_STEP_UNIFORM;
+        else if (v && !strcmp(v, "corrected"))
+            cfg->step_mode = EF_STEP_CORRECTED;
+        else
+            return ef_cli_error(EF_ERR_ARG, "%s: --step uniform|corrected", cmd);
+        *used = 1;
+    } else if (!strcmp(a, "--micro-len")) {
+        if ((rc = ef_sm_num(cmd, a, v, 0, 0, &x)))
+            return rc;
+        cfg->micro_len = x;
+        *used = 1;
+    } else if (!strcmp(a, "--g1")) {
+        cfg->smooth_degree = 3;
+    } else {
+        return -1;
+    }
     return 0;
 }
 
@@ -633,8 +693,7 @@ int ef_cmd_smooth(int argc, char **argv)
     ef_smooth_opts_default(&o);
     for (int k = 1; k < argc; k++) {
         const char *a = argv[k], *v = k + 1 < argc ? argv[k + 1] : NULL;
-        double x;
-        int rc;
+        int rc, used;
         if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
             fputs(usage, stdout);
             return 0;
@@ -648,52 +707,10 @@ int ef_cmd_smooth(int argc, char **argv)
                 return ef_cli_error(EF_ERR_ARG, "smooth: --svg needs a file name");
             o.svg = v;
             k++;
-        } else if (!strcmp(a, "--tol")) {
-            if ((rc = ef_sm_num(a, v, 0, 0, &x)))
+        } else if ((rc = ef_cli_pipe_opt("smooth", a, v, &o.cfg, &used)) >= 0) {
+            if (rc)
                 return rc;
-            o.cfg.tol_default = x;
-            k++;
-        } else if (!strcmp(a, "--vmax")) {
-            if ((rc = ef_sm_num(a, v, 0, 1, &x)))
-                return rc;
-            for (int i = 0; i < 3; i++)
-                o.cfg.lim.v_axis[i] = (float)x;
-            o.cfg.rapid_speed = x;
-            k++;
-        } else if (!strcmp(a, "--amax")) {
-            if ((rc = ef_sm_num(a, v, 0, 1, &x)))
-                return rc;
-            for (int i = 0; i < 3; i++)
-                o.cfg.lim.a_axis[i] = (float)x;
-            k++;
-        } else if (!strcmp(a, "--jerk")) {
-            if ((rc = ef_sm_num(a, v, 0, 0, &x)))
-                return rc;
-            o.cfg.lim.j_max = (float)x;
-            k++;
-        } else if (!strcmp(a, "--period-us")) {
-            if ((rc = ef_sm_num(a, v, 1, 0, &x)))
-                return rc;
-            if (x != floor(x) || x > 1e6)
-                return ef_cli_error(EF_ERR_ARG, "smooth: --period-us %s: a whole number 1..1000000",
-                                    v);
-            o.cfg.period_us = (uint32_t)x;
-            k++;
-        } else if (!strcmp(a, "--step")) {
-            if (v && !strcmp(v, "uniform"))
-                o.cfg.step_mode = EF_STEP_UNIFORM;
-            else if (v && !strcmp(v, "corrected"))
-                o.cfg.step_mode = EF_STEP_CORRECTED;
-            else
-                return ef_cli_error(EF_ERR_ARG, "smooth: --step uniform|corrected");
-            k++;
-        } else if (!strcmp(a, "--micro-len")) {
-            if ((rc = ef_sm_num(a, v, 0, 0, &x)))
-                return rc;
-            o.cfg.micro_len = x;
-            k++;
-        } else if (!strcmp(a, "--g1")) {
-            o.cfg.smooth_degree = 3;
+            k += used;
         } else if (a[0] == '-' && a[1]) {
             return ef_cli_error(EF_ERR_ARG, "smooth: unknown option '%s'", a);
         } else if (path) {

@@ -20,6 +20,8 @@ static const char usage[] =
     "  demo      the built-in default job: smooth the sample part program, write an SVG\n"
     "  gcode     read a part program and print its path items (docs/gcode.md)\n"
     "  smooth    smooth a part program: planned moves, setpoints, summary, JSON/CSV/SVG\n"
+    "  stream    smooth a part program and stream it to a drive (--modbus)\n"
+    "  sim-drive a simulated drive (modbus) for tests and demos\n"
     "\n"
     "Run 'evenfeed COMMAND --help' for a command's options. Exit status: 0 on success,\n"
     "otherwise the negated evenfeed error code (1 = usage or invalid argument).\n";
@@ -95,6 +97,10 @@ int main(int argc, char **argv)
         return ef_cmd_gcode(argc - 1, argv + 1);
     if (!strcmp(argv[1], "smooth"))
         return ef_cmd_smooth(argc - 1, argv + 1);
+    if (!strcmp(argv[1], "stream"))
+        return ef_cmd_stream(argc - 1, argv + 1);
+    if (!strcmp(argv[1], "sim-drive"))
+        return ef_cmd_sim_drive(argc - 1, argv + 1);
     fputs(usage, stderr);
     return ef_cli_error(EF_ERR_ARG, "unknown command '%s'", argv[1]);
 }

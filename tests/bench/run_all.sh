@@ -68,3 +68,8 @@ if [ -x "$b/tests/bench_smooth" ]; then
 else
     echo "(bench_smooth not built: EF_BENCH_SMOOTH off)"
 fi
+
+echo
+echo "== Modbus: sustained segments/s and direct target writes/s over TCP and RTU at 115200"
+echo "   baud, and the feed each sustains on the sample profile (docs/benchmarks-modbus.md)"
+"$b/tests/bench_modbus" "$ef" .

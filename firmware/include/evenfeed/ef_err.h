@@ -39,6 +39,7 @@ typedef enum {
     EF_ERR_UNDERRUN = -17,    /**< the interpolator ran out of moves while moving */
     EF_ERR_STATE = -18,       /**< call not allowed in the object's current state (e.g. push
                                    after finish, or after a sticky error) */
+    EF_ERR_CRC = -19,         /**< checksum mismatch in received data (segment slot, frame) */
     EF_ERR_TBL_TRUNCATED = -20,  /**< table blob shorter than its header says */
     EF_ERR_TBL_MAGIC = -21,      /**< not a table file (magic bytes) */
     EF_ERR_TBL_VERSION = -22,    /**< format version not supported */
@@ -53,6 +54,14 @@ typedef enum {
     EF_ERR_TBL_PROVENANCE = -31, /**< provenance string too long or not printable text */
     EF_ERR_TBL_CRC = -32,        /**< CRC-32 mismatch: corrupt data */
     EF_ERR_TBL_VALUE = -33,      /**< stored DOF value non-finite or outside its bounds */
+    EF_ERR_SEQ = -40,        /**< segment sequence number out of order (a gap) */
+    EF_ERR_DUP = -41,        /**< segment already accepted (a retried write): not queued again;
+                                  callers treat it as success */
+    EF_ERR_TIMEOUT = -42,    /**< no answer in time (host transports) */
+    EF_ERR_PROTO = -43,      /**< malformed or unexpected reply, or an exception/abort from
+                                  the other side (host transports; message names it) */
+    EF_ERR_DRIVE = -44,      /**< the drive reports a fault, or restarted (message names it) */
+    EF_ERR_DISCONNECT = -45, /**< connection lost and could not be re-established */
 } ef_err_t;
 
 /**
