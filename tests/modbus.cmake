@@ -19,3 +19,9 @@ if(TARGET ef_tables_default)
   target_include_directories(bench_modbus PRIVATE ${CMAKE_CURRENT_LIST_DIR})
   target_link_libraries(bench_modbus PRIVATE ef_host ef_tables_default m)
 endif()
+
+# The CLI: argument errors, an unreachable drive, a whole program streamed.
+add_test(NAME modbus_cli
+         COMMAND bash ${CMAKE_CURRENT_LIST_DIR}/test_stream_cli.sh $<TARGET_FILE:evenfeed>
+                 ${PROJECT_SOURCE_DIR} ${CMAKE_CURRENT_BINARY_DIR})
+set_tests_properties(modbus_cli PROPERTIES TIMEOUT 120 PASS_REGULAR_EXPRESSION " 0 failed")

@@ -1,9 +1,14 @@
 /* evenfeed demo: the built-in default job, runnable with no hardware and no input files:
  * smooth the shipped sample part programs (samples/bracket.ngc: lines, arcs, events;
  * samples/profile.ngc: CAM micro-segment curves and split edges; both embedded at build
- * time), print their summaries and write an SVG plot of each. */
+ * time), print their summaries and write an SVG plot of each, then stream the profile to
+ * a simulated Modbus drive over TCP on loopback (docs/modbus.md). */
+#include <pthread.h>
+#include <signal.h>
 #include <string.h>
+#include <unistd.h>
 #include "cli.h"
+#include "evenfeed/host/ef_mb.h"
 
 /* Generated from samples/NAME.ngc by host/CMakeLists.txt. */
 extern const char ef_sample_bracket[];
@@ -38,6 +43,87 @@ static int ef_demo_one(const char *text, unsigned long len, const char *name, co
     return 0;
 }
 
+static volatile sig_atomic_t ef_demo_stop;
+
+typedef struct {
+    ef_mb_server_cfg_t c;
+    ef_msg_t m;
+    int rc;
+} ef_demo_srv_t;
+
+/* The simulated drive's thread: serves until the demo sets ef_demo_stop. */
+static void *ef_demo_serve(void *arg)
+{
+    ef_demo_srv_t *S = arg;
+    S->rc = ef_mb_serve(&S->c, &S->m);
+    if (S->c.ready)
+        fclose(S->c.ready); /* unblocks the reader if the server never got ready */
+    return NULL;
+}
+
+/* Stream the profile to a simulated drive (in a thread of this process) over real Modbus
+ * TCP on loopback, with the drive's clock at 4x so it takes a few seconds. */
+static int ef_demo_stream(void)
+{
+    static ef_demo_srv_t S;
+    int fds[2];
+    if (pipe(fds) != 0)
+        return ef_cli_error(EF_ERR_IO, "demo: pipe");
+    ef_mb_server_cfg_default(&S.c);
+    S.c.mb.port = 0; /* any free port: the ready line says which */
+    S.c.time_scale = 4.0;
+    S.c.stop = &ef_demo_stop;
+    S.c.ready = fdopen(fds[1], "w");
+    FILE *rd = fdopen(fds[0], "r");
+    pthread_t th;
+    if (!S.c.ready || !rd || pthread_create(&th, NULL, ef_demo_serve, &S) != 0)
+        return ef_cli_error(EF_ERR_IO, "demo: cannot start the simulated drive");
+    char line[256] = "";
+    int port = 0;
+    if (fgets(line, sizeof line, rd))
+        sscanf(line, "ready tcp %*[^:]:%d", &port);
+    fclose(rd);
+    int rc = EF_OK;
+    ef_msg_t m = {{0}};
+    ef_mb_stream_result_t res;
+    memset(&res, 0, sizeof res);
+    if (port <= 0) {
+        rc = EF_ERR_IO;
+        ef_fail(&m, rc, "simulated drive did not start: %.400s", S.m.text);
+    } else {
+        printf("== samples/profile.ngc streamed to a simulated drive: Modbus TCP 127.0.0.1:%d, "
+               "segment mode, drive clock 4x\n",
+               port);
+        fflush(stdout);
+        static ef_gcode_t r;
+        ef_mb_stream_cfg_t c;
+        memset(&c, 0, sizeof c);
+        ef_mb_cfg_default(&c.mb);
+        ef_pipe_cfg_default(&c.pipe);
+        c.pipe.g2 = ef_cli_default_table(EF_TABLE_G2_QUINTIC);
+        c.pipe.g1 = ef_cli_default_table(EF_TABLE_G1_CUBIC);
+        c.mode = EF_MB_MODE_SEGMENT;
+        c.mb.port = port;
+        rc = ef_gcode_init(&r, ef_sample_profile, (size_t)ef_sample_profile_len, "profile.ngc");
+        if (rc == EF_OK)
+            rc = ef_mb_stream(&r, &c, &res, &m);
+        ef_gcode_free(&r);
+    }
+    ef_demo_stop = 1;
+    pthread_join(th, NULL);
+    if (rc != EF_OK)
+        return ef_cli_error(rc, "demo: stream: %s", m.text);
+    printf("stream           %u segments, path time %.2f s, %llu Modbus transactions, "
+           "%llu retries\n",
+           res.moves, res.path_time, (unsigned long long)res.io.transactions,
+           (unsigned long long)res.io.retries);
+    printf("drive            executed %u segments, ended at rest at %.4f %.4f %.4f mm, "
+           "following error max %.4f mm\n",
+           res.last.done_count, (double)res.last.act[0], (double)res.last.act[1],
+           (double)res.last.act[2], (double)res.last.ferr_max);
+    return 0;
+}
+
 int ef_cmd_demo(int argc, char **argv)
 {
     const char *svg = "evenfeed-demo.svg";
@@ -68,5 +154,8 @@ int ef_cmd_demo(int argc, char **argv)
     int rc = ef_demo_one(ef_sample_bracket, ef_sample_bracket_len, "bracket.ngc", svg);
     if (rc)
         return rc;
-    return ef_demo_one(ef_sample_profile, ef_sample_profile_len, "profile.ngc", svg2);
+    rc = ef_demo_one(ef_sample_profile, ef_sample_profile_len, "profile.ngc", svg2);
+    if (rc)
+        return rc;
+    return ef_demo_stream();
 }

@@ -66,7 +66,7 @@ int ef_cmd_sim_drive(int argc, char **argv)
     int have_addr = 0;
     for (int k = 2; k < argc; k++) {
         const char *a = argv[k], *v = k + 1 < argc ? argv[k + 1] : NULL;
-        long x;
+        long x = 0;
         double d;
         int rc;
         if (!strcmp(a, "--help") || !strcmp(a, "-h")) {

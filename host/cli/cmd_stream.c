@@ -55,7 +55,7 @@ int ef_cmd_stream(int argc, char **argv)
     ef_msg_t m = {{0}};
     for (int k = 1; k < argc; k++) {
         const char *a = argv[k], *v = k + 1 < argc ? argv[k + 1] : NULL;
-        long x;
+        long x = 0;
         int rc, used;
         if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
             fputs(usage, stdout);
