@@ -97,12 +97,8 @@ static int ef_demo_stream(void)
         fflush(stdout);
         static ef_gcode_t r;
         ef_mb_stream_cfg_t c;
-        memset(&c, 0, sizeof c);
-        ef_mb_cfg_default(&c.mb);
-        ef_pipe_cfg_default(&c.pipe);
-        c.pipe.g2 = ef_cli_default_table(EF_TABLE_G2_QUINTIC);
-        c.pipe.g1 = ef_cli_default_table(EF_TABLE_G1_CUBIC);
-        c.mode = EF_MB_MODE_SEGMENT;
+        ef_mb_stream_cfg_default(&c, ef_cli_default_table(EF_TABLE_G2_QUINTIC),
+                                 ef_cli_default_table(EF_TABLE_G1_CUBIC));
         c.mb.port = port;
         rc = ef_gcode_init(&r, ef_sample_profile, (size_t)ef_sample_profile_len, "profile.ngc");
         if (rc == EF_OK)

@@ -44,13 +44,8 @@ static int st_int(const char *opt, const char *v, long lo, long hi, long *out)
 int ef_cmd_stream(int argc, char **argv)
 {
     ef_mb_stream_cfg_t c;
-    memset(&c, 0, sizeof c);
-    ef_mb_cfg_default(&c.mb);
-    ef_pipe_cfg_default(&c.pipe);
-    c.pipe.g2 = ef_cli_default_table(EF_TABLE_G2_QUINTIC);
-    c.pipe.g1 = ef_cli_default_table(EF_TABLE_G1_CUBIC);
-    c.mode = EF_MB_MODE_SEGMENT;
-    c.direct_hz = 50.0;
+    ef_mb_stream_cfg_default(&c, ef_cli_default_table(EF_TABLE_G2_QUINTIC),
+                             ef_cli_default_table(EF_TABLE_G1_CUBIC));
     const char *path = NULL, *addr = NULL;
     ef_msg_t m = {{0}};
     for (int k = 1; k < argc; k++) {

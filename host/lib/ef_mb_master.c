@@ -244,6 +244,19 @@ static int mb_xfer(ef_mb_master_t *ms, int write, uint16_t addr, int n, uint16_t
                    ms->c.retries + 1, modbus_strerror(last_errno));
 }
 
+/* The flow-control fields, from registers read starting at address base. */
+static void mb_parse_flow(ef_mb_status_t *s, const uint16_t *r, int base)
+{
+    s->status = r[EF_MB_REG_STATUS - base];
+    s->state = r[EF_MB_REG_STATE - base];
+    s->fault = r[EF_MB_REG_FAULT - base];
+    s->free = r[EF_MB_REG_FREE - base];
+    s->next_seq = ef_mb_get_u32(r + EF_MB_REG_NEXT_SEQ - base);
+    s->done_seq = ef_mb_get_u32(r + EF_MB_REG_DONE_SEQ - base);
+    s->exec_seq = ef_mb_get_u32(r + EF_MB_REG_EXEC_SEQ - base);
+    s->time_ms = ef_mb_get_u32(r + EF_MB_REG_TIME_MS - base);
+}
+
 /* Read the identification, control and status blocks in one transaction. */
 static int mb_poll(ef_mb_master_t *ms, ef_msg_t *m)
 {
@@ -257,14 +270,7 @@ static int mb_poll(ef_mb_master_t *ms, ef_msg_t *m)
     ef_mb_status_t *s = &ms->st;
     s->session = r[EF_MB_REG_SESSION];
     s->slots = r[EF_MB_REG_SLOTS];
-    s->status = r[EF_MB_REG_STATUS];
-    s->state = r[EF_MB_REG_STATE];
-    s->fault = r[EF_MB_REG_FAULT];
-    s->free = r[EF_MB_REG_FREE];
-    s->next_seq = ef_mb_get_u32(r + EF_MB_REG_NEXT_SEQ);
-    s->done_seq = ef_mb_get_u32(r + EF_MB_REG_DONE_SEQ);
-    s->exec_seq = ef_mb_get_u32(r + EF_MB_REG_EXEC_SEQ);
-    s->time_ms = ef_mb_get_u32(r + EF_MB_REG_TIME_MS);
+    mb_parse_flow(s, r, 0);
     s->done_count = ef_mb_get_u32(r + EF_MB_REG_DONE_COUNT);
     s->rejected = r[EF_MB_REG_REJECTED];
     s->duplicates = r[EF_MB_REG_DUPLICATES];
@@ -299,16 +305,8 @@ static int mb_poll_flow(ef_mb_master_t *ms, ef_msg_t *m)
     ms->last_poll = ef_mb_now();
     if (rc != EF_OK)
         return rc;
-    const uint16_t *q = r - EF_MB_REG_STATUS; /* index by register address */
     ef_mb_status_t *s = &ms->st;
-    s->status = q[EF_MB_REG_STATUS];
-    s->state = q[EF_MB_REG_STATE];
-    s->fault = q[EF_MB_REG_FAULT];
-    s->free = q[EF_MB_REG_FREE];
-    s->next_seq = ef_mb_get_u32(q + EF_MB_REG_NEXT_SEQ);
-    s->done_seq = ef_mb_get_u32(q + EF_MB_REG_DONE_SEQ);
-    s->exec_seq = ef_mb_get_u32(q + EF_MB_REG_EXEC_SEQ);
-    s->time_ms = ef_mb_get_u32(q + EF_MB_REG_TIME_MS);
+    mb_parse_flow(s, r, EF_MB_REG_STATUS);
     /* Executed count: every segment before the one executing (or all, at rest). */
     if (s->done_seq != EF_MB_DONE_NONE)
         s->done_count = s->done_seq + 1u;

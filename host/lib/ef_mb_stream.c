@@ -15,6 +15,18 @@ typedef struct {
     double t0; /* direct mode: wall time of the first target */
 } stream_t;
 
+/* Defaults documented in ef_mb.h. */
+void ef_mb_stream_cfg_default(ef_mb_stream_cfg_t *c, const ef_table_t *g2, const ef_table_t *g1)
+{
+    memset(c, 0, sizeof *c);
+    ef_mb_cfg_default(&c->mb);
+    ef_pipe_cfg_default(&c->pipe);
+    c->pipe.g2 = g2;
+    c->pipe.g1 = g1;
+    c->mode = EF_MB_MODE_SEGMENT;
+    c->direct_hz = 50.0;
+}
+
 /* Each planned move goes to the drive as one slot. */
 static int stream_move(void *user, const ef_move_t *mv, const ef_pipe_move_info_t *mi)
 {

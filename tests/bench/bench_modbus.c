@@ -54,11 +54,7 @@ static double bm_stream(const char *url, const char *prog, int mode, ef_mb_strea
     static ef_gcode_t r;
     ef_msg_t m = {{0}};
     ef_mb_stream_cfg_t c;
-    memset(&c, 0, sizeof c);
-    ef_mb_cfg_default(&c.mb);
-    ef_pipe_cfg_default(&c.pipe);
-    c.pipe.g2 = &ef_tbl_g2_default;
-    c.pipe.g1 = &ef_tbl_g1_default;
+    ef_mb_stream_cfg_default(&c, &ef_tbl_g2_default, &ef_tbl_g1_default);
     c.mode = mode;
     c.direct_hz = 10000;
     c.mb.timeout_s = 0.5;

@@ -173,6 +173,10 @@ typedef struct {
     void *user;
 } ef_mb_stream_cfg_t;
 
+/** Defaults: ef_mb_cfg_default(), ef_pipe_cfg_default() with the tables g2 and g1, segment
+ *  mode, 50 targets/s in direct mode, no callback. */
+void ef_mb_stream_cfg_default(ef_mb_stream_cfg_t *c, const ef_table_t *g2, const ef_table_t *g1);
+
 /** Result of a stream. */
 typedef struct {
     uint32_t moves;   /**< segments sent */
