@@ -631,10 +631,17 @@ int ef_mb_end(ef_mb_master_t *ms, ef_msg_t *m)
     ms->begun = 0;
     ms->started = 0;
     int rc = mb_control(ms, 0, "disable", m);
+    if (ms->lost)
+        return rc;
+    /* Wait for rest even when the disable was refused: a faulted drive is stopping on its
+     * own, and whoever called this must not see it as stopped before it is. */
     double until = ef_mb_now() + 5.0;
-    while (rc == EF_OK) {
-        rc = mb_poll(ms, m);
-        if (rc != EF_OK || !(ms->st.status & (EF_MB_ST_MOVING | EF_MB_ST_STOPPING)))
+    for (;;) {
+        ef_msg_t pm;
+        int prc = mb_poll(ms, &pm);
+        if (prc != EF_OK)
+            return rc != EF_OK ? rc : ef_fail(m, prc, "%s", pm.text);
+        if (!(ms->st.status & (EF_MB_ST_MOVING | EF_MB_ST_STOPPING)))
             break;
         if (ef_mb_now() > until)
             return ef_fail(m, EF_ERR_TIMEOUT, "drive still moving 5 s after being disabled");
