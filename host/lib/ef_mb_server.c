@@ -306,6 +306,8 @@ int ef_mb_serve(const ef_mb_server_cfg_t *c, ef_msg_t *m)
         struct timeval tv = {(time_t)wait, (long)((wait - floor(wait)) * 1e6)};
         int n = select(maxfd + 1, &rd, NULL, NULL, &tv);
         srv_tick(&s, &last, &acc);
+        if (s.trace)
+            fflush(s.trace); /* a reader sees every period up to now, requests or not */
         if (n <= 0)
             continue; /* timeout, or a signal (checked by the loop) */
         if (c->mb.rtu) {
