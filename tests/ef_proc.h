@@ -102,7 +102,7 @@ static inline int tm_drive(tm_proc_t *p, const char *addr_opt, const char *addr,
         argv[n++] = "--trace";
         argv[n++] = (char *)trace;
     }
-    /* extra: up to 4 space-separated words */
+    /* extra: up to 8 space-separated words */
     if (extra) {
         char tmp[256];
         snprintf(tmp, sizeof tmp, "%s", extra);

@@ -279,25 +279,6 @@ static ef_vec3_t drv_queue_end(const ef_drive_t *d)
     return d->cmd;
 }
 
-/* The interpolator's acceptance checks, done here so a bad segment is refused at once. */
-static int drv_move_ok(const ef_move_t *m, ef_vec3_t start)
-{
-    if (m->degree != 1 && m->degree != 3 && m->degree != 5)
-        return 0;
-    int ok = drv_finite(m->duration) & drv_finite(m->length) & drv_finite(m->v_exit);
-    for (int i = 0; i <= m->degree; i++)
-        ok &= drv_vok(m->b[i]);
-    for (int k = 0; k < EF_TIMELAW_PHASES; k++) {
-        ok &= drv_finite(m->law.dt[k]) & (m->law.dt[k] >= 0.0f);
-        for (int i = 0; i < 5; i++)
-            ok &= drv_finite(m->law.c[k][i]);
-    }
-    if (!ok || !(m->duration > 0.0f) || !(m->length > 0.0f) || !(m->v_exit >= 0.0f))
-        return 0;
-    ef_vec3_t gap = ef_v3_sub(m->b[0], start);
-    return ef_v3_dot(gap, gap) <= EF_INTERP_JOIN_TOL * EF_INTERP_JOIN_TOL;
-}
-
 /* Queue a received segment after the sequence and data checks (ef_drive.h). */
 int ef_drive_push(ef_drive_t *d, const ef_move_t *m)
 {
@@ -311,7 +292,7 @@ int ef_drive_push(ef_drive_t *d, const ef_move_t *m)
     if (m->seq > d->next_seq)
         return EF_ERR_SEQ;
     ef_move_t c = *m; /* checked as stored: the caller's copy may change */
-    if (!drv_move_ok(&c, drv_queue_end(d)))
+    if (ef_interp_check(&c, drv_queue_end(d)) != EF_OK)
         return EF_ERR_ARG;
     if (d->ring_count >= EF_DRIVE_SLOTS)
         return EF_ERR_FULL;

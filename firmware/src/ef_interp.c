@@ -52,10 +52,11 @@ uint32_t ef_interp_space(const ef_interp_t *ip)
     return ip ? (uint32_t)EF_INTERP_QUEUE - ip->count : 0u;
 }
 
-/* Queue a planned move that joins the previous end (contract in ef_interp.h). */
-int ef_interp_push(ef_interp_t *ip, const ef_move_t *m)
+/* A move the interpolator can execute after `start` (contract in ef_interp.h); shared with
+ * the drive, which refuses a bad segment when it arrives rather than when it runs. */
+int ef_interp_check(const ef_move_t *m, ef_vec3_t start)
 {
-    if (!ip || !m)
+    if (!m)
         return EF_ERR_ARG;
     if (m->degree != 1 && m->degree != 3 && m->degree != 5)
         return EF_ERR_ARG;
@@ -70,9 +71,20 @@ int ef_interp_push(ef_interp_t *ip, const ef_move_t *m)
     }
     if (!ok || !(m->duration > 0.0f) || !(m->length > 0.0f) || !(m->v_exit >= 0.0f))
         return EF_ERR_ARG;
-    ef_vec3_t gap = ef_v3_sub(m->b[0], ip->end);
+    ef_vec3_t gap = ef_v3_sub(m->b[0], start);
     if (!(ef_v3_dot(gap, gap) <= EF_INTERP_JOIN_TOL * EF_INTERP_JOIN_TOL))
         return EF_ERR_ARG;
+    return EF_OK;
+}
+
+/* Queue a planned move that joins the previous end (contract in ef_interp.h). */
+int ef_interp_push(ef_interp_t *ip, const ef_move_t *m)
+{
+    if (!ip || !m)
+        return EF_ERR_ARG;
+    int rc = ef_interp_check(m, ip->end);
+    if (rc != EF_OK)
+        return rc;
     if (ip->count >= EF_INTERP_QUEUE)
         return EF_ERR_FULL;
     if (ip->count == 0) {

@@ -331,6 +331,13 @@ static int mb_check_fault(ef_mb_master_t *ms, ef_msg_t *m)
     return EF_OK;
 }
 
+/* A flow-control read that also fails on a fault or an unexpected state. */
+static int mb_poll_checked(ef_mb_master_t *ms, ef_msg_t *m)
+{
+    int rc = mb_poll_flow(ms, m);
+    return rc == EF_OK ? mb_check_fault(ms, m) : rc;
+}
+
 /* Write the control word. */
 static int mb_control(ef_mb_master_t *ms, uint16_t word, const char *what, ef_msg_t *m)
 {
@@ -461,9 +468,7 @@ static int mb_start(ef_mb_master_t *ms, ef_msg_t *m)
 static int mb_wait_credit(ef_mb_master_t *ms, ef_msg_t *m)
 {
     for (;;) {
-        int rc = mb_poll_flow(ms, m);
-        if (rc == EF_OK)
-            rc = mb_check_fault(ms, m);
+        int rc = mb_poll_checked(ms, m);
         if (rc != EF_OK)
             return rc;
         ms->credits = ms->st.free;
@@ -561,9 +566,7 @@ int ef_mb_drain(ef_mb_master_t *ms, ef_msg_t *m)
     double progress_t = ef_mb_now();
     uint32_t last_time = 0;
     for (;;) {
-        int rc = mb_poll_flow(ms, m);
-        if (rc == EF_OK)
-            rc = mb_check_fault(ms, m);
+        int rc = mb_poll_checked(ms, m);
         if (rc != EF_OK)
             return rc;
         if (!(ms->st.status & EF_MB_ST_MOVING) &&

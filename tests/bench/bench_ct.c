@@ -329,6 +329,15 @@ static void make_corner(unsigned long long *rs, long i, ef_vec3_t *v, ef_vec3_t 
     *mo = (float)exp(ef_t_uniform(rs, log(1e-7), log(1e3)));
 }
 
+/* Outcome index of a blend for the per-mode tally: 0 blend, 1 straight, 2 stop, 3 clamped. */
+static int blend_outcome(unsigned flags)
+{
+    return (flags & EF_BLEND_STRAIGHT)  ? 1
+           : (flags & EF_BLEND_STOP)    ? 2
+           : (flags & EF_BLEND_CLAMPED) ? 3
+                                        : 0;
+}
+
 /* Corner blends: N calls of ef_blend_corner, one dump each; counts the outcomes. */
 static int run_blend(const ef_table_t *tbl, long n, int dump, unsigned long long *rs)
 {
@@ -347,11 +356,7 @@ static int run_blend(const ef_table_t *tbl, long n, int dump, unsigned long long
             fprintf(stderr, "bench_ct: blend call %ld failed: %s\n", i, ef_err_str(rc));
             return 1;
         }
-        int o = (bl.flags & EF_BLEND_STRAIGHT)  ? 1
-                : (bl.flags & EF_BLEND_STOP)    ? 2
-                : (bl.flags & EF_BLEND_CLAMPED) ? 3
-                                                : 0;
-        outcome[o]++;
+        outcome[blend_outcome(bl.flags)]++;
     }
     printf("bench_ct blend: %ld calls OK; blend %ld, straight %ld, stop %ld, clamped %ld\n", n,
            outcome[0], outcome[1], outcome[2], outcome[3]);
@@ -434,11 +439,7 @@ static int run_bprim(const ef_table_t *tbl, long n, int dump, int arcs, unsigned
             fprintf(stderr, "bench_ct: ef_blend_prims call %ld failed: %s\n", i, ef_err_str(rc));
             return 1;
         }
-        int o = (bl.flags & EF_BLEND_STRAIGHT)  ? 1
-                : (bl.flags & EF_BLEND_STOP)    ? 2
-                : (bl.flags & EF_BLEND_CLAMPED) ? 3
-                                                : 0;
-        outcome[o]++;
+        outcome[blend_outcome(bl.flags)]++;
     }
     printf("bench_ct %s: %ld calls OK; blend %ld, straight %ld, stop %ld, clamped %ld\n",
            arcs ? "bprim_aa" : "bprim_la", n, outcome[0], outcome[1], outcome[2], outcome[3]);

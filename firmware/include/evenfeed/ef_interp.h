@@ -50,11 +50,11 @@ typedef enum {
 
 /** One setpoint. */
 typedef struct {
-    ef_vec3_t p;     /**< commanded position */
-    float v_plan;    /**< planned path speed now (units/s) */
-    uint32_t seq;    /**< sequence number of the move being executed (last one when idle) */
-    uint32_t tag;    /**< its tag */
-    uint8_t moving;  /**< 1 while executing a move, 0 when idle or holding */
+    ef_vec3_t p;    /**< commanded position */
+    float v_plan;   /**< planned path speed now (units/s) */
+    uint32_t seq;   /**< sequence number of the move being executed (last one when idle) */
+    uint32_t tag;   /**< its tag */
+    uint8_t moving; /**< 1 while executing a move, 0 when idle or holding */
 } ef_setpoint_t;
 
 /** Interpolator state (public for static allocation; treat as private). */
@@ -84,6 +84,16 @@ typedef struct {
  * @retval EF_ERR_NONFINITE home not finite or beyond EF_MAX_COORD
  */
 int ef_interp_init(ef_interp_t *ip, ef_vec3_t home, uint32_t period_us, int mode);
+
+/**
+ * @brief Whether ef_interp_push() would accept m after a move ending at start (the checks
+ * only; nothing is queued). Drives use it to refuse a segment when it arrives.
+ * @retval EF_OK
+ * @retval EF_ERR_ARG NULL, degree not 1/3/5, duration or length not > 0, v_exit < 0,
+ *                    non-finite control points / law / length / v_exit, a negative phase
+ *                    duration, or b[0] farther than EF_INTERP_JOIN_TOL from start
+ */
+int ef_interp_check(const ef_move_t *m, ef_vec3_t start);
 
 /**
  * @brief Queue a planned move.
