@@ -4,7 +4,8 @@
  * small tables defined here, then runs a short program (lines and an arc) through the
  * streaming smoother, the feed planner and the interpolator, as a controller would; and a
  * drive-side Modbus register device (ef_modbus.h, ef_drive.h) that receives one encoded
- * straight-line slot and executes it.
+ * straight-line slot and executes it; and a CANopen master (ef_comaster.h) bringing up
+ * one CiA 402 drive (ef_codrive.h) over an in-memory bus and streaming it a few CSP targets.
  * firmware/arm/build.sh links it against libef_fw.a with
  * --gc-sections and inspects the result: whatever the library drags in shows up there
  * (heap, stdio, double-precision soft-float helpers would all be failures).
@@ -13,6 +14,8 @@
  * sets up .data/.bss and the FPU before main, as a real board's startup must.
  */
 #include <stdint.h>
+#include "evenfeed/ef_codrive.h"
+#include "evenfeed/ef_comaster.h"
 #include "evenfeed/ef_err.h"
 #include "evenfeed/ef_interp.h"
 #include "evenfeed/ef_modbus.h"
@@ -198,8 +201,78 @@ static int lc_run_drive(void)
     return rc != EF_OK || ef_mb_get_u32(done) != 0u;
 }
 
-/* Build both segments and publish their control points; then run the smoother and the
- * drive. */
+/* CANopen: a master and one drive on an in-memory bus (a ring each way), as two nodes of a
+ * real bus would exchange frames through their controllers. */
+#define LC_BUSQ 64u
+typedef struct {
+    ef_can_frame_t q[LC_BUSQ];
+    uint32_t head, count;
+} lc_busq_t;
+static lc_busq_t lc_to_drive, lc_to_master;
+static ef_comaster_t lc_master;
+static ef_codrive_t lc_codrive;
+
+/* The HAL send op of either node: queue the frame for the other one. */
+static int lc_can_send(void *ctx, const ef_can_frame_t *f)
+{
+    lc_busq_t *q = ctx;
+    if (q->count == LC_BUSQ)
+        return EF_ERR_AGAIN;
+    q->q[(q->head + q->count) % LC_BUSQ] = *f;
+    q->count++;
+    return EF_OK;
+}
+
+/* Deliver everything queued in both directions. */
+static void lc_can_deliver(void)
+{
+    for (uint32_t guard = 0; guard < 4u * LC_BUSQ && (lc_to_drive.count || lc_to_master.count);
+         guard++) {
+        if (lc_to_drive.count) {
+            (void)ef_codrive_rx(&lc_codrive, &lc_to_drive.q[lc_to_drive.head]);
+            lc_to_drive.head = (lc_to_drive.head + 1u) % LC_BUSQ;
+            lc_to_drive.count--;
+        }
+        if (lc_to_master.count) {
+            (void)ef_comaster_rx(&lc_master, &lc_to_master.q[lc_to_master.head]);
+            lc_to_master.head = (lc_to_master.head + 1u) % LC_BUSQ;
+            lc_to_master.count--;
+        }
+    }
+}
+
+/* Bring the drive up in CSP and stream a short ramp; 0 when it got there. */
+static int lc_run_canopen(void)
+{
+    ef_com_cfg_t mc;
+    ef_comaster_cfg_default(&mc, EF_COM_MODE_CSP);
+    mc.n_nodes = 1;
+    mc.nodes[0] = 1;
+    ef_codrive_cfg_t dc;
+    ef_codrive_cfg_default(&dc, 1);
+    ef_can_port_t pm = {lc_can_send, &lc_to_drive}, pd = {lc_can_send, &lc_to_master};
+    int rc = ef_comaster_init(&lc_master, &mc, &pm);
+    rc |= ef_codrive_init(&lc_codrive, &dc, &pd);
+    float x = 0.0f;
+    for (uint32_t tick = 0; tick < 20000u && rc == EF_OK; tick++) {
+        uint32_t next_us;
+        (void)ef_comaster_process(&lc_master, 100u, &next_us);
+        (void)ef_codrive_process(&lc_codrive, 100u, &next_us);
+        lc_can_deliver();
+        int st = ef_comaster_state(&lc_master);
+        if (st == EF_COM_RUN && x < 1.0f && ef_comaster_push_target(&lc_master, &x) == EF_OK)
+            x += 0.01f;
+        if (st == EF_COM_RUN && x >= 1.0f)
+            (void)ef_comaster_finish(&lc_master);
+        if (st == EF_COM_DONE || st == EF_COM_ERROR)
+            break;
+    }
+    lc_pos[0] = ef_codrive_position(&lc_codrive);
+    return rc != EF_OK || ef_comaster_state(&lc_master) != EF_COM_DONE;
+}
+
+/* Build both segments and publish their control points; then run the smoother, the drive
+ * and the CANopen pair. */
 int main(void)
 {
     ef_endpoint_t e0 = lc_load(&lc_e0), e1 = lc_load(&lc_e1);
@@ -217,6 +290,7 @@ int main(void)
     lc_status = (rc3 == EF_OK && rc5 == EF_OK) ? 0 : 1;
     lc_status |= lc_run_smoother() << 1;
     lc_status |= lc_run_drive() << 2;
+    lc_status |= lc_run_canopen() << 3;
     return lc_status;
 }
 

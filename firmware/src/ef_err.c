@@ -31,6 +31,8 @@ const char *ef_err_str(int err)
     case EF_ERR_PROTO: return "protocol error or exception reply";
     case EF_ERR_DRIVE: return "drive fault";
     case EF_ERR_DISCONNECT: return "connection lost";
+    case EF_ERR_BUS: return "bus error (bus-off, error-passive or interface down)";
+    case EF_ERR_HEARTBEAT: return "heartbeat lost or node never booted";
     case EF_ERR_TBL_TRUNCATED: return "table truncated";
     case EF_ERR_TBL_MAGIC: return "not an evenfeed table (bad magic)";
     case EF_ERR_TBL_VERSION: return "unsupported table format version";

@@ -73,3 +73,8 @@ echo
 echo "== Modbus: sustained segments/s and direct target writes/s over TCP and RTU at 115200"
 echo "   baud, and the feed each sustains on the sample profile (docs/benchmarks-modbus.md)"
 "$b/tests/bench_modbus" "$ef" .
+
+echo
+echo "== CAN bus load: CSP at 1 kHz against segment mode, 3 drives, the sample profile, real"
+echo "   master and drive code on a simulated 1 Mbit/s bus (docs/benchmarks-can.md)"
+"$b/tests/bench_canbus" samples/profile.ngc

@@ -62,6 +62,9 @@ typedef enum {
                                   the other side (host transports; message names it) */
     EF_ERR_DRIVE = -44,      /**< the drive reports a fault, or restarted (message names it) */
     EF_ERR_DISCONNECT = -45, /**< connection lost and could not be re-established */
+    EF_ERR_BUS = -46,        /**< the field bus failed: CAN bus-off or error-passive, or the
+                                  interface went down (message names it) */
+    EF_ERR_HEARTBEAT = -47,  /**< a node's heartbeat stopped, or it never booted */
 } ef_err_t;
 
 /**
