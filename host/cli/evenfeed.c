@@ -20,8 +20,8 @@ static const char usage[] =
     "  demo      the built-in default job: smooth the sample part program, write an SVG\n"
     "  gcode     read a part program and print its path items (docs/gcode.md)\n"
     "  smooth    smooth a part program: planned moves, setpoints, summary, JSON/CSV/SVG\n"
-    "  stream    smooth a part program and stream it to a drive (--modbus)\n"
-    "  sim-drive a simulated drive (modbus) for tests and demos\n"
+    "  stream    smooth a part program and stream it to drives (--modbus, --can)\n"
+    "  sim-drive a simulated drive (modbus, can) for tests and demos\n"
     "\n"
     "Run 'evenfeed COMMAND --help' for a command's options. Exit status: 0 on success,\n"
     "otherwise the negated evenfeed error code (1 = usage or invalid argument).\n";
