@@ -4,15 +4,16 @@
  * here answer them (SDO server over a toy object dictionary, a CiA 402 power state machine
  * stepped at SYNC, TPDO1 after SYNC), with injectable misbehaviour: silence at boot, SDO
  * aborts, wrong device type, lost or malformed SDO answers, a drive in FAULT, a busy or
- * failed port.
+ * failed port; the caller's SDO transfers (segmented download frames, wrong toggle, retry and
+ * timeout).
  *
  * Integration parts: the master and real ef_codrive drives on the in-memory bus of
  * ef_canbus_sim.h (CSP ramp and circle, segment-mode moves, go-back-N after a lost chunk,
- * EMCY mid-path, heartbeat loss). */
+ * EMCY mid-path, heartbeat loss, the caller's SDO transfers while streaming). */
 #include <stdint.h>
 #include <string.h>
 #include "ef_test.h"
-#include "ef_canbus_sim.h"
+#include "evenfeed/host/ef_canbus_sim.h"
 #include "evenfeed/ef_comaster.h"
 #include "evenfeed/ef_err.h"
 
@@ -57,6 +58,15 @@ typedef struct {
     /* segmented upload */
     uint32_t up_pos;
     int up_toggle;
+    /* segmented download */
+    uint16_t dl_index;
+    uint8_t dl_sub;
+    uint32_t dl_size, dl_pos;
+    int dl_toggle;
+    uint8_t dl_buf[64];
+    int dl_done;       /* segmented downloads completed (last segment received) */
+    int dl_bad_toggle; /* answer segments with the toggle bit inverted */
+    int dl_drop_seg;   /* leave this many segments unanswered */
 } fk_drive_t;
 
 typedef struct {
@@ -116,6 +126,29 @@ static uint32_t *fk_obj(fk_drive_t *d, uint16_t index, uint8_t sub)
     return &d->od[d->n_od++].value;
 }
 
+/* Toy SDO server: one download segment (data collected, toggle answered, maybe wrongly). */
+static void fk_sdo_dl_seg(fk_drive_t *d, const ef_can_frame_t *f)
+{
+    uint8_t r[8] = {0}, cmd = f->data[0];
+    uint32_t n = 7u - ((cmd >> 1) & 7u);
+    int t = (cmd >> 4) & 1;
+    EF_CHECK_EQ(t, d->dl_toggle);
+    if (d->dl_pos + n <= sizeof d->dl_buf)
+        memcpy(d->dl_buf + d->dl_pos, &f->data[1], n);
+    d->dl_pos += n;
+    d->dl_toggle ^= 1;
+    if (cmd & 1u) {
+        EF_CHECK_EQ(d->dl_pos, d->dl_size);
+        d->dl_done++;
+    }
+    if (d->dl_drop_seg > 0) {
+        d->dl_drop_seg--;
+        return;
+    }
+    r[0] = (uint8_t)(0x20 | ((t ^ (d->dl_bad_toggle ? 1 : 0)) << 4));
+    fk_reply(EF_CO_COB_SDO_TX + d->id, r, 8);
+}
+
 /* Toy SDO server. */
 static void fk_sdo(fk_drive_t *d, const ef_can_frame_t *f)
 {
@@ -123,6 +156,10 @@ static void fk_sdo(fk_drive_t *d, const ef_can_frame_t *f)
     uint16_t index = ef_co_get16(&f->data[1]);
     uint8_t sub = f->data[3], cmd = f->data[0];
     uint32_t tx = EF_CO_COB_SDO_TX + d->id;
+    if ((cmd & 0xE0u) == 0x00u) {
+        fk_sdo_dl_seg(d, f);
+        return;
+    }
     if ((cmd & 0xE0u) == 0x60u && index == 0 && sub == 0) {
         /* upload segment request (bytes 1..7 are zero) */
         uint32_t len = (uint32_t)strlen(FK_NAME);
@@ -157,6 +194,18 @@ static void fk_sdo(fk_drive_t *d, const ef_can_frame_t *f)
             r[0] = 0x60;
             fk_reply(tx, r, 7);
         }
+        return;
+    }
+    /* Segmented download initiate (the size is indicated). */
+    if ((cmd & 0xE0u) == 0x20u && !(cmd & 0x02u)) {
+        EF_CHECK_EQ(cmd, 0x21);
+        d->dl_index = index;
+        d->dl_sub = sub;
+        d->dl_size = ef_co_get32(&f->data[4]);
+        d->dl_pos = 0;
+        d->dl_toggle = 0;
+        r[0] = 0x60;
+        fk_reply(tx, r, 8);
         return;
     }
     if ((cmd & 0xE0u) == 0x20u) { /* expedited download */
@@ -603,6 +652,181 @@ static void t_fake_seg(void)
     EF_CHECK_EQ(*fk_obj(d, EF_CO_OBJ_CYCLE, 0), 10000);
 }
 
+/* Step the fakes until the caller's SDO transfer is no longer pending; its result. */
+static int fk_sdo_wait(void)
+{
+    int rc = ef_comaster_sdo_result(&F.m, NULL, NULL, NULL);
+    for (int i = 0; i < 4000 && rc == EF_ERR_AGAIN; i++) {
+        fk_step(500);
+        rc = ef_comaster_sdo_result(&F.m, NULL, NULL, NULL);
+    }
+    return rc;
+}
+
+/* SDO frames the master sent node id since log position mark, into out (at most max). */
+static int fk_sdo_frames(uint8_t id, int mark, ef_can_frame_t *out, int max)
+{
+    int n = 0;
+    for (int i = mark; i < F.n_log; i++)
+        if (F.log[i].id == EF_CO_COB_SDO_RX + id) {
+            if (n < max)
+                out[n] = F.log[i];
+            n++;
+        }
+    return n;
+}
+
+/* The caller's SDO client against the fakes: argument and state checks, the exact frames of
+ * a 10-byte segmented download, a wrong toggle, a retry from the initiate, a timeout, and a
+ * transfer after the end (DONE). */
+static void t_sdo_segdl_fake(void)
+{
+    ef_com_cfg_t c = fk_cfg(EF_COM_MODE_CSP);
+    fk_setup(&c);
+    const uint8_t pay[10] = {0xA0, 0xA1, 0xA2, 0xA3, 0xA4, 0xA5, 0xA6, 0xA7, 0xA8, 0xA9};
+    uint8_t big[EF_COM_SDO_BUF + 1];
+    memset(big, 0x5A, sizeof big);
+    ef_comaster_t *m = &F.m;
+    /* During bring-up the master owns the client. */
+    EF_CHECK_EQ(ef_comaster_sdo_result(m, NULL, NULL, NULL), EF_ERR_STATE);
+    EF_CHECK_EQ(ef_comaster_sdo_write(m, 1, 0x2345, 1, pay, 10), EF_ERR_STATE);
+    EF_CHECK_EQ(ef_comaster_sdo_read(m, 0, EF_CO_OBJ_DEVICE_TYPE, 0), EF_ERR_STATE);
+    fk_run_until(EF_COM_CONFIG, 100000);
+    EF_CHECK_EQ(ef_comaster_state(m), EF_COM_CONFIG);
+    EF_CHECK_EQ(ef_comaster_sdo_read(m, 0, EF_CO_OBJ_DEVICE_TYPE, 0), EF_ERR_STATE);
+    fk_run_until(EF_COM_RUN, 3000000);
+    EF_CHECK_EQ(ef_comaster_state(m), EF_COM_RUN);
+    EF_CHECK_EQ(ef_comaster_sdo_result(m, NULL, NULL, NULL), EF_ERR_STATE); /* none started */
+    EF_CHECK_EQ(ef_comaster_sdo_result(NULL, NULL, NULL, NULL), EF_ERR_ARG);
+    EF_CHECK_EQ(ef_comaster_sdo_write(NULL, 1, 0x2345, 1, pay, 10), EF_ERR_ARG);
+    EF_CHECK_EQ(ef_comaster_sdo_write(m, 3, 0x2345, 1, pay, 10), EF_ERR_ARG);
+    EF_CHECK_EQ(ef_comaster_sdo_write(m, -1, 0x2345, 1, pay, 10), EF_ERR_ARG);
+    EF_CHECK_EQ(ef_comaster_sdo_write(m, 1, 0x2345, 1, NULL, 10), EF_ERR_ARG);
+    EF_CHECK_EQ(ef_comaster_sdo_write(m, 1, 0x2345, 1, pay, 0), EF_ERR_ARG);
+    EF_CHECK_EQ(ef_comaster_sdo_write(m, 1, 0x2345, 1, big, EF_COM_SDO_BUF + 1), EF_ERR_ARG);
+    EF_CHECK_EQ(ef_comaster_sdo_read(m, 3, EF_CO_OBJ_DEVICE_TYPE, 0), EF_ERR_ARG);
+    EF_CHECK_EQ(ef_comaster_sdo_read(NULL, 0, EF_CO_OBJ_DEVICE_TYPE, 0), EF_ERR_ARG);
+
+    /* 10 bytes: initiate 0x21 with the size, then 7 bytes (toggle 0), then 3 (toggle 1, c). */
+    fk_drive_t *d = &F.d[1];
+    int mark = F.n_log;
+    EF_CHECK_EQ(ef_comaster_sdo_write(m, 1, 0x2345, 1, pay, 10), EF_OK);
+    EF_CHECK_EQ(ef_comaster_sdo_write(m, 0, 0x2345, 1, pay, 10), EF_ERR_STATE); /* pending */
+    EF_CHECK_EQ(ef_comaster_sdo_read(m, 2, EF_CO_OBJ_DEVICE_TYPE, 0), EF_ERR_STATE);
+    EF_CHECK_EQ(ef_comaster_sdo_result(m, NULL, NULL, NULL), EF_ERR_AGAIN);
+    EF_CHECK_EQ(fk_sdo_wait(), EF_OK);
+    ef_can_frame_t fr[8];
+    EF_CHECK_EQ(fk_sdo_frames(6, mark, fr, 8), 3);
+    const uint8_t init[8] = {0x21, 0x45, 0x23, 0x01, 10, 0, 0, 0};
+    const uint8_t seg0[8] = {0x00, 0xA0, 0xA1, 0xA2, 0xA3, 0xA4, 0xA5, 0xA6};
+    const uint8_t seg1[8] = {0x19, 0xA7, 0xA8, 0xA9, 0, 0, 0, 0}; /* t 1, n 4, c */
+    EF_CHECK(fr[0].dlc == 8 && memcmp(fr[0].data, init, 8) == 0);
+    EF_CHECK(fr[1].dlc == 8 && memcmp(fr[1].data, seg0, 8) == 0);
+    EF_CHECK(fr[2].dlc == 8 && memcmp(fr[2].data, seg1, 8) == 0);
+    EF_CHECK_EQ(d->dl_done, 1);
+    EF_CHECK_EQ(d->dl_index, 0x2345);
+    EF_CHECK_EQ(d->dl_sub, 1);
+    EF_CHECK(memcmp(d->dl_buf, pay, 10) == 0);
+    uint32_t ab = 7, n = 7;
+    const uint8_t *dp = pay;
+    EF_CHECK_EQ(ef_comaster_sdo_result(m, &ab, &dp, &n), EF_OK);
+    EF_CHECK_EQ(ab, 0);
+    EF_CHECK(dp == NULL);
+    EF_CHECK_EQ(n, 0);
+    EF_CHECK_EQ(ef_comaster_sdo_result(m, NULL, NULL, NULL), EF_OK); /* stays */
+
+    /* Up to 4 bytes: expedited (3 bytes: n = 1). */
+    mark = F.n_log;
+    EF_CHECK_EQ(ef_comaster_sdo_write(m, 1, 0x2346, 2, pay, 3), EF_OK);
+    EF_CHECK_EQ(fk_sdo_wait(), EF_OK);
+    EF_CHECK_EQ(fk_sdo_frames(6, mark, fr, 8), 1);
+    EF_CHECK_EQ(fr[0].data[0], 0x27);
+    EF_CHECK_EQ(*fk_obj(d, 0x2346, 2), 0xA2A1A0u);
+    /* The 7-byte segment limit exactly: 14 bytes in two full segments, c on the second. */
+    mark = F.n_log;
+    EF_CHECK_EQ(ef_comaster_sdo_write(m, 1, 0x2345, 1, big, 14), EF_OK);
+    EF_CHECK_EQ(fk_sdo_wait(), EF_OK);
+    EF_CHECK_EQ(fk_sdo_frames(6, mark, fr, 8), 3);
+    EF_CHECK_EQ(fr[1].data[0], 0x00);
+    EF_CHECK_EQ(fr[2].data[0], 0x11);
+    EF_CHECK_EQ(d->dl_done, 2);
+
+    /* A wrong toggle bit in the server's answer. */
+    d->dl_bad_toggle = 1;
+    mark = F.n_log;
+    EF_CHECK_EQ(ef_comaster_sdo_write(m, 1, 0x2345, 1, pay, 10), EF_OK);
+    EF_CHECK_EQ(fk_sdo_wait(), EF_ERR_PROTO);
+    EF_CHECK_EQ(ef_comaster_sdo_result(m, &ab, &dp, &n), EF_ERR_PROTO);
+    EF_CHECK_EQ(ab, EF_CO_ABORT_TOGGLE);
+    EF_CHECK(dp == NULL);
+    EF_CHECK_EQ(fk_sdo_frames(6, mark, fr, 8), 2); /* nothing after the bad answer */
+    EF_CHECK_EQ(ef_comaster_state(m), EF_COM_RUN);
+    EF_CHECK_EQ(ef_comaster_error(m)->code, 0);
+    d->dl_bad_toggle = 0;
+
+    /* A server abort at the initiate. */
+    d->abort_index = 0x2345;
+    d->abort_sub = 1;
+    d->abort_code = EF_CO_ABORT_NO_OBJECT;
+    EF_CHECK_EQ(ef_comaster_sdo_write(m, 1, 0x2345, 1, pay, 10), EF_OK);
+    EF_CHECK_EQ(fk_sdo_wait(), EF_ERR_PROTO);
+    EF_CHECK_EQ(ef_comaster_sdo_result(m, &ab, NULL, NULL), EF_ERR_PROTO);
+    EF_CHECK_EQ(ab, EF_CO_ABORT_NO_OBJECT);
+    d->abort_index = 0;
+
+    /* A lost segment answer: the retry restarts the transfer from the initiate. */
+    d->dl_drop_seg = 1;
+    mark = F.n_log;
+    uint32_t t0 = m->now_us;
+    EF_CHECK_EQ(ef_comaster_sdo_write(m, 1, 0x2345, 1, pay, 10), EF_OK);
+    EF_CHECK_EQ(fk_sdo_wait(), EF_OK);
+    EF_CHECK_EQ(fk_sdo_frames(6, mark, fr, 8), 5);
+    EF_CHECK(memcmp(fr[2].data, init, 8) == 0);
+    EF_CHECK(memcmp(fr[3].data, seg0, 8) == 0);
+    EF_CHECK(memcmp(fr[4].data, seg1, 8) == 0);
+    EF_CHECK(m->now_us - t0 >= 200000u && m->now_us - t0 < 300000u);
+
+    /* No answer at all to the segments: one retry, then the timeout. */
+    d->dl_drop_seg = 2;
+    mark = F.n_log;
+    t0 = m->now_us;
+    EF_CHECK_EQ(ef_comaster_sdo_write(m, 1, 0x2345, 1, pay, 10), EF_OK);
+    EF_CHECK_EQ(fk_sdo_wait(), EF_ERR_TIMEOUT);
+    EF_CHECK_EQ(ef_comaster_sdo_result(m, &ab, NULL, NULL), EF_ERR_TIMEOUT);
+    EF_CHECK_EQ(ab, 0);
+    EF_CHECK_EQ(fk_sdo_frames(6, mark, fr, 8), 4);
+    EF_CHECK(memcmp(fr[0].data, init, 8) == 0 && memcmp(fr[2].data, init, 8) == 0);
+    EF_CHECK(memcmp(fr[1].data, seg0, 8) == 0 && memcmp(fr[3].data, seg0, 8) == 0);
+    EF_CHECK(m->now_us - t0 >= 400000u && m->now_us - t0 < 500000u);
+    EF_CHECK_EQ(ef_comaster_state(m), EF_COM_RUN);
+    EF_CHECK_EQ(ef_comaster_error(m)->code, 0);
+
+    /* A transfer under way when the master stops goes on through STOPPING into DONE (its
+     * retry is sent there), and after the end the caller still has the client. */
+    d->dl_drop_seg = 1;
+    EF_CHECK_EQ(ef_comaster_sdo_write(m, 1, 0x2345, 1, big, 10), EF_OK);
+    EF_CHECK_EQ(ef_comaster_stop(m), EF_OK);
+    EF_CHECK_EQ(fk_sdo_wait(), EF_OK);
+    EF_CHECK_EQ(ef_comaster_state(m), EF_COM_DONE);
+    EF_CHECK(memcmp(d->dl_buf, big, 10) == 0);
+    EF_CHECK_EQ(ef_comaster_error(m)->code, 0);
+    EF_CHECK_EQ(ef_comaster_sdo_write(m, 1, 0x2345, 1, pay, 10), EF_OK);
+    uint32_t nx = 0;
+    EF_CHECK_EQ(ef_comaster_process(m, 0, &nx), EF_OK);
+    EF_CHECK(nx > 0u && nx <= 200000u); /* the SDO timeout is due then */
+    EF_CHECK_EQ(fk_sdo_wait(), EF_OK);
+    EF_CHECK(memcmp(d->dl_buf, pay, 10) == 0);
+    EF_CHECK_EQ(ef_comaster_sdo_read(m, 0, EF_CO_OBJ_DEVICE_NAME, 0), EF_OK);
+    EF_CHECK_EQ(fk_sdo_wait(), EF_OK);
+    EF_CHECK_EQ(ef_comaster_sdo_result(m, &ab, &dp, &n), EF_OK);
+    EF_CHECK(dp != NULL && n == strlen(FK_NAME) && memcmp(dp, FK_NAME, n) == 0);
+    d->dl_drop_seg = 2; /* and the timeout works there too */
+    EF_CHECK_EQ(ef_comaster_sdo_write(m, 1, 0x2345, 1, pay, 10), EF_OK);
+    EF_CHECK_EQ(fk_sdo_wait(), EF_ERR_TIMEOUT);
+    EF_CHECK_EQ(ef_comaster_state(m), EF_COM_DONE);
+    EF_CHECK_EQ(ef_comaster_error(m)->code, 0);
+}
+
 /* ------------------------------------------------------------------ integration */
 
 static ef_sim_bus_t B;
@@ -885,6 +1109,122 @@ static void t_heartbeat(void)
         EF_CHECK(D[k].power != EF_CO_PS_OP_ENABLED);
 }
 
+/* Step the bus until the caller's SDO transfer is no longer pending; its result. */
+static int sim_sdo_wait(void)
+{
+    int rc = ef_comaster_sdo_result(&M, NULL, NULL, NULL);
+    for (int i = 0; i < 20000 && rc == EF_ERR_AGAIN; i++) {
+        ef_sim_step(&B, 100);
+        rc = ef_comaster_sdo_result(&M, NULL, NULL, NULL);
+    }
+    return rc;
+}
+
+/* Read index:sub of node k through the caller's API; returns the result, data in out/len. */
+static int sim_sdo_read(int k, uint16_t index, uint8_t sub, uint8_t *out, uint32_t *len)
+{
+    *len = 0;
+    EF_CHECK_EQ(ef_comaster_sdo_read(&M, k, index, sub), EF_OK);
+    int rc = sim_sdo_wait();
+    const uint8_t *p = NULL;
+    uint32_t n = 0;
+    EF_CHECK_EQ(ef_comaster_sdo_result(&M, NULL, &p, &n), rc);
+    if (rc == EF_OK && p && n <= EF_COM_SDO_BUF) {
+        memcpy(out, p, n);
+        *len = n;
+    }
+    return rc;
+}
+
+/* The caller's SDO client against real drives in segment mode: an axis record delivered over
+ * SDO by segmented download (0x2100), expedited and segmented reads, aborts, a call while a
+ * transfer is pending; transfers during motion leave the stream alone; one after DONE. */
+static void t_sdo_user(void)
+{
+    seg_moves();
+    ef_com_cfg_t c = sim_cfg(EF_COM_MODE_SEGMENT);
+    sim_setup(&c);
+    EF_CHECK_EQ(ef_sim_run_until(&B, EF_COM_RUN, 3000000, 100), EF_COM_RUN);
+    /* The axis record of the first move (sequence 0, x) in its two 8-byte chunks: the drive
+     * takes 0x2100 chunks over SDO as by RPDO2. */
+    ef_move_t mv = SM[0];
+    mv.seq = 0;
+    uint8_t rec[EF_CO_REC_MAX], ch[8];
+    uint32_t rlen = 0;
+    EF_CHECK_EQ(ef_co_axis_encode(&mv, 0, rec, &rlen), EF_OK);
+    EF_CHECK_EQ(ef_co_chunk_count(rlen), 2);
+    ef_co_chunk(rec, rlen, 0, ch);
+    EF_CHECK_EQ(ef_comaster_sdo_write(&M, 0, EF_CO_OBJ_SEG_AXIS, 0, ch, 8), EF_OK);
+    EF_CHECK_EQ(sim_sdo_wait(), EF_OK);
+    EF_CHECK_EQ(D[0].asm_axis.len, rlen); /* record under way, chunk 1 expected */
+    EF_CHECK_EQ(D[0].asm_axis.next, 1);
+    ef_co_chunk(rec, rlen, 1, ch);
+    EF_CHECK_EQ(ef_comaster_sdo_write(&M, 0, EF_CO_OBJ_SEG_AXIS, 0, ch, 8), EF_OK);
+    EF_CHECK_EQ(sim_sdo_wait(), EF_OK);
+    EF_CHECK_EQ(D[0].have_axis, 1); /* complete: waits for its law record */
+    EF_CHECK_EQ(D[0].axis_seq16, 0);
+    EF_CHECK_EQ(D[0].seg_dropped, 0);
+
+    /* Expedited read; calls while it is pending are refused. */
+    EF_CHECK_EQ(ef_comaster_sdo_read(&M, 1, EF_CO_OBJ_DEVICE_TYPE, 0), EF_OK);
+    EF_CHECK_EQ(ef_comaster_sdo_read(&M, 1, EF_CO_OBJ_DEVICE_TYPE, 0), EF_ERR_STATE);
+    EF_CHECK_EQ(ef_comaster_sdo_write(&M, 0, EF_CO_OBJ_SEG_AXIS, 0, ch, 8), EF_ERR_STATE);
+    EF_CHECK_EQ(ef_comaster_sdo_result(&M, NULL, NULL, NULL), EF_ERR_AGAIN);
+    EF_CHECK_EQ(sim_sdo_wait(), EF_OK);
+    const uint8_t *p = NULL;
+    uint32_t n = 0, ab = 1;
+    EF_CHECK_EQ(ef_comaster_sdo_result(&M, &ab, &p, &n), EF_OK);
+    EF_CHECK_EQ(ab, 0);
+    EF_CHECK(p != NULL && n == 4);
+    if (p && n == 4)
+        EF_CHECK_EQ(ef_co_get32(p), 0x00020192u);
+    /* Segmented read: the device name. */
+    uint8_t buf[EF_COM_SDO_BUF];
+    EF_CHECK_EQ(sim_sdo_read(2, EF_CO_OBJ_DEVICE_NAME, 0, buf, &n), EF_OK);
+    EF_CHECK(n == 18 && memcmp(buf, "evenfeed sim drive", 18) == 0);
+    /* Writes to a read-only object, expedited and segmented: the drive's abort, nothing else. */
+    const uint8_t four[8] = {1, 2, 3, 4, 5, 6, 7, 8};
+    EF_CHECK_EQ(ef_comaster_sdo_write(&M, 0, EF_CO_OBJ_DEVICE_TYPE, 0, four, 4), EF_OK);
+    EF_CHECK_EQ(sim_sdo_wait(), EF_ERR_PROTO);
+    EF_CHECK_EQ(ef_comaster_sdo_result(&M, &ab, &p, &n), EF_ERR_PROTO);
+    EF_CHECK_EQ(ab, 0x06010002u);
+    EF_CHECK_EQ(ef_comaster_sdo_write(&M, 2, EF_CO_OBJ_DEVICE_NAME, 0, four, 8), EF_OK);
+    EF_CHECK_EQ(sim_sdo_wait(), EF_ERR_PROTO);
+    EF_CHECK_EQ(ef_comaster_sdo_result(&M, &ab, NULL, NULL), EF_ERR_PROTO);
+    EF_CHECK_EQ(ab, EF_CO_ABORT_READONLY);
+    EF_CHECK_EQ(ef_comaster_state(&M), EF_COM_RUN);
+    EF_CHECK_EQ(ef_comaster_error(&M)->code, 0);
+
+    /* Stream every move; during motion an abort and a statusword read change nothing. */
+    for (int i = 0; i < SEG_MOVES; i++)
+        EF_CHECK_EQ(ef_comaster_push_move(&M, &SM[i]), EF_OK);
+    ef_sim_run(&B, 1000000, 100);
+    EF_CHECK_EQ(ef_comaster_state(&M), EF_COM_RUN);
+    EF_CHECK(M.running);
+    EF_CHECK(D[0].drv.done_any >= 1);
+    EF_CHECK_EQ(ef_comaster_sdo_write(&M, 1, EF_CO_OBJ_DEVICE_TYPE, 0, four, 4), EF_OK);
+    EF_CHECK_EQ(sim_sdo_wait(), EF_ERR_PROTO);
+    EF_CHECK_EQ(ef_comaster_sdo_result(&M, &ab, NULL, NULL), EF_ERR_PROTO);
+    EF_CHECK_EQ(ab, EF_CO_ABORT_READONLY);
+    EF_CHECK_EQ(sim_sdo_read(1, EF_CO_OBJ_STATUSWORD, 0, buf, &n), EF_OK);
+    EF_CHECK_EQ(n, 2);
+    EF_CHECK_EQ(ef_co_get16(buf) & 0x6Fu, 0x27u); /* operation enabled */
+    EF_CHECK_EQ(ef_comaster_state(&M), EF_COM_RUN);
+    EF_CHECK_EQ(ef_comaster_error(&M)->code, 0);
+    EF_CHECK_EQ(ef_comaster_finish(&M), EF_OK);
+    EF_CHECK_EQ(ef_sim_run_until(&B, EF_COM_DONE, 30000000, 100), EF_COM_DONE);
+    EF_CHECK_EQ(ef_comaster_error(&M)->code, 0);
+    seg_check_end();
+    for (int k = 0; k < 3; k++) {
+        EF_CHECK_EQ(D[k].seg_dups, 0);
+        EF_CHECK_EQ(D[k].seg_dropped, 0);
+        EF_CHECK_EQ(ef_comaster_node(&M, k)->resends, 0);
+    }
+    /* After the end: still usable. */
+    EF_CHECK_EQ(sim_sdo_read(0, EF_CO_OBJ_DEVICE_TYPE, 0, buf, &n), EF_OK);
+    EF_CHECK(n == 4 && ef_co_get32(buf) == 0x00020192u);
+}
+
 int main(int argc, char **argv)
 {
     const char *part = argc > 1 ? argv[1] : "all";
@@ -911,6 +1251,8 @@ int main(int argc, char **argv)
     PART("gobackn", t_gobackn);
     PART("emcy", t_emcy);
     PART("heartbeat", t_heartbeat);
+    PART("sdo_segdl_fake", t_sdo_segdl_fake);
+    PART("sdo_user", t_sdo_user);
 #undef PART
     if (!any) {
         fprintf(stderr, "unknown part %s\n", part);

@@ -22,13 +22,17 @@
 /** SDO command bytes (CiA 301). */
 #define SDO_DL_INIT   0x20u /**< download initiate (client) */
 #define SDO_DL_RESP   0x60u /**< download initiate response (server) */
+#define SDO_DL_SEG    0x00u /**< download segment (client; + toggle << 4, n << 1, c) */
+#define SDO_DL_ACK    0x20u /**< download segment response (server; + toggle << 4) */
 #define SDO_UL_INIT   0x40u /**< upload initiate (both; server adds n/e/s bits) */
 #define SDO_UL_SEG    0x60u /**< upload segment request (client; + toggle << 4) */
 #define SDO_CS_MASK   0xE0u /**< command specifier bits */
 #define SDO_TOGGLE    0x10u /**< toggle bit of segment frames */
 #define SDO_EXPEDITED 0x02u /**< e bit */
 #define SDO_SIZED     0x01u /**< s bit */
-#define SDO_LAST      0x01u /**< c bit of a segment response */
+#define SDO_LAST      0x01u /**< c bit of a segment (no more segments) */
+/** Data bytes of one SDO segment. */
+#define SDO_SEG_BYTES 7u
 /** TPDO1 lengths per mode. */
 #define COM_TPDO1_CSP_LEN 6u
 #define COM_TPDO1_SEG_LEN 8u
@@ -289,7 +293,10 @@ static void com_sdo_request(ef_comaster_t *m)
     uint8_t d[8] = {0};
     ef_co_put16(&d[1], m->sdo_index);
     d[3] = m->sdo_sub;
-    if (m->sdo_write) {
+    if (m->sdo_write && m->sdo_len > 4u) {
+        d[0] = (uint8_t)(SDO_DL_INIT | SDO_SIZED); /* segmented: the size, then segments */
+        ef_co_put32(&d[4], m->sdo_len);
+    } else if (m->sdo_write) {
         d[0] = (uint8_t)(SDO_DL_INIT | ((4u - m->sdo_len) << 2) | SDO_EXPEDITED | SDO_SIZED);
         ef_co_put32(&d[4], m->sdo_value);
     } else {
@@ -302,10 +309,26 @@ static void com_sdo_request(ef_comaster_t *m)
     com_send(m, EF_CO_COB_SDO_RX + m->sdo_node, d, 8);
 }
 
+/* Segmented download: send the next segment (sdo_got counts the bytes sent with it). */
+static void com_sdo_dl_seg(ef_comaster_t *m)
+{
+    uint32_t left = m->sdo_len - m->sdo_got;
+    uint32_t n = left < SDO_SEG_BYTES ? left : SDO_SEG_BYTES;
+    uint8_t d[8] = {0};
+    d[0] = (uint8_t)(SDO_DL_SEG | (m->sdo_toggle ? SDO_TOGGLE : 0u) | ((SDO_SEG_BYTES - n) << 1) |
+                     (n == left ? SDO_LAST : 0u));
+    for (uint32_t i = 0; i < n; i++)
+        d[1 + i] = m->sdo_buf[m->sdo_got + i];
+    m->sdo_got += n;
+    m->sdo_t0_us = m->now_us;
+    com_send(m, EF_CO_COB_SDO_RX + m->sdo_node, d, 8);
+}
+
 /* Begin configuration step op of node k. */
 static void com_sdo_start(ef_comaster_t *m, int k, const com_op_t *op)
 {
     m->sdo_busy = 1;
+    m->sdo_user = 0;
     m->sdo_node = m->cfg.nodes[k];
     m->sdo_index = op->index;
     m->sdo_sub = op->sub;
@@ -316,11 +339,17 @@ static void com_sdo_start(ef_comaster_t *m, int k, const com_op_t *op)
     com_sdo_request(m);
 }
 
-/* An SDO failure of node cur: the error names the node and the object. */
+/* An SDO failure: the caller's transfer keeps it as its result; at CONFIG (node cur) it is the
+ * master's error, naming the node and the object. */
 static void com_sdo_fail(ef_comaster_t *m, int code, uint32_t abort)
 {
     int k = m->cur;
     m->sdo_busy = 0;
+    if (m->sdo_user) {
+        m->sdo_rc = code;
+        m->sdo_abort = abort;
+        return;
+    }
     if (m->cfg_restart) {
         /* The node rebooted under us: its answer (or silence) means nothing; start over. */
         m->cfg_restart = 0;
@@ -333,11 +362,16 @@ static void com_sdo_fail(ef_comaster_t *m, int code, uint32_t abort)
     com_enter_stop(m);
 }
 
-/* The pending transfer completed: check / keep its value, then the next step. */
+/* The pending transfer completed: the caller's is done; a configuration step checks / keeps
+ * its value, then the next step follows. */
 static void com_sdo_done(ef_comaster_t *m)
 {
     int k = m->cur;
     m->sdo_busy = 0;
+    if (m->sdo_user) {
+        m->sdo_rc = EF_OK;
+        return;
+    }
     if (m->cfg_restart) {
         m->cfg_restart = 0;
         m->op = 0;
@@ -384,7 +418,26 @@ static void com_sdo_done(ef_comaster_t *m)
     m->op++;
 }
 
-/* An SDO answer from the node being configured. */
+/* Segmented download: a segment confirmed (toggle checked); the next one, or done. */
+static void com_sdo_dl_ack(ef_comaster_t *m, uint8_t cmd)
+{
+    if ((cmd & SDO_CS_MASK) != SDO_DL_ACK) {
+        com_sdo_fail(m, EF_ERR_PROTO, 0);
+        return;
+    }
+    if (((cmd & SDO_TOGGLE) != 0) != (m->sdo_toggle != 0)) {
+        com_sdo_fail(m, EF_ERR_PROTO, EF_CO_ABORT_TOGGLE);
+        return;
+    }
+    if (m->sdo_got >= m->sdo_len) {
+        com_sdo_done(m);
+        return;
+    }
+    m->sdo_toggle ^= 1u;
+    com_sdo_dl_seg(m);
+}
+
+/* An SDO answer from the node of the pending transfer. */
 static void com_sdo_rx(ef_comaster_t *m, const ef_can_frame_t *f)
 {
     const uint8_t *d = f->data;
@@ -399,8 +452,16 @@ static void com_sdo_rx(ef_comaster_t *m, const ef_can_frame_t *f)
         return;
     }
     if (m->sdo_write) {
+        if (m->sdo_got > 0u) { /* segmented, a segment sent: its confirmation */
+            com_sdo_dl_ack(m, cmd);
+            return;
+        }
         if (cmd != SDO_DL_RESP || !echo) {
             com_sdo_fail(m, EF_ERR_PROTO, 0);
+            return;
+        }
+        if (m->sdo_len > 4u) {
+            com_sdo_dl_seg(m); /* initiate confirmed: the first segment (toggle 0) */
             return;
         }
         com_sdo_done(m);
@@ -455,7 +516,19 @@ static void com_sdo_rx(ef_comaster_t *m, const ef_can_frame_t *f)
     com_sdo_fail(m, EF_ERR_PROTO, 0);
 }
 
-/* SDO timeout: one retry of the whole transfer, then an error naming node and object. */
+/* An SDO answer for the pending transfer from node q: it must have 8 bytes. */
+static void com_sdo_frame(ef_comaster_t *m, ef_com_node_t *q, const ef_can_frame_t *f)
+{
+    if (f->dlc != 8u) {
+        q->rx_bad++;
+        com_sdo_fail(m, EF_ERR_PROTO, 0);
+        return;
+    }
+    com_sdo_rx(m, f);
+}
+
+/* SDO timeout: one retry of the whole transfer, then the transfer fails (at CONFIG an error
+ * naming node and object). */
 static void com_sdo_timer(ef_comaster_t *m)
 {
     if (!m->sdo_busy)
@@ -492,7 +565,8 @@ static void com_enter_final(ef_comaster_t *m)
 {
     m->state = (uint8_t)(m->err.code ? EF_COM_ERROR : EF_COM_DONE);
     m->sync_on = 0;
-    m->sdo_busy = 0;
+    if (!m->sdo_user)
+        m->sdo_busy = 0; /* a configuration step ends; the caller's transfer goes on */
 }
 
 /* Controlled stop: quick stop every enabled node while SYNC keeps running (drives move
@@ -509,7 +583,8 @@ static void com_enter_stop(ef_comaster_t *m)
     m->step = 0;
     m->t_step_us = m->now_us;
     m->mark_sync = m->sync_count;
-    m->sdo_busy = 0;
+    if (!m->sdo_user)
+        m->sdo_busy = 0;
 }
 
 /* Whether node k's latest TPDO1 reports the drive after the current wait began. */
@@ -1059,8 +1134,15 @@ int ef_comaster_rx(ef_comaster_t *m, const ef_can_frame_t *f)
     m->rx_frames++;
     if (f->flags & (EF_CAN_FLAG_RTR | EF_CAN_FLAG_EFF))
         return EF_OK;
-    if (m->state == EF_COM_IDLE || m->state == EF_COM_DONE || m->state == EF_COM_ERROR)
+    if (m->state == EF_COM_IDLE)
         return EF_OK;
+    if (m->state == EF_COM_DONE || m->state == EF_COM_ERROR) {
+        /* After the end only the caller's SDO transfer goes on; everything else is ignored. */
+        int j = com_node_of(m, m->sdo_node);
+        if (m->sdo_busy && j >= 0 && f->id == EF_CO_COB_SDO_TX + m->sdo_node)
+            com_sdo_frame(m, &m->node[j], f);
+        return EF_OK;
+    }
     int before = m->err.code;
     uint32_t fn = f->id & 0x780u, id = f->id & 0x7Fu;
     int k = com_node_of(m, id);
@@ -1084,12 +1166,7 @@ int ef_comaster_rx(ef_comaster_t *m, const ef_can_frame_t *f)
             q->rx_bad++; /* nothing asked: a late answer to a retried request */
             break;
         }
-        if (f->dlc != 8u) {
-            q->rx_bad++;
-            com_sdo_fail(m, EF_ERR_PROTO, 0);
-            break;
-        }
-        com_sdo_rx(m, f);
+        com_sdo_frame(m, q, f);
         break;
     case EF_CO_COB_TPDO2:
         q->rx_bad++; /* disabled in every layout */
@@ -1110,6 +1187,7 @@ static void com_timers(ef_comaster_t *m, uint32_t dt_us)
         ef_com_node_t *q = &m->node[k];
         q->hb_age_us = (q->hb_age_us + dt_us < q->hb_age_us) ? 0xFFFFFFFFu : q->hb_age_us + dt_us;
     }
+    com_sdo_timer(m); /* the configuration step or the caller's transfer */
     switch (m->state) {
     case EF_COM_BOOT:
         if (m->step == 0) {
@@ -1128,7 +1206,6 @@ static void com_timers(ef_comaster_t *m, uint32_t dt_us)
                 }
         return;
     case EF_COM_CONFIG:
-        com_sdo_timer(m);
         return;
     case EF_COM_START:
         if (ef_time_reached(now, m->t_step_us + m->cfg.enable_timeout_ms * 1000u))
@@ -1209,11 +1286,20 @@ int ef_comaster_process(ef_comaster_t *m, uint32_t dt_us, uint32_t *next_us)
             }
         }
         com_advance(m);
+    } else if (m->state != EF_COM_IDLE) {
+        /* DONE / ERROR: frames still queued go out; the caller's SDO transfer goes on. */
+        com_flush(m);
+        com_sdo_timer(m);
     }
     if (next_us) {
         uint32_t nx = 0xFFFFFFFFu;
         if (m->state == EF_COM_DONE || m->state == EF_COM_ERROR || m->state == EF_COM_IDLE) {
             nx = m->txq_count ? COM_RETRY_US : 0xFFFFFFFFu;
+            if (m->sdo_busy) {
+                uint32_t due = m->sdo_t0_us + m->cfg.sdo_timeout_ms * 1000u;
+                uint32_t s = ef_time_reached(m->now_us, due) ? 0u : due - m->now_us;
+                nx = s < nx ? s : nx;
+            }
         } else {
             nx = 10000u; /* timers are coarse (ms): look at them at least this often */
             if (m->sync_on) {
@@ -1355,4 +1441,87 @@ int ef_comaster_bus_error(ef_comaster_t *m, uint32_t detail)
         return EF_ERR_ARG;
     com_bus_fail(m, detail);
     return EF_OK;
+}
+
+/* Whether the caller may start an SDO transfer: nothing pending, bring-up over. */
+static int com_sdo_user_ok(const ef_comaster_t *m)
+{
+    int st = m->state;
+    return !m->sdo_busy && (st == EF_COM_RUN || st == EF_COM_DONE || st == EF_COM_ERROR);
+}
+
+/* Begin the caller's transfer to node k (fields of the direction already set). */
+static void com_sdo_user_start(ef_comaster_t *m, int k, uint16_t index, uint8_t sub)
+{
+    m->sdo_busy = 1;
+    m->sdo_user = 1;
+    m->sdo_rc = EF_ERR_AGAIN;
+    m->sdo_abort = 0;
+    m->sdo_node = m->cfg.nodes[k];
+    m->sdo_index = index;
+    m->sdo_sub = sub;
+    m->sdo_tries = 1;
+    com_sdo_request(m);
+}
+
+/* Caller's download: expedited up to 4 bytes, segmented above (data copied to sdo_buf). */
+int ef_comaster_sdo_write(ef_comaster_t *m, int k, uint16_t index, uint8_t sub, const uint8_t *data,
+                          uint32_t len)
+{
+    if (!m || !data || k < 0 || k >= m->cfg.n_nodes || len == 0u || len > EF_COM_SDO_BUF)
+        return EF_ERR_ARG;
+    if (!com_sdo_user_ok(m))
+        return EF_ERR_STATE;
+    uint32_t v = 0;
+    for (uint32_t i = 0; i < len; i++) {
+        m->sdo_buf[i] = data[i];
+        if (i < 4u)
+            v |= (uint32_t)data[i] << (8u * i);
+    }
+    m->sdo_write = 1;
+    m->sdo_value = v;
+    m->sdo_len = len;
+    com_sdo_user_start(m, k, index, sub);
+    return EF_OK;
+}
+
+/* Caller's upload: expedited or segmented, as the server answers. */
+int ef_comaster_sdo_read(ef_comaster_t *m, int k, uint16_t index, uint8_t sub)
+{
+    if (!m || k < 0 || k >= m->cfg.n_nodes)
+        return EF_ERR_ARG;
+    if (!com_sdo_user_ok(m))
+        return EF_ERR_STATE;
+    m->sdo_write = 0;
+    m->sdo_value = 0;
+    m->sdo_len = 0;
+    com_sdo_user_start(m, k, index, sub);
+    return EF_OK;
+}
+
+/* Outcome of the caller's last transfer (a read's data from sdo_buf). */
+int ef_comaster_sdo_result(const ef_comaster_t *m, uint32_t *abort, const uint8_t **data,
+                           uint32_t *len)
+{
+    if (abort)
+        *abort = 0;
+    if (data)
+        *data = 0;
+    if (len)
+        *len = 0;
+    if (!m)
+        return EF_ERR_ARG;
+    if (!m->sdo_user)
+        return EF_ERR_STATE;
+    if (m->sdo_busy)
+        return EF_ERR_AGAIN;
+    if (abort)
+        *abort = m->sdo_abort;
+    if (m->sdo_rc == EF_OK && !m->sdo_write) {
+        if (data)
+            *data = m->sdo_buf;
+        if (len)
+            *len = m->sdo_got < EF_COM_SDO_BUF ? m->sdo_got : EF_COM_SDO_BUF;
+    }
+    return m->sdo_rc;
 }

@@ -8,6 +8,7 @@
 #include <string.h>
 #include <unistd.h>
 #include "cli.h"
+#include "evenfeed/host/ef_canload.h"
 #include "evenfeed/host/ef_mb.h"
 
 /* Generated from samples/NAME.ngc by host/CMakeLists.txt. */
@@ -120,6 +121,55 @@ static int ef_demo_stream(void)
     return 0;
 }
 
+/* The profile over CANopen to three drives on an in-process bus: segment mode and CSP, with
+ * the bus load of each (the firmware master and drives; no CAN kernel needed). */
+static int ef_demo_can(void)
+{
+    printf(
+        "\n== samples/profile.ngc over CANopen to three simulated CiA 402 drives (one per axis),\n"
+        "   the firmware master and drives on an in-process bus at 1 Mbit/s (ctest -R hil_can\n"
+        "   runs them over SocketCAN on a real vcan bus in User-Mode Linux)\n");
+    fflush(stdout);
+    static ef_gcode_t r;
+    ef_msg_t m = {{0}};
+    ef_pipe_cfg_t pc;
+    ef_pipe_cfg_default(&pc);
+    pc.g2 = ef_cli_default_table(EF_TABLE_G2_QUINTIC);
+    pc.g1 = ef_cli_default_table(EF_TABLE_G1_CUBIC);
+    pc.period_us = 1000; /* the CSP cycle */
+    ef_canload_path_t path;
+    int rc = ef_gcode_init(&r, ef_sample_profile, (size_t)ef_sample_profile_len, "profile.ngc");
+    if (rc == EF_OK)
+        rc = ef_canload_path(&r, &pc, &path, &m);
+    ef_gcode_free(&r);
+    if (rc != EF_OK)
+        return ef_cli_error(rc, "demo: can: %s", m.text);
+    ef_canload_result_t res[2];
+    static const int modes[2] = {EF_COM_MODE_SEGMENT, EF_COM_MODE_CSP};
+    static const char *names[2] = {"segment mode", "CSP at 1 kHz"};
+    for (int i = 0; i < 2 && rc == EF_OK; i++) {
+        rc = ef_canload_run(&path, modes[i], 1000000u, &res[i], &m);
+        if (rc != EF_OK)
+            break;
+        const ef_canload_result_t *q = &res[i];
+        if (modes[i] == EF_COM_MODE_SEGMENT)
+            printf("%-16s %zu segments; executed by each drive: %u %u %u\n", names[i], path.nmv,
+                   q->executed[0], q->executed[1], q->executed[2]);
+        else
+            printf("%-16s %zu targets, one per drive per SYNC\n", names[i], path.nsp);
+        printf("                 at rest %.4f mm from the end, following error max %.4f mm,"
+               " bus %.1f kbit/s (%.1f %%), %.0f frames\n",
+               q->end_err, q->ferr_max, q->bits / q->seconds * 1e-3, q->bits / q->seconds * 1e-4,
+               q->frames);
+    }
+    ef_canload_path_free(&path);
+    if (rc != EF_OK)
+        return ef_cli_error(rc, "demo: can: %s", m.text);
+    printf("segment mode needs 1/%.1f of CSP's bus load (docs/benchmarks-can.md)\n",
+           (res[1].bits / res[1].seconds) / (res[0].bits / res[0].seconds));
+    return 0;
+}
+
 int ef_cmd_demo(int argc, char **argv)
 {
     const char *svg = "evenfeed-demo.svg";
@@ -153,5 +203,8 @@ int ef_cmd_demo(int argc, char **argv)
     rc = ef_demo_one(ef_sample_profile, ef_sample_profile_len, "profile.ngc", svg2);
     if (rc)
         return rc;
-    return ef_demo_stream();
+    rc = ef_demo_stream();
+    if (rc)
+        return rc;
+    return ef_demo_can();
 }

@@ -51,6 +51,20 @@
  * (go-back-N; the drive ignores duplicates). Execution starts (controlword bit 4 to every
  * node in one SYNC) once cfg.prefill segments are acknowledged or finish() was called.
  *
+ * ## SDO client
+ * One transfer at a time, to the node it names: expedited upload and download (up to 4
+ * bytes), segmented upload (the server chooses), segmented download (more than 4 bytes:
+ * initiate with the size indicated (s = 1, e = 0, size in bytes 4..7), the server confirms,
+ * then segments of up to 7 bytes, the toggle bit starting at 0, each confirmed with the same
+ * toggle; the last one carries c = 1). Every request waits sdo_timeout_ms for its answer; one
+ * retry follows, which restarts the whole transfer from its initiate. A server abort is
+ * ::EF_ERR_PROTO with its code; a wrong toggle bit in an answer ::EF_ERR_PROTO (abort
+ * ::EF_CO_ABORT_TOGGLE), any other unexpected answer ::EF_ERR_PROTO (abort 0).
+ * At CONFIG the master owns the client (its failures are the master's error, naming node and
+ * object). In RUN, DONE and ERROR the caller may use it (ef_comaster_sdo_write(),
+ * ef_comaster_sdo_read(), ef_comaster_sdo_result()); such a transfer continues through FINISH
+ * and STOPPING, and its failure is the caller's only: no master error, no stop.
+ *
  * Non-blocking: ef_comaster_rx() per received frame, ef_comaster_process(m, dt_us,
  * &next_us) for time (wrap-safe differences of a free-running microsecond counter).
  * The port's send must not call ef_comaster_rx() itself (queue received frames instead).
@@ -101,7 +115,8 @@ extern "C" {
 #ifndef EF_COM_TXQ
 #define EF_COM_TXQ 64
 #endif
-/** Longest segmented SDO upload kept (the device name; longer data is read and cut). */
+/** SDO client buffer: the longest upload kept (the device name; longer data is read and
+ *  cut) and the longest download (ef_comaster_sdo_write()). */
 #ifndef EF_COM_SDO_BUF
 #define EF_COM_SDO_BUF 32
 #endif
@@ -228,6 +243,10 @@ typedef struct {
     uint32_t sdo_value, sdo_len, sdo_got;
     uint8_t sdo_buf[EF_COM_SDO_BUF];
     uint32_t sdo_t0_us;
+    uint8_t sdo_user; /**< private: the pending / last transfer is the caller's */
+    uint8_t sdo_pad[3];
+    int32_t sdo_rc;     /**< private: outcome of the caller's last transfer */
+    uint32_t sdo_abort; /**< private: its abort code (0: none) */
     /* CSP. */
     float tq[EF_COM_TARGETQ][EF_COM_MAX_NODES];
     uint32_t tq_head, tq_count;
@@ -274,7 +293,8 @@ typedef struct {
 int ef_comaster_init(ef_comaster_t *m, const ef_com_cfg_t *c, const ef_can_port_t *port);
 
 /**
- * @brief Handle one received frame.
+ * @brief Handle one received frame (in DONE and ERROR only the answers to the caller's SDO
+ * transfer).
  * @retval EF_OK  (unexpected frames are counted, not errors, unless they are an error's cause)
  * @retval EF_ERR_ARG NULL
  * @retval <0     the error this frame caused (also kept: ef_comaster_error())
@@ -282,7 +302,8 @@ int ef_comaster_init(ef_comaster_t *m, const ef_com_cfg_t *c, const ef_can_port_
 int ef_comaster_rx(ef_comaster_t *m, const ef_can_frame_t *f);
 
 /**
- * @brief Advance time: timeouts, SDO sequence, SYNC and PDOs when due, TX retries.
+ * @brief Advance time: timeouts, SDO sequence, SYNC and PDOs when due, TX retries (in DONE
+ * and ERROR only TX retries and the caller's SDO transfer).
  * @param next_us out (may be NULL): when to call again at the latest (the next SYNC or
  *                timeout)
  * @retval EF_OK
@@ -351,6 +372,47 @@ int ef_comaster_stop(ef_comaster_t *m);
  * @retval EF_ERR_ARG NULL
  */
 int ef_comaster_bus_error(ef_comaster_t *m, uint32_t detail);
+
+/**
+ * @brief Start an SDO download of len bytes to object index:sub of node k (0-based index
+ * into cfg.nodes): expedited for up to 4 bytes, segmented otherwise. The data is copied;
+ * ef_comaster_sdo_result() tells the outcome.
+ * @retval EF_OK        started
+ * @retval EF_ERR_ARG   NULL m or data, k not 0..n_nodes-1, len 0 or above ::EF_COM_SDO_BUF
+ * @retval EF_ERR_STATE a transfer is pending, or the master is not in RUN, DONE or ERROR
+ *                      (during bring-up the master owns the SDO client)
+ */
+int ef_comaster_sdo_write(ef_comaster_t *m, int k, uint16_t index, uint8_t sub, const uint8_t *data,
+                          uint32_t len);
+
+/**
+ * @brief Start an SDO upload of object index:sub of node k (0-based index into cfg.nodes):
+ * expedited or segmented, as the server answers; data beyond ::EF_COM_SDO_BUF bytes is read
+ * and cut. ef_comaster_sdo_result() tells the outcome and gives the data.
+ * @retval EF_OK        started
+ * @retval EF_ERR_ARG   NULL m, k not 0..n_nodes-1
+ * @retval EF_ERR_STATE a transfer is pending, or the master is not in RUN, DONE or ERROR
+ */
+int ef_comaster_sdo_read(ef_comaster_t *m, int k, uint16_t index, uint8_t sub);
+
+/**
+ * @brief Outcome of the last transfer started by ef_comaster_sdo_write() or
+ * ef_comaster_sdo_read(). A failure is the caller's only: it is not the master's error
+ * (ef_comaster_error()) and does not stop motion. Every out pointer may be NULL.
+ * @param abort out: the server's abort code (::EF_CO_ABORT_TOGGLE for a wrong toggle bit in
+ *              an answer), 0 otherwise
+ * @param data  out: a read's bytes (valid until the next transfer starts); NULL otherwise
+ * @param len   out: their count (at most ::EF_COM_SDO_BUF); 0 otherwise
+ * @retval EF_OK          done (a read's data in data/len)
+ * @retval EF_ERR_AGAIN   pending: call ef_comaster_process() / ef_comaster_rx() on
+ * @retval EF_ERR_PROTO   the server aborted (code in *abort), or a malformed answer or wrong
+ *                        toggle bit
+ * @retval EF_ERR_TIMEOUT no answer, also not to the one retry
+ * @retval EF_ERR_STATE   no such transfer was started
+ * @retval EF_ERR_ARG     NULL m
+ */
+int ef_comaster_sdo_result(const ef_comaster_t *m, uint32_t *abort, const uint8_t **data,
+                           uint32_t *len);
 
 #ifdef __cplusplus
 }

@@ -1,6 +1,7 @@
 /*
- * In-memory CAN bus for tests and benchmarks: one ef_comaster and up to EF_SIM_MAX_DRIVES
- * ef_codrive objects on a simulated bus with microsecond time.
+ * In-memory CAN bus for tests, the bus-load benchmark and the demo (ef_canload.h): one
+ * ef_comaster and up to EF_SIM_MAX_DRIVES ef_codrive objects on a simulated bus with
+ * microsecond time. Header-only on the firmware headers, so firmware-only tests use it too.
  *
  * Every frame a participant sends is queued on the bus and later delivered to every other
  * participant (never back to its sender), in send order. With bitrate 0 the bus is
