@@ -1,12 +1,13 @@
 #!/bin/sh
-# Fuzz the table parser, the G-code reader and the runtime chain (smoother, planner,
-# interpolator) with libFuzzer for a fixed time.
+# Fuzz the table parser, the G-code reader, the runtime chain (smoother, planner,
+# interpolator) and the CANopen frame handling (drive and master) with libFuzzer for a
+# fixed time.
 #
 #   tests/fuzz/run.sh [SECONDS [BUILD_DIR]]     default 60 s, build-fuzz
 #
 # Configures its own clang build directory (BUILD_DIR, or $EF_FUZZ_BUILD), builds
-# fuzz_table_parse, fuzz_gcode and fuzz_smooth (-fsanitize=fuzzer,address,undefined), and
-# fuzzes each for a third of SECONDS (EF_FUZZ_TARGETS="table", "gcode" or "smooth" picks
+# fuzz_table_parse, fuzz_gcode, fuzz_smooth and fuzz_canopen (-fsanitize=fuzzer,address,undefined), and
+# fuzzes each for an equal share of SECONDS (EF_FUZZ_TARGETS="table", "gcode", "smooth" or "can" picks
 # some, which then share all of it), on a working copy of its seed corpus kept in that build directory, so coverage
 # accumulates across runs while the checked-in corpora stay as they are. Crash reproducers
 # go to $EF_FUZZ_BUILD/artifacts/; the script exits nonzero when a fuzzer finds one.
@@ -25,11 +26,11 @@ mkdir -p "$build"
 build=$(cd "$build" && pwd)
 jobs=${EF_FUZZ_JOBS:-1}
 cc=${CC:-clang}
-targets=${EF_FUZZ_TARGETS:-table gcode smooth}
+targets=${EF_FUZZ_TARGETS:-table gcode smooth can}
 
 cmake -S "$root" -B "$build" -G Ninja -DCMAKE_C_COMPILER="$cc" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     -DEF_FUZZ=ON -DEF_WERROR=ON >/dev/null
-ninja -C "$build" fuzz_table_parse fuzz_gcode fuzz_smooth
+ninja -C "$build" fuzz_table_parse fuzz_gcode fuzz_smooth fuzz_canopen
 mkdir -p "$build/artifacts"
 n=0
 for t in $targets; do n=$((n + 1)); done
@@ -68,7 +69,8 @@ for t in $targets; do
     table) fuzz fuzz_table_parse "$root/tests/fuzz/corpus" "$build/fuzz-corpus" || status=$? ;;
     gcode) fuzz fuzz_gcode "$root/tests/fuzz/corpus_gcode" "$build/fuzz-corpus-gcode" || status=$? ;;
     smooth) fuzz fuzz_smooth "$root/tests/fuzz/corpus_smooth" "$build/fuzz-corpus-smooth" || status=$? ;;
-    *) echo "unknown fuzz target '$t' (table, gcode, smooth)" >&2; exit 2 ;;
+    can) fuzz fuzz_canopen "$root/tests/fuzz/corpus_canopen" "$build/fuzz-corpus-canopen" || status=$? ;;
+    *) echo "unknown fuzz target '$t' (table, gcode, smooth, can)" >&2; exit 2 ;;
     esac
 done
 exit "$status"
