@@ -17,7 +17,7 @@
  * to rest under control (no step in the commanded speed beyond the stop ramp).
  *
  * Usage: test_can_hil EVENFEED SRC_DIR OUT_DIR PART
- *   PART: csp | segment | drop | emcy | heartbeat | busoff | boot
+ *   PART: csp | segment | drop | emcy | heartbeat | busoff | boot | start
  */
 #include <errno.h>
 #include <math.h>
@@ -704,6 +704,39 @@ static void part_fault(const char *kind)
     hil_strace_free(&S);
 }
 
+/* Drives that are not where the program starts: refused before any motion, naming both
+ * positions; no drive's command moved. */
+static void part_start(void)
+{
+    char prog[512];
+    snprintf(prog, sizeof prog, "%s/samples/profile.ngc", g_src);
+    tm_proc_t d[4] = {{0}};
+    hil_drives_t x = {{NULL}};
+    x.extra[1] = "--home 5";
+    if (hil_start(d, &x) != 0) {
+        EF_CHECK(0);
+        hil_stop(d);
+        return;
+    }
+    int rc = hil_stream("start", "segment", "1,2,3", NULL, prog);
+    hil_stop(d);
+    EF_CHECK(rc != 0);
+    EF_CHECK(hil_err_has("start", "the path starts at", "5.0000"));
+    for (int node = 1; node <= 3; node++) {
+        hil_dtrace_t T;
+        EF_CHECK_EQ(hil_dtrace_load(node, &T), 0);
+        double lo = INFINITY, hi = -INFINITY;
+        for (size_t i = 0; i < T.np; i++) {
+            lo = fmin(lo, T.p[i].cmd);
+            hi = fmax(hi, T.p[i].cmd);
+        }
+        printf("start: node %d: %zu SYNC steps, command stayed within [%.6f, %.6f]\n", node, T.np,
+               T.np ? lo : 0.0, T.np ? hi : 0.0);
+        EF_CHECK(T.np == 0 || hi - lo < 1e-6);
+        hil_dtrace_free(&T);
+    }
+}
+
 /* A node that never boots is named; nothing is enabled. */
 static void part_boot(void)
 {
@@ -744,6 +777,8 @@ int main(int argc, char **argv)
         part_fault(part);
     else if (!strcmp(part, "boot"))
         part_boot();
+    else if (!strcmp(part, "start"))
+        part_start();
     else {
         fprintf(stderr, "unknown part %s\n", part);
         return 2;
