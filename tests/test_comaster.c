@@ -1047,6 +1047,67 @@ static void t_gobackn(void)
     EF_CHECK(M.resends >= 1); /* both losses fall in one go-back-N window */
 }
 
+/* Drop hook: chunk 0 of the axis records of segments 8, 11, 14, 17 and 20 to node 2, the
+ * first time each is sent (its bytes 1..2 are the record's sequence number): five losses
+ * far enough apart to need five go-back-N rounds, each of which recovers. */
+static uint32_t drop_seen;
+static int drop_spread(void *ctx, const ef_can_frame_t *f, int src, uint64_t n)
+{
+    (void)ctx;
+    (void)src;
+    (void)n;
+    if (f->id != EF_CO_COB_RPDO2 + 2 || (f->data[0] & 0x0F) != 0)
+        return 0;
+    uint32_t seq = ef_co_get16(&f->data[1]);
+    if (seq < 8 || seq > 20 || (seq - 8) % 3 != 0 || (drop_seen & (1u << seq)))
+        return 0;
+    drop_seen |= 1u << seq;
+    return 1;
+}
+
+/* Drop hook: every axis chunk to node 2 from sequence nibble 3 on (a node that never gets
+ * its records). */
+static int drop_all(void *ctx, const ef_can_frame_t *f, int src, uint64_t n)
+{
+    (void)ctx;
+    (void)src;
+    (void)n;
+    return f->id == EF_CO_COB_RPDO2 + 2 && (f->data[0] >> 4) >= 3;
+}
+
+/* Go-back-N gives up only after max_resends rounds in a row without progress: many
+ * recovered losses in one program are fine; a node that never advances is an error. */
+static void t_resend_limit(void)
+{
+    seg_moves();
+    ef_com_cfg_t c = sim_cfg(EF_COM_MODE_SEGMENT);
+    c.max_resends = 1;
+    sim_setup(&c);
+    drop_seen = 0;
+    B.drop = drop_spread;
+    EF_CHECK_EQ(ef_sim_run_until(&B, EF_COM_RUN, 3000000, 100), EF_COM_RUN);
+    EF_CHECK_EQ(seg_stream(SEG_MOVES, 30000000, NULL), EF_COM_DONE);
+    EF_CHECK_EQ(ef_comaster_error(&M)->code, 0);
+    seg_check_end();
+    printf("resend limit: %llu chunks lost, %u go-back-N rounds in all (limit 1 in a row)\n",
+           (unsigned long long)B.dropped, M.resends);
+    EF_CHECK_EQ(B.dropped, 5);
+    EF_CHECK(M.resends > 1);
+
+    seg_moves();
+    c = sim_cfg(EF_COM_MODE_SEGMENT);
+    c.max_resends = 3;
+    sim_setup(&c);
+    B.drop = drop_all;
+    EF_CHECK_EQ(ef_sim_run_until(&B, EF_COM_RUN, 3000000, 100), EF_COM_RUN);
+    EF_CHECK_EQ(seg_stream(SEG_MOVES, 30000000, NULL), EF_COM_ERROR);
+    const ef_com_error_t *e = ef_comaster_error(&M);
+    EF_CHECK_EQ(e->code, EF_ERR_PROTO);
+    EF_CHECK_EQ(e->what, EF_COM_WHAT_STREAM);
+    EF_CHECK_EQ(e->value, 3); /* the oldest segment node 2 never got */
+    EF_CHECK_EQ(M.resends, 4);
+}
+
 static void emcy_mid(uint32_t t)
 {
     if (t == 2000000)
@@ -1249,6 +1310,7 @@ int main(int argc, char **argv)
     PART("csp", t_csp);
     PART("seg", t_seg);
     PART("gobackn", t_gobackn);
+    PART("resend_limit", t_resend_limit);
     PART("emcy", t_emcy);
     PART("heartbeat", t_heartbeat);
     PART("sdo_segdl_fake", t_sdo_segdl_fake);

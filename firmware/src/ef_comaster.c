@@ -605,6 +605,7 @@ static void com_enter_run(ef_comaster_t *m)
     m->running = 0;
     m->seg_cap = EF_COM_SEGQ;
     for (int k = 0; k < m->cfg.n_nodes; k++) {
+        m->resend_run[k] = 0;
         m->node[k].next_seq = 0;
         m->last_progress_sync[k] = m->sync_count;
         if (m->node[k].free < m->seg_cap)
@@ -859,12 +860,17 @@ static void com_gobackn(ef_comaster_t *m)
             continue;
         q->resends++;
         m->last_progress_sync[k] = m->sync_count;
-        stalled = 1;
+        /* Only rounds without progress count towards giving up: a long program on a lossy
+         * or slow bus may need many rounds in all, each of which recovered. */
+        if (++m->resend_run[k] > m->cfg.max_resends)
+            stalled = 2;
+        else if (!stalled)
+            stalled = 1;
     }
     if (!stalled)
         return;
     m->resends++;
-    if (m->resends > m->cfg.max_resends) {
+    if (stalled == 2) {
         com_error(m, EF_ERR_PROTO, EF_COM_WHAT_STREAM, -1, 0, 0);
         m->err.value = m->sq_base;
         com_enter_stop(m);
@@ -959,6 +965,7 @@ static void com_seg_status(ef_comaster_t *m, int k, uint8_t next8, uint8_t free)
     if (ext != q->next_seq) {
         q->next_seq = ext;
         m->last_progress_sync[k] = m->sync_count;
+        m->resend_run[k] = 0;
     }
     uint32_t lo = 0xFFFFFFFFu;
     for (int j = 0; j < m->cfg.n_nodes; j++)

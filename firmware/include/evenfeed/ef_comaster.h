@@ -194,7 +194,8 @@ typedef struct {
     uint8_t resend_cycles; /**< SYNCs without progress before go-back-N (default 3) */
     uint8_t prefill;       /**< segments acknowledged before execution starts (default 8) */
     uint8_t pad;
-    uint32_t max_resends; /**< go-back-N rounds before giving up (default 50) */
+    uint32_t max_resends; /**< go-back-N rounds for one node in a row, without that node
+                               advancing in between, before giving up (default 50) */
 } ef_com_cfg_t;
 
 /** @brief Defaults for a mode (the cycle default depends on it); no nodes. */
@@ -278,6 +279,8 @@ typedef struct {
     uint32_t cw_age;    /**< segment mode: SYNCs since RPDO1 was last sent */
     uint32_t seg_cap;   /**< segment mode: smallest ring a node reported at RUN */
     uint32_t resends;   /**< go-back-N rounds, all nodes */
+    uint32_t resend_run[EF_COM_MAX_NODES]; /**< private: go-back-N rounds for a node since it
+                                                last advanced */
     uint32_t tx_lost;   /**< frames dropped with the TX queue full */
     uint32_t sync_late; /**< SYNC periods skipped by late process() calls */
     uint32_t rx_other;  /**< frames of no configured node (ignored) */
