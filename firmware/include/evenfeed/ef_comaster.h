@@ -281,9 +281,9 @@ typedef struct {
     uint32_t resends;   /**< go-back-N rounds, all nodes */
     uint32_t resend_run[EF_COM_MAX_NODES]; /**< private: go-back-N rounds for a node since it
                                                 last advanced */
-    uint32_t tx_lost;   /**< frames dropped with the TX queue full */
-    uint32_t sync_late; /**< SYNC periods skipped by late process() calls */
-    uint32_t rx_other;  /**< frames of no configured node (ignored) */
+    uint32_t tx_lost;                      /**< frames dropped with the TX queue full */
+    uint32_t sync_late;                    /**< SYNC periods skipped by late process() calls */
+    uint32_t rx_other;                     /**< frames of no configured node (ignored) */
     char name[EF_COM_MAX_NODES][EF_COM_SDO_BUF + 1]; /**< 0x1008 of each node */
 } ef_comaster_t;
 
