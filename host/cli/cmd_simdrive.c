@@ -38,7 +38,6 @@ static const char usage[] =
     "  --trace FILE         CSV: each SYNC step, accepted segments, EMCYs\n"
     "  --log FILE           candump log of what the drive receives and sends\n"
     "  --run-ms MS          stop after MS ms of wall time (default: run until a signal)\n"
-    "  --exit-on-term       end on SIGTERM/SIGINT with status 0 (the default)\n"
     "fault injection, at SYNC time in OPERATION ENABLED (SYNCs x cycle period), each once:\n"
     "  --fault-at MS        raise drive fault 4 (EMCY 0xFF04)\n"
     "  --hb-stop-at MS      stop sending heartbeats\n"
@@ -144,8 +143,6 @@ static int sd_can(int argc, char **argv)
                 return rc;
             c.run_ms = x;
             k++;
-        } else if (!strcmp(a, "--exit-on-term")) {
-            /* the default: SIGTERM/SIGINT end the drive with status 0 */
         } else if (!strcmp(a, "--fault-at") || !strcmp(a, "--hb-stop-at") ||
                    !strcmp(a, "--bus-off-at")) {
             if ((rc = sd_ms(a, v, &x)))
