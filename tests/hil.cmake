@@ -54,7 +54,7 @@ if(NOT EF_SANITIZE AND TARGET ef_tables_default)
   add_executable(test_can_hil ${CMAKE_CURRENT_LIST_DIR}/test_can_hil.c)
   target_include_directories(test_can_hil PRIVATE ${CMAKE_CURRENT_LIST_DIR})
   target_link_libraries(test_can_hil PRIVATE ef_host ef_tables_default m)
-  foreach(part csp segment drop emcy heartbeat busoff boot start)
+  foreach(part csp segment drop emcy heartbeat busoff boot start masterdeath)
     add_test(NAME hil_can_${part}
              COMMAND bash ${EF_HIL_RUN} ${CMAKE_CURRENT_LIST_DIR}/hil/can.sh
                      ${CMAKE_CURRENT_BINARY_DIR}/hil_can_${part}/verdict 240

@@ -17,7 +17,7 @@
  * to rest under control (no step in the commanded speed beyond the stop ramp).
  *
  * Usage: test_can_hil EVENFEED SRC_DIR OUT_DIR PART
- *   PART: csp | segment | drop | emcy | heartbeat | busoff | boot | start
+ *   PART: csp | segment | drop | emcy | heartbeat | busoff | boot | start | masterdeath
  */
 #include <errno.h>
 #include <math.h>
@@ -737,6 +737,99 @@ static void part_start(void)
     }
 }
 
+/* Whether a drive's newest actual position (its trace, flushed every loop) is beyond x. */
+static int hil_drive_passed(int node, double x)
+{
+    hil_dtrace_t T;
+    if (hil_dtrace_load(node, &T) != 0)
+        return 0;
+    int yes = T.np > 0 && T.p[T.np - 1].act > x;
+    hil_dtrace_free(&T);
+    return yes;
+}
+
+/* Whether a drive trace has an EMCY with this code. */
+static int hil_drive_emcy(int node, unsigned code)
+{
+    char path[512], want[32];
+    snprintf(path, sizeof path, "%s/drive%d.csv", g_out, node);
+    snprintf(want, sizeof want, ",0x%04X,", code);
+    char *t = hil_slurp(path);
+    int yes = t && strstr(t, want);
+    free(t);
+    return yes;
+}
+
+/* The master dies mid-path (SIGKILL: no stop frames): every drive detects the SYNC loss
+ * (0x2003, 500 ms), reports EMCY 0x8130 and stops under control on its own clock: the
+ * moving axis runs on by about its stopping distance at the stop ramp, not 0 (a freeze) and
+ * not more. */
+static void part_masterdeath(void)
+{
+    char prog[512];
+    snprintf(prog, sizeof prog, "%s/samples/profile.ngc", g_src);
+    tm_proc_t d[4] = {{0}};
+    if (hil_start(d, NULL) != 0) {
+        EF_CHECK(0);
+        hil_stop(d);
+        return;
+    }
+    char log[512], trace[512];
+    snprintf(log, sizeof log, "%s/death.log", g_out);
+    snprintf(trace, sizeof trace, "%s/death.csv", g_out);
+    char *argv[] = {(char *)g_ef, "stream", "--can", "vcan0", "--mode", "segment", "--log", log,
+                    "--trace", trace, prog, NULL};
+    tm_proc_t st;
+    EF_CHECK_EQ(tm_spawn(argv, 1, &st), 0);
+    /* Wait (bounded) until x is well into the straight cut at 20 mm/s (x 0 -> 60 mm). */
+    int moving = 0;
+    for (int i = 0; i < 600 && !moving; i++) {
+        moving = hil_drive_passed(1, 20.0);
+        if (!moving)
+            usleep(50000);
+    }
+    EF_CHECK(moving);
+    tm_stop(&st, SIGKILL);
+    int all = 0;
+    for (int i = 0; i < 200 && !all; i++) {
+        all = hil_drive_emcy(1, 0x8130) && hil_drive_emcy(2, 0x8130) && hil_drive_emcy(3, 0x8130);
+        if (!all)
+            usleep(50000);
+    }
+    /* The stop ends by itself; give the drives' own clocks the stopping time. */
+    for (int i = 0; i < 100; i++) {
+        hil_dtrace_t T;
+        int done = hil_dtrace_load(1, &T) == 0 && T.np > 0 &&
+                   T.p[T.np - 1].power == EF_CO_PS_FAULT;
+        hil_dtrace_free(&T);
+        if (done)
+            break;
+        usleep(50000);
+    }
+    hil_stop(d);
+    EF_CHECK(all);
+    ef_servo_cfg_t sc;
+    ef_servo_cfg_default(&sc);
+    hil_dtrace_t T;
+    EF_CHECK_EQ(hil_dtrace_load(1, &T), 0);
+    /* Speed at the last SYNC (two rows with consecutive SYNC numbers), then the distance the
+     * command travelled after it. */
+    size_t last = 0;
+    for (size_t i = 1; i < T.np; i++)
+        if (T.p[i].sync == T.p[i - 1].sync + 1)
+            last = i;
+    double v = last ? (T.p[last].cmd - T.p[last - 1].cmd) / 0.010 : 0.0;
+    double run = T.np ? T.p[T.np - 1].cmd - T.p[last].cmd : 0.0, stop = v * v / (2.0 * sc.a_stop);
+    printf("masterdeath: x at %.3f mm/s when SYNC stopped; it ran on %.4f mm (stopping distance"
+           " at %.0f mm/s^2: %.4f mm); final power state %d (%s)\n",
+           v, run, sc.a_stop, stop, T.np ? T.p[T.np - 1].power : -1,
+           T.np ? ef_co_power_str(T.p[T.np - 1].power) : "-");
+    EF_CHECK(v > 10.0);
+    EF_CHECK(run >= 0.5 * stop && run <= 1.5 * stop + 1e-3);
+    EF_CHECK(T.np && T.p[T.np - 1].power == EF_CO_PS_FAULT);
+    hil_dtrace_free(&T);
+}
+
 /* A node that never boots is named; nothing is enabled. */
 static void part_boot(void)
 {
@@ -779,6 +872,8 @@ int main(int argc, char **argv)
         part_boot();
     else if (!strcmp(part, "start"))
         part_start();
+    else if (!strcmp(part, "masterdeath"))
+        part_masterdeath();
     else {
         fprintf(stderr, "unknown part %s\n", part);
         return 2;

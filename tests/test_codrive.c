@@ -1509,6 +1509,330 @@ static void test_tx(void)
     EF_CHECK_EQ(log_count(SDO_TX), 1);
 }
 
+/* ------------------------------------------------------------------ watchdog */
+
+#define A_STOP 2000.0 /* the default servo's stop ramp (units/s^2) */
+
+/* process() for ms wall-clock milliseconds (1 ms calls) with no SYNC; checks that nothing
+ * happens (no frame, the command still, the power state kept) and that next_us asks for the
+ * watchdog deadline (or the 100 ms idle period before it). after_sync: a SYNC came since the
+ * last call, so the first call starts the count (a SYNC handled between two calls is given
+ * the benefit of the doubt: the caller may have been held back with it waiting). */
+static void wd_quiet(int ms, int power_want, uint32_t timeout_ms, int after_sync)
+{
+    float cmd = g_d.drv.cmd.x;
+    int n0 = g_bus.n, ok = 1, next_ok = 1;
+    for (int i = 1; i <= ms; i++) {
+        uint32_t next = 0, left = timeout_ms - (uint32_t)(i - (after_sync ? 1 : 0));
+        ok &= ef_codrive_process(&g_d, 1000, &next) == EF_OK;
+        if (timeout_ms)
+            next_ok &= next == (left < 100u ? left * 1000u : 100000u);
+    }
+    EF_CHECK(ok);
+    EF_CHECK(next_ok);
+    EF_CHECK(g_d.drv.cmd.x == cmd);
+    EF_CHECK_EQ(g_d.power, power_want);
+    EF_CHECK_EQ(g_bus.n, n0);
+}
+
+/* After the watchdog tripped: process() every 1 ms until the drive is at rest. The command
+ * keeps its direction and its speed falls by at most A_STOP per ms from v0 (the commanded
+ * speed at the last SYNC: drive time stood still during the gap); next_us asks for the next
+ * servo period meanwhile. Returns the milliseconds the command moved. */
+static int wd_watch_stop(double v0)
+{
+    double dir = v0 < 0 ? -1.0 : 1.0, prev_v = fabs(v0), worst = 0, travel = 0;
+    double a_dt = A_STOP * 1e-3; /* speed change per servo period */
+    int moving_ms = 0, next_ok = 1, dir_ok = 1, k = 0;
+    for (; k < 2000 && g_d.sync_lost; k++) {
+        float before = g_d.drv.cmd.x;
+        uint32_t next = 0;
+        EF_CHECK_EQ(ef_codrive_process(&g_d, 1000, &next), EF_OK);
+        double v = (g_d.drv.cmd.x - before) * dir / 1e-3;
+        dir_ok &= v >= -1e-3;
+        if (fabs(v - prev_v) > worst)
+            worst = fabs(v - prev_v);
+        if (v > 0)
+            moving_ms++;
+        travel += v * 1e-3;
+        prev_v = v;
+        if (g_d.sync_lost)
+            next_ok &= next == 1000;
+    }
+    EF_CHECK(k < 2000);
+    EF_CHECK(dir_ok);
+    EF_CHECK(next_ok);
+    EF_CHECK(worst <= a_dt * 1.001 + 0.01); /* float positions: ~1e-5 units per step */
+    EF_CHECK_NEAR(moving_ms * 1e-3, fabs(v0) / A_STOP, 2e-3);
+    EF_CHECK_NEAR(travel, v0 * v0 / (2 * A_STOP), fabs(v0) * 1e-3); /* within a period */
+    EF_CHECK_EQ(g_d.drv.state, EF_DRV_FAULT);
+    EF_CHECK(g_d.drv.cmd_vel.x == 0.0f);
+    EF_CHECK(fabsf(g_d.drv.act.x - g_d.drv.cmd.x) <= EF_CODRIVE_POS_WINDOW * 1e-4f + 1e-6f);
+    /* At rest: nothing moves any more, no call asked for early. */
+    float cmd = g_d.drv.cmd.x, act = g_d.drv.act.x;
+    uint32_t next = 0;
+    for (int i = 0; i < 100; i++)
+        EF_CHECK_EQ(ef_codrive_process(&g_d, 1000, &next), EF_OK);
+    EF_CHECK(g_d.drv.cmd.x == cmd && g_d.drv.act.x == act);
+    EF_CHECK(next > 1000);
+    return moving_ms;
+}
+
+/* The trip at the timeout: EMCY 0x8130 with fault WATCHDOG, the objects that report it. */
+static void wd_check_trip(int rc)
+{
+    EF_CHECK_EQ(rc, EF_ERR_DRIVE);
+    EF_CHECK_EQ(log_count(EMCY_ID), 1);
+    check_emcy(EF_CO_EMCY_HEARTBEAT, 0x11, EF_DRV_FAULT_WATCHDOG);
+    EF_CHECK_EQ(g_d.drv.fault, EF_DRV_FAULT_WATCHDOG);
+    EF_CHECK_EQ(g_d.power, EF_CO_PS_FAULT_REACTION);
+    EF_CHECK_EQ(g_d.statusword & 0x4F, 0x0F);
+    EF_CHECK(g_d.sync_lost);
+    EF_CHECK_EQ(rd(EF_CO_OBJ_ERROR_CODE, 0), EF_CO_EMCY_HEARTBEAT);
+    EF_CHECK_EQ(rd(EF_CO_OBJ_DRIVE_FAULT, 0), EF_DRV_FAULT_WATCHDOG);
+    EF_CHECK_EQ(rd(EF_CO_OBJ_ERROR_REG, 0), 0x11);
+}
+
+/* SYNC cycles of cyc_ms with 1 ms process() calls between them (RPDO1 cw + target each
+ * cycle); the calls never move the command (the SYNC steps it) and nothing faults. */
+static void wd_run(int cycles, int cyc_ms, uint16_t cw, double v_csp)
+{
+    int still = 1, ok = 1;
+    for (int k = 0; k < cycles; k++) {
+        for (int i = 0; i < cyc_ms; i++) {
+            float c = g_d.drv.cmd.x;
+            ok &= ef_codrive_process(&g_d, 1000, NULL) == EF_OK;
+            still &= g_d.drv.cmd.x == c;
+        }
+        int32_t tg = (int32_t)lround(v_csp * (g_d.sync_count + 1) * 1e-3 * EF_CO_INC_PER_UNIT);
+        rpdo1(cw, v_csp != 0 ? tg : 0);
+        ok &= sync1() == EF_OK;
+    }
+    EF_CHECK(ok);
+    EF_CHECK(still);
+    EF_CHECK_EQ(log_count(EMCY_ID), 0);
+}
+
+static void test_watchdog(void)
+{
+    /* 0x2003: default 500 ms, rw u16, range checked, back to 500 on reset node. */
+    drive_up(NULL);
+    EF_CHECK_EQ(rd(EF_CO_OBJ_SYNC_TIMEOUT, 0), EF_CODRIVE_SYNC_TIMEOUT_MS);
+    EF_CHECK_EQ(rd(EF_CO_OBJ_SYNC_TIMEOUT, 0), 500);
+    uint8_t req[8] = {0x40, 0x03, 0x20, 0}, cmd;
+    sdo_req(req, &cmd);
+    EF_CHECK_EQ(cmd, 0x4B); /* u16 */
+    wr(EF_CO_OBJ_SYNC_TIMEOUT, 0, 200, 2);
+    EF_CHECK_EQ(rd(EF_CO_OBJ_SYNC_TIMEOUT, 0), 200);
+    EF_CHECK_EQ(sdo_write(EF_CO_OBJ_SYNC_TIMEOUT, 0, EF_CODRIVE_SYNC_TIMEOUT_MAX_MS + 1u, 2),
+                EF_CO_ABORT_RANGE);
+    EF_CHECK_EQ(sdo_write(EF_CO_OBJ_SYNC_TIMEOUT, 0, 0xFFFF, 2), EF_CO_ABORT_RANGE);
+    EF_CHECK_EQ(sdo_write(EF_CO_OBJ_SYNC_TIMEOUT, 0, 300, 4), EF_CO_ABORT_LEN);
+    uint32_t v = 0;
+    EF_CHECK_EQ(sdo_read(EF_CO_OBJ_SYNC_TIMEOUT, 1, &v), EF_CO_ABORT_NO_SUB);
+    EF_CHECK_EQ(rd(EF_CO_OBJ_SYNC_TIMEOUT, 0), 200);
+    wr(EF_CO_OBJ_SYNC_TIMEOUT, 0, EF_CODRIVE_SYNC_TIMEOUT_MAX_MS, 2);
+    wr(EF_CO_OBJ_SYNC_TIMEOUT, 0, 0, 2);
+    EF_CHECK_EQ(rd(EF_CO_OBJ_SYNC_TIMEOUT, 0), 0);
+    nmt(EF_CO_NMT_RESET_COMM, 0); /* a communication object it is not */
+    EF_CHECK_EQ(rd(EF_CO_OBJ_SYNC_TIMEOUT, 0), 0);
+    nmt(EF_CO_NMT_RESET_NODE, 0);
+    EF_CHECK_EQ(rd(EF_CO_OBJ_SYNC_TIMEOUT, 0), 500);
+    /* Not watched: PRE-OPERATIONAL, cycle period 0, not enabled. */
+    log_clear();
+    wr(EF_CO_OBJ_CYCLE, 0, 1000, 4);
+    wr(EF_CO_OBJ_CONTROLWORD, 0, EF_CO_CW_SHUTDOWN, 2);
+    wr(EF_CO_OBJ_CONTROLWORD, 0, EF_CO_CW_ENABLE_OP, 2);
+    EF_CHECK_EQ(power(), EF_CO_PS_OP_ENABLED);
+    wd_quiet(2000, EF_CO_PS_OP_ENABLED, 0, 0);
+    wr(EF_CO_OBJ_CYCLE, 0, 0, 4);
+    nmt(EF_CO_NMT_START, 0);
+    wd_quiet(2000, EF_CO_PS_OP_ENABLED, 0, 0);
+    wr(EF_CO_OBJ_CONTROLWORD, 0, EF_CO_CW_SWITCH_ON, 2);
+    wr(EF_CO_OBJ_CYCLE, 0, 1000, 4);
+    wd_quiet(2000, EF_CO_PS_SWITCHED_ON, 0, 0);
+    EF_CHECK_EQ(log_count(EMCY_ID), 0);
+
+    /* Segment mode, moving at 50 units/s (10 ms cycle, a process() call every 1 ms). A gap
+     * short of the timeout (450 ms) changes nothing; then the SYNCs stop for good. */
+    drive_up(NULL);
+    seg_pdos();
+    to_op_enabled(10000, EF_CO_MODE_SEGMENT);
+    ef_move_t mv[3];
+    mk_three(mv);
+    for (int i = 0; i < 3; i++) {
+        send_law(&mv[i], -1);
+        send_axis(&mv[i], -1);
+    }
+    log_clear();
+    wd_run(42, 10, EF_CO_CW_ENABLE_OP | EF_CO_CW_SEG_RUN, 0); /* into the cruise */
+    wd_quiet(450, EF_CO_PS_OP_ENABLED, 500, 1);
+    wd_run(3, 10, EF_CO_CW_ENABLE_OP | EF_CO_CW_SEG_RUN, 0);
+    EF_CHECK(g_d.drv.cmd_vel.x > 0.8f * V0); /* cruising (the quintic's speed varies) */
+    double v0 = g_d.drv.cmd_vel.x;
+    float x0 = g_d.drv.cmd.x;
+    wd_quiet(500, EF_CO_PS_OP_ENABLED, 500, 1); /* nothing before the timeout */
+    uint32_t next = 0;
+    int rc = ef_codrive_process(&g_d, 1000, &next); /* 500 ms without a SYNC */
+    wd_check_trip(rc);
+    EF_CHECK_EQ(next, 1000);
+    EF_CHECK(g_d.drv.cmd.x == x0); /* the stop starts at the deadline */
+    int ms = wd_watch_stop(v0);
+    EF_CHECK(ms >= 23 && ms <= 26); /* 50 / 2000 s */
+    EF_CHECK_EQ(g_d.power, EF_CO_PS_FAULT);
+    EF_CHECK_EQ(power(), EF_CO_PS_FAULT);
+    EF_CHECK_EQ(log_count(EMCY_ID), 1);
+    EF_CHECK(g_d.drv.cmd.x > x0 + 0.55f && g_d.drv.cmd.x < x0 + 0.65f); /* v0^2 / 2 a_stop */
+    /* Still no SYNC: FAULT is not watched; a fault reset and a new job are possible. */
+    wd_quiet(1000, EF_CO_PS_FAULT, 0, 0);
+    reset_fault();
+    wr(EF_CO_OBJ_CONTROLWORD, 0, EF_CO_CW_SHUTDOWN, 2);
+    wr(EF_CO_OBJ_CONTROLWORD, 0, EF_CO_CW_ENABLE_OP, 2);
+    EF_CHECK_EQ(power(), EF_CO_PS_OP_ENABLED);
+    EF_CHECK(!g_d.sync_lost);
+
+    /* CSP following a ramp at 40 units/s (1 ms cycle); a shorter timeout, 200 ms. */
+    drive_up(NULL);
+    wr(EF_CO_OBJ_SYNC_TIMEOUT, 0, 200, 2);
+    to_op_enabled(1000, EF_CO_MODE_CSP);
+    log_clear();
+    wd_run(300, 1, EF_CO_CW_ENABLE_OP, 40.0);
+    EF_CHECK_NEAR(g_d.drv.cmd_vel.x, 40.0, 0.5);
+    v0 = g_d.drv.cmd_vel.x;
+    wd_quiet(200, EF_CO_PS_OP_ENABLED, 200, 1);
+    rc = ef_codrive_process(&g_d, 1000, &next);
+    wd_check_trip(rc);
+    ms = wd_watch_stop(v0);
+    EF_CHECK(ms >= 18 && ms <= 21); /* 40 / 2000 s */
+    EF_CHECK_EQ(power(), EF_CO_PS_FAULT);
+    EF_CHECK_EQ(log_count(EMCY_ID), 1);
+
+    /* Late calls. The first after a SYNC counts nothing, however late (the caller may have
+     * been held back with SYNCs waiting); past the deadline the rest is stepped at once. */
+    drive_up(NULL);
+    to_op_enabled(1000, EF_CO_MODE_CSP);
+    log_clear();
+    wd_run(300, 1, EF_CO_CW_ENABLE_OP, 40.0);
+    v0 = g_d.drv.cmd_vel.x;
+    x0 = g_d.drv.cmd.x;
+    int n0 = g_bus.n;
+    EF_CHECK_EQ(ef_codrive_process(&g_d, 2000000, &next), EF_OK);
+    EF_CHECK_EQ(next, 100000);
+    EF_CHECK_EQ(g_bus.n, n0);
+    EF_CHECK(g_d.drv.cmd.x == x0);
+    rc = ef_codrive_process(&g_d, 510000, &next); /* 10 ms past the deadline */
+    wd_check_trip(rc);
+    EF_CHECK_NEAR(g_d.drv.cmd.x - x0, 0.010 * v0 - 0.5 * A_STOP * 0.010 * 0.010, 0.015);
+    wd_watch_stop(g_d.drv.cmd_vel.x);
+    EF_CHECK_EQ(power(), EF_CO_PS_FAULT);
+
+    /* Timeout 0: no watchdog; the axis stays where the last SYNC left it. */
+    drive_up(NULL);
+    wr(EF_CO_OBJ_SYNC_TIMEOUT, 0, 0, 2);
+    to_op_enabled(1000, EF_CO_MODE_CSP);
+    log_clear();
+    wd_run(300, 1, EF_CO_CW_ENABLE_OP, 40.0);
+    wd_quiet(3000, EF_CO_PS_OP_ENABLED, 0, 0);
+    ef_codrive_process(&g_d, 0, &next);
+    EF_CHECK(next > 1000);
+    EF_CHECK(g_d.drv.cmd_vel.x > 30.0f); /* frozen mid-motion, as before this watchdog */
+    /* Switched on afterwards: watched from then on. */
+    wr(EF_CO_OBJ_SYNC_TIMEOUT, 0, 100, 2);
+    wd_quiet(99, EF_CO_PS_OP_ENABLED, 100, 0);
+    rc = ef_codrive_process(&g_d, 1000, &next);
+    wd_check_trip(rc);
+    wd_watch_stop(g_d.drv.cmd_vel.x);
+
+    /* QUICK STOP ACTIVE while moving, then the SYNCs stop: the watchdog faults it and the
+     * stop goes on at the same ramp on the wall clock. */
+    drive_up(NULL);
+    to_op_enabled(1000, EF_CO_MODE_CSP);
+    log_clear();
+    wd_run(300, 1, EF_CO_CW_ENABLE_OP, 40.0);
+    wr(EF_CO_OBJ_CONTROLWORD, 0, 0x000B, 2); /* quick stop */
+    EF_CHECK_EQ(power(), EF_CO_PS_QUICK_STOP);
+    wd_run(5, 1, 0x000B, 0);
+    EF_CHECK_EQ(power(), EF_CO_PS_QUICK_STOP);
+    v0 = g_d.drv.cmd_vel.x;
+    EF_CHECK(v0 > 20);
+    wd_quiet(500, EF_CO_PS_QUICK_STOP, 500, 1);
+    rc = ef_codrive_process(&g_d, 1000, &next);
+    wd_check_trip(rc);
+    ms = wd_watch_stop(v0);
+    EF_CHECK(ms >= (int)(v0 / 2) - 2 && ms <= (int)(v0 / 2) + 1);
+    EF_CHECK_EQ(power(), EF_CO_PS_FAULT);
+
+    /* FAULT REACTION ACTIVE (an injected fault while moving), then the SYNCs stop: no second
+     * fault or EMCY, the first one stays reported; the stop completes on the wall clock. */
+    drive_up(NULL);
+    to_op_enabled(1000, EF_CO_MODE_CSP);
+    log_clear();
+    wd_run(300, 1, EF_CO_CW_ENABLE_OP, 40.0);
+    EF_CHECK_EQ(ef_codrive_fault(&g_d, EF_DRV_FAULT_INJECTED), EF_OK);
+    check_emcy(EF_CO_EMCY_INJECTED, 0x81, EF_DRV_FAULT_INJECTED);
+    log_clear();
+    wd_run(1, 1, EF_CO_CW_ENABLE_OP, 0);
+    EF_CHECK_EQ(power(), EF_CO_PS_FAULT_REACTION);
+    v0 = g_d.drv.cmd_vel.x;
+    wd_quiet(500, EF_CO_PS_FAULT_REACTION, 500, 1);
+    rc = ef_codrive_process(&g_d, 1000, &next);
+    EF_CHECK_EQ(rc, EF_OK);
+    EF_CHECK_EQ(log_count(EMCY_ID), 0);
+    EF_CHECK(g_d.sync_lost);
+    EF_CHECK_EQ(g_d.drv.fault, EF_DRV_FAULT_INJECTED);
+    EF_CHECK_EQ(rd(EF_CO_OBJ_ERROR_CODE, 0), EF_CO_EMCY_INJECTED);
+    wd_watch_stop(v0);
+    EF_CHECK_EQ(power(), EF_CO_PS_FAULT);
+
+    /* SYNCs resuming during the stop take the stepping back: process() then moves nothing,
+     * each SYNC one cycle (10 ms), and the stop's drive time adds up to the wall-clock steps
+     * plus the cycles (none stepped twice). */
+    drive_up(NULL);
+    seg_pdos();
+    to_op_enabled(10000, EF_CO_MODE_SEGMENT);
+    for (int i = 0; i < 3; i++) {
+        send_law(&mv[i], -1);
+        send_axis(&mv[i], -1);
+    }
+    log_clear();
+    wd_run(45, 10, EF_CO_CW_ENABLE_OP | EF_CO_CW_SEG_RUN, 0);
+    v0 = g_d.drv.cmd_vel.x;
+    x0 = g_d.drv.cmd.x;
+    wd_quiet(500, EF_CO_PS_OP_ENABLED, 500, 1);
+    double t0 = drive_time();
+    rc = ef_codrive_process(&g_d, 1000, &next);
+    wd_check_trip(rc);
+    for (int i = 0; i < 5; i++)
+        ef_codrive_process(&g_d, 1000, NULL);
+    EF_CHECK_NEAR(drive_time() - t0, 0.005, 1e-9);
+    float x5 = g_d.drv.cmd.x;
+    EF_CHECK(x5 > x0);
+    rpdo1(EF_CO_CW_ENABLE_OP | EF_CO_CW_SEG_RUN, 0);
+    EF_CHECK_EQ(sync1(), EF_OK); /* the master is back */
+    EF_CHECK(!g_d.sync_lost);
+    EF_CHECK_NEAR(drive_time() - t0, 0.015, 1e-9);
+    float x15 = g_d.drv.cmd.x;
+    EF_CHECK(x15 > x5);
+    int still = 1;
+    for (int i = 0; i < 9; i++) {
+        ef_codrive_process(&g_d, 1000, &next);
+        still &= g_d.drv.cmd.x == x15 && !g_d.sync_lost;
+    }
+    EF_CHECK(still);
+    EF_CHECK(next > 1000); /* back to the watchdog deadline */
+    rpdo1(EF_CO_CW_ENABLE_OP | EF_CO_CW_SEG_RUN, 0);
+    sync1();
+    EF_CHECK_NEAR(drive_time() - t0, 0.025, 1e-9);
+    int n = 0;
+    watch_stop(100, &n);
+    EF_CHECK(n <= 1);
+    EF_CHECK_EQ(power(), EF_CO_PS_FAULT);
+    /* The same stop as on one clock: v0^2 / (2 a_stop), one EMCY. */
+    EF_CHECK_NEAR(g_d.drv.cmd.x - x0, v0 * v0 / (2 * A_STOP), fabs(v0) * 1e-3 + 1e-3);
+    EF_CHECK_EQ(log_count(EMCY_ID), 1);
+    EF_CHECK_EQ(g_d.drv.fault, EF_DRV_FAULT_WATCHDOG);
+}
+
 int main(int argc, char **argv)
 {
     int all = argc < 2;
@@ -1530,5 +1854,7 @@ int main(int argc, char **argv)
         test_bad();
     if (all || strcmp(argv[1], "tx") == 0)
         test_tx();
+    if (all || strcmp(argv[1], "watchdog") == 0)
+        test_watchdog();
     return ef_test_summary();
 }

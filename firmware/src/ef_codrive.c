@@ -316,6 +316,8 @@ static void cod_op_enter(ef_codrive_t *d)
     d->target_inc = cod_inc(d, v->cmd.x); /* nothing moves until a new target comes */
     d->power = EF_CO_PS_OP_ENABLED;
     d->power_next = EF_CO_PS_OP_ENABLED;
+    d->sync_lost = 0u; /* a new job: the SYNCs step it, supervised from now */
+    d->sync_gap_us = 0u;
 }
 
 /* Leave OPERATION ENABLED for `to` through a controlled stop (the state changes at rest). */
@@ -774,6 +776,8 @@ static uint32_t od_find(ef_codrive_t *d, uint16_t idx, uint8_t sub, od_t *o)
         return od_var(sub, o, 4u, COD_R, d->cfg.inc_per_unit);
     case EF_CO_OBJ_DRIVE_FAULT:
         return od_var(sub, o, 1u, COD_R, d->last_fault);
+    case EF_CO_OBJ_SYNC_TIMEOUT:
+        return od_var(sub, o, 2u, COD_R | COD_W, d->sync_timeout_ms);
     case EF_CO_OBJ_SEG_AXIS:
     case EF_CO_OBJ_SEG_LAW:
         return od_var(sub, o, COD_PDO_BYTES, COD_W, 0u);
@@ -879,6 +883,11 @@ static uint32_t od_set(ef_codrive_t *d, uint16_t idx, uint8_t sub, uint32_t val)
     case EF_CO_OBJ_HB_PRODUCER:
         d->hb_ms = (uint16_t)val;
         d->hb_acc_us = 0u;
+        return 0u;
+    case EF_CO_OBJ_SYNC_TIMEOUT:
+        if (val > EF_CODRIVE_SYNC_TIMEOUT_MAX_MS)
+            return EF_CO_ABORT_RANGE;
+        d->sync_timeout_ms = (uint16_t)val; /* the gap so far counts against the new value */
         return 0u;
     case EF_CO_OBJ_CONTROLWORD:
         cod_control(d, (uint16_t)val);
@@ -1187,6 +1196,10 @@ static void cod_sync(ef_codrive_t *d, const ef_can_frame_t *f)
         return;
     }
     d->sync_count++;
+    d->sync_gap_us = 0u;
+    d->sync_seen = 1u; /* the gap counts from the next process() call */
+    if (d->cycle_us > 0u)
+        d->sync_lost = 0u; /* SYNCs step the motion again (a watchdog stop included) */
     for (uint32_t k = 0; k < EF_CODRIVE_RPDOS; k++) {
         ef_codrive_pdo_t *p = &d->rpdo[k];
         if (p->has_latched) {
@@ -1211,6 +1224,76 @@ static void cod_sync(ef_codrive_t *d, const ef_can_frame_t *f)
     d->statusword = cod_statusword(d);
     if (d->nmt == EF_CO_NMT_OPERATIONAL)
         cod_tpdo_sync(d);
+}
+
+/* Whether the SYNC-loss watchdog watches: OPERATIONAL, a cycle period, a timeout, and the
+ * axis in OPERATION ENABLED or still stopping in QUICK STOP / FAULT REACTION ACTIVE. */
+static int cod_wd_armed(const ef_codrive_t *d)
+{
+    if (d->nmt != EF_CO_NMT_OPERATIONAL || d->cycle_us == 0u || d->sync_timeout_ms == 0u)
+        return 0;
+    if (d->power == EF_CO_PS_OP_ENABLED)
+        return 1;
+    return (d->power == EF_CO_PS_QUICK_STOP || d->power == EF_CO_PS_FAULT_REACTION) &&
+           d->drv.state == EF_DRV_STOPPING;
+}
+
+/* Whether the drive model is at rest: no stop ramp under way, the command still and the
+ * actual position settled on it. */
+static int cod_at_rest(const ef_codrive_t *d)
+{
+    return d->drv.state != EF_DRV_STOPPING && cod_settled(d, d->drv.cmd.x);
+}
+
+/* The watchdog's stop on the wall clock: step the drive model by dt_us (bounded per call as
+ * a SYNC step is; one period short of EF_DRIVE_MAX_STEPS per call, since a remainder of
+ * earlier calls may add one), follow it; done once at rest. */
+static void cod_wd_step(ef_codrive_t *d, uint32_t dt_us)
+{
+    uint32_t chunk = ((uint32_t)EF_DRIVE_MAX_STEPS - 1u) * d->cfg.servo_period_us;
+    uint32_t left = dt_us;
+    for (uint32_t i = 0; i < EF_CODRIVE_SYNC_CALLS && left > 0u; i++) {
+        uint32_t dt = left < chunk ? left : chunk;
+        (void)ef_drive_process(&d->drv, dt, NULL); /* a fault shows in drv.fault: cod_update */
+        left -= dt;
+    }
+    cod_update(d);
+    d->statusword = cod_statusword(d);
+    if (d->nmt == EF_CO_NMT_OPERATIONAL)
+        cod_tpdo_events(d);
+    if (cod_at_rest(d))
+        d->sync_lost = 0u;
+}
+
+/* SYNC-loss watchdog (ef_codrive.h): count the time since the last SYNC while armed (from
+ * the first call after it); at the timeout raise the WATCHDOG fault (unless a fault is
+ * already being reacted to) and step the stop on the wall clock from then on. Returns when it
+ * needs the next call. */
+static uint32_t cod_watchdog(ef_codrive_t *d, uint32_t dt_us)
+{
+    uint32_t step = dt_us; /* wall-clock time to step if the stop runs */
+    uint32_t add = d->sync_seen ? 0u : dt_us;
+    d->sync_seen = 0u;
+    if (!d->sync_lost && cod_wd_armed(d)) {
+        uint32_t lim = (uint32_t)d->sync_timeout_ms * COD_US_PER_MS;
+        d->sync_gap_us = add > UINT32_MAX - d->sync_gap_us ? UINT32_MAX : d->sync_gap_us + add;
+        if (d->sync_gap_us < lim)
+            return lim - d->sync_gap_us;
+        step = d->sync_gap_us - lim; /* the stop starts at the deadline */
+        d->sync_gap_us = 0u;
+        d->sync_lost = 1u;
+        if (d->drv.fault == EF_DRV_FAULT_NONE)
+            (void)ef_drive_fault(&d->drv, EF_DRV_FAULT_WATCHDOG);
+        cod_update(d); /* EMCY 0x8130, 0x603F, 0x2001, 0x1001, FAULT REACTION or FAULT */
+        d->statusword = cod_statusword(d);
+    } else if (!d->sync_lost) {
+        d->sync_gap_us = 0u;
+        return COD_IDLE_US;
+    }
+    cod_wd_step(d, step);
+    if (d->sync_lost)
+        return d->cfg.servo_period_us - d->drv.acc_us; /* > 0: acc_us < period */
+    return COD_IDLE_US;
 }
 
 /* Boot-up message: NMT error control with state 0, then PRE-OPERATIONAL. */
@@ -1258,6 +1341,9 @@ static int cod_reset_app(ef_codrive_t *d, float home)
     d->ferr_window = (uint32_t)cod_inc(d, d->cfg.servo.ferr_lim);
     d->target_inc = cod_inc(d, home);
     d->seg_dropped = d->seg_dups = 0u;
+    d->sync_timeout_ms = (uint16_t)EF_CODRIVE_SYNC_TIMEOUT_MS;
+    d->sync_gap_us = 0u;
+    d->sync_lost = d->sync_seen = 0u;
     d->pend = (ef_move_t){0};
     cod_seg_reset(d);
     d->statusword = cod_statusword(d);
@@ -1400,6 +1486,10 @@ int ef_codrive_process(ef_codrive_t *d, uint32_t dt_us, uint32_t *next_us)
         }
         next = period - d->hb_acc_us;
     }
+    uint32_t faults0 = d->faults;
+    uint32_t wd = cod_watchdog(d, dt_us);
+    if (wd < next)
+        next = wd;
     if (d->txq_count > 0u && next > COD_RETRY_US)
         next = COD_RETRY_US;
     if (next_us)
@@ -1408,7 +1498,7 @@ int ef_codrive_process(ef_codrive_t *d, uint32_t dt_us, uint32_t *next_us)
         d->bus_err = 0u;
         return EF_ERR_BUS;
     }
-    return EF_OK;
+    return d->faults != faults0 ? EF_ERR_DRIVE : EF_OK;
 }
 
 /* Fault injection (contract in ef_codrive.h). */

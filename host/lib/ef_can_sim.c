@@ -115,14 +115,21 @@ static void sim_send_bus_off(sim_t *S)
                 n == (ssize_t)sizeof cf ? "ok" : strerror(n < 0 ? errno : EIO));
 }
 
-/* After each SYNC: trace the step, then the injections due at this SYNC time. */
-static void sim_after_sync(sim_t *S)
+/* One `p` row: the drive's state now, under the last SYNC's number. */
+static void sim_trace_p(sim_t *S)
 {
     const ef_codrive_t *d = &S->d;
     if (S->trace)
         fprintf(S->trace, "p,%u,%u,%u,%.6f,%.6f,%.6f\n", (unsigned)d->sync_count,
                 (unsigned)d->statusword, (unsigned)d->power, (double)d->drv.cmd.x,
                 (double)d->drv.act.x, (double)d->drv.ferr);
+}
+
+/* After each SYNC: trace the step, then the injections due at this SYNC time. */
+static void sim_after_sync(sim_t *S)
+{
+    const ef_codrive_t *d = &S->d;
+    sim_trace_p(S);
     if (d->power == EF_CO_PS_OP_ENABLED)
         S->op_syncs++;
     uint64_t t_ms = (uint64_t)S->op_syncs * d->cycle_us / 1000u;
@@ -227,6 +234,8 @@ int ef_can_sim_run(const ef_can_sim_cfg_t *c, ef_msg_t *m)
     int rc = sim_open(S, m);
     uint32_t t_prev = ef_sockcan_now_us();
     uint64_t t_us = 0;
+    ef_can_frame_t f;
+    int have = 0; /* f holds a frame the last wait received, not yet handed over */
     while (rc == EF_OK && !(c->stop && *c->stop)) {
         uint32_t now = ef_sockcan_now_us();
         uint32_t dt = now - t_prev;
@@ -234,21 +243,10 @@ int ef_can_sim_run(const ef_can_sim_cfg_t *c, ef_msg_t *m)
         t_us += dt;
         if (c->run_ms >= 0 && t_us >= (uint64_t)c->run_ms * 1000u)
             break;
-        uint32_t next = SIM_MAX_WAIT_US;
-        ef_codrive_process(&S->d, dt, &next); /* a bus error: the drive keeps trying */
-        int frc = ef_sockcan_flush(&S->sk);
-        if (frc == EF_ERR_IO) {
-            rc = ef_fail(m, EF_ERR_IO, "sim-drive: %s", S->sk.msg.text);
-            break;
-        }
-        uint32_t wait = next < SIM_MAX_WAIT_US ? next : SIM_MAX_WAIT_US;
-        if (c->run_ms >= 0) {
-            uint64_t left = (uint64_t)c->run_ms * 1000u - t_us;
-            if (left < wait)
-                wait = (uint32_t)left;
-        }
-        ef_can_frame_t f;
-        int rrc = ef_sockcan_recv(&S->sk, &f, wait);
+        /* What arrived up to now goes to the drive before the time elapsed up to now: SYNCs
+         * that waited in the socket while this process was held back are no SYNC loss. */
+        int rrc = have ? EF_OK : ef_sockcan_recv(&S->sk, &f, 0);
+        have = 0;
         for (int n = 0; rrc == EF_OK; n++) {
             sim_rx(S, &f);
             if (n + 1 >= SIM_RX_BURST)
@@ -259,8 +257,33 @@ int ef_can_sim_run(const ef_can_sim_cfg_t *c, ef_msg_t *m)
             rc = ef_fail(m, EF_ERR_IO, "sim-drive: %s", S->sk.msg.text);
             break;
         }
+        uint32_t next = SIM_MAX_WAIT_US;
+        float cmd0 = S->d.drv.cmd.x, act0 = S->d.drv.act.x;
+        uint16_t sw0 = S->d.statusword;
+        ef_codrive_process(&S->d, dt, &next); /* a bus error: the drive keeps trying */
+        /* The drive stepped on its own clock (the SYNC-loss watchdog's stop): trace it too. */
+        if (S->d.drv.cmd.x != cmd0 || S->d.drv.act.x != act0 || S->d.statusword != sw0)
+            sim_trace_p(S);
+        int frc = ef_sockcan_flush(&S->sk);
+        if (frc == EF_ERR_IO) {
+            rc = ef_fail(m, EF_ERR_IO, "sim-drive: %s", S->sk.msg.text);
+            break;
+        }
         if (S->trace)
             fflush(S->trace); /* a reader sees everything up to now */
+        uint32_t wait = next < SIM_MAX_WAIT_US ? next : SIM_MAX_WAIT_US;
+        if (c->run_ms >= 0) {
+            uint64_t left = (uint64_t)c->run_ms * 1000u - t_us;
+            if (left < wait)
+                wait = (uint32_t)left;
+        }
+        rrc = ef_sockcan_recv(&S->sk, &f, wait); /* handed over at the top, after the clock */
+        if (rrc == EF_OK) {
+            have = 1;
+        } else if (rrc == EF_ERR_IO) {
+            rc = ef_fail(m, EF_ERR_IO, "sim-drive: %s", S->sk.msg.text);
+            break;
+        }
     }
     if (S->trace)
         fclose(S->trace);

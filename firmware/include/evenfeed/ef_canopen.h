@@ -111,6 +111,10 @@ const char *ef_co_abort_str(uint32_t code);
 #define EF_CO_OBJ_TPDO_MAP     0x1A00u /**< + k */
 #define EF_CO_OBJ_INC_PER_UNIT 0x2000u /**< u32 ro: position increments per program unit */
 #define EF_CO_OBJ_DRIVE_FAULT  0x2001u /**< u8 ro: ::ef_drive_fault_t of the last fault */
+/** u16 rw: SYNC loss timeout (ms, 0 = off, default 500): a drive enabled (or still stopping)
+ *  in OPERATIONAL with a cycle period that sees no SYNC this long raises the WATCHDOG fault
+ *  (EMCY 0x8130) and stops under control on its own clock. */
+#define EF_CO_OBJ_SYNC_TIMEOUT 0x2003u
 #define EF_CO_OBJ_SEG_AXIS     0x2100u /**< u64 wo, RPDO-mappable: axis record chunk */
 #define EF_CO_OBJ_SEG_LAW      0x2101u /**< u64 wo, RPDO-mappable: law record chunk */
 #define EF_CO_OBJ_SEG_STATUS   0x2102u /**< record ro: see EF_CO_SEGST_* */

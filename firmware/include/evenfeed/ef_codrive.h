@@ -20,7 +20,19 @@
  * time is SYNC time, see ef_canopen.h). RPDOs of synchronous transmission type (0..240)
  * are latched and applied at the next SYNC; type 254/255 apply on receipt. TPDOs of type 1
  * are sent after every SYNC (after the motion step, so they report the new state).
- * ef_codrive_process() only runs the wall-clock duties: boot-up, heartbeat, TX retries.
+ * ef_codrive_process() runs the wall-clock duties: boot-up, heartbeat, TX retries, and the
+ * SYNC-loss watchdog (0x2003, default ::EF_CODRIVE_SYNC_TIMEOUT_MS): while the drive is in
+ * OPERATION ENABLED (or QUICK STOP ACTIVE / FAULT REACTION ACTIVE still moving), NMT
+ * OPERATIONAL, with a non-zero cycle period, a SYNC gap of the timeout raises the WATCHDOG
+ * fault (EMCY 0x8130, or none if a fault is already being reacted to). The gap is the time
+ * the process() calls report after the first call that follows the last SYNC (a SYNC
+ * handled between two calls counts as arriving at the second: a caller held back with SYNCs
+ * waiting in its receive queue, which it hands over before its next call, never trips it).
+ * From then on, until
+ * a SYNC comes again, ef_codrive_process() steps the drive model by the wall-clock time it is
+ * given: the stop ramps down from where and how fast the axis was at the last SYNC (during
+ * the gap itself the axis holds: a SYNC may merely be late), then FAULT. A SYNC takes the
+ * stepping back (never both).
  *
  * Storage: all static; the TX queue holds ::EF_CODRIVE_TXQ frames (a full port queue is
  * retried, not dropped; beyond the queue the oldest heartbeat/TPDO is replaced, never an
@@ -33,7 +45,9 @@
  *   and heartbeat only. Reset communication restores 0x1005, 0x1006 (0), 0x1017 (0: no
  *   heartbeat until the master sets one) and the PDO parameters, and sends the boot-up at
  *   once; reset node also restores the application objects (mode CSP, SWITCH ON DISABLED,
- *   0x6065 from servo.ferr_lim, counters) and restarts the drive model where the axis is.
+ *   0x6065 from servo.ferr_lim, 0x2003, counters) and restarts the drive model where the
+ *   axis is. A stop the watchdog is stepping goes on through NMT commands other than reset
+ *   node.
  * - PDO defaults: RPDO1 0x200+node type 1 {0x6040, 0x607A}; TPDO1 0x180+node type 1 {0x6041,
  *   0x6064}; RPDO2 0x300+node, RPDO3 0x400+node (type 255) and TPDO2 0x280+node (type 1)
  *   disabled and empty. Types 0..240 and 254/255 are accepted. A synchronous RPDO keeps
@@ -87,6 +101,10 @@ extern "C" {
 /** Most ef_drive_process() calls one SYNC steps: 0x1006 is at most this times
  *  EF_DRIVE_MAX_STEPS servo periods (1.024 s at the 1000 us default). */
 #define EF_CODRIVE_SYNC_CALLS 16u
+/** SYNC loss timeout (0x2003) at power-up and after reset node (ms; 0 = off). */
+#define EF_CODRIVE_SYNC_TIMEOUT_MS 500u
+/** Largest SYNC loss timeout 0x2003 accepts (ms). */
+#define EF_CODRIVE_SYNC_TIMEOUT_MAX_MS 60000u
 /** PDOs of each direction (RPDO1..3, TPDO1..2). */
 #define EF_CODRIVE_RPDOS 3
 #define EF_CODRIVE_TPDOS 2
@@ -137,14 +155,19 @@ typedef struct {
     int8_t mode_display;  /**< 0x6061 */
     uint16_t controlword; /**< last applied */
     uint16_t statusword;
-    uint16_t error_code;  /**< 0x603F */
-    uint16_t hb_ms;       /**< 0x1017 (0 after reset communication: off) */
-    uint32_t cycle_us;    /**< 0x1006 (0 after reset communication: SYNC steps no motion) */
-    uint32_t ferr_window; /**< 0x6065 (increments) */
-    uint32_t sync_count;  /**< SYNCs processed (pre-operational or operational) */
-    uint32_t hb_acc_us;   /**< time since the last heartbeat */
-    uint8_t booted;       /**< boot-up message sent */
-    uint8_t hb_off;       /**< heartbeat suppressed (fault injection) */
+    uint16_t error_code;      /**< 0x603F */
+    uint16_t hb_ms;           /**< 0x1017 (0 after reset communication: off) */
+    uint32_t cycle_us;        /**< 0x1006 (0 after reset communication: SYNC steps no motion) */
+    uint32_t ferr_window;     /**< 0x6065 (increments) */
+    uint32_t sync_count;      /**< SYNCs processed (pre-operational or operational) */
+    uint32_t hb_acc_us;       /**< time since the last heartbeat */
+    uint8_t booted;           /**< boot-up message sent */
+    uint8_t hb_off;           /**< heartbeat suppressed (fault injection) */
+    uint16_t sync_timeout_ms; /**< 0x2003 (0: watchdog off) */
+    uint32_t sync_gap_us;     /**< time since the last SYNC while the watchdog watches */
+    uint8_t sync_lost;        /**< the watchdog tripped: process() steps the stop until at rest
+                                   or until a SYNC steps again */
+    uint8_t sync_seen;        /**< a SYNC came since the last process() call */
     uint8_t pad[2];
     ef_codrive_pdo_t rpdo[EF_CODRIVE_RPDOS];
     ef_codrive_pdo_t tpdo[EF_CODRIVE_TPDOS];
@@ -203,11 +226,15 @@ int ef_codrive_init(ef_codrive_t *d, const ef_codrive_cfg_t *c, const ef_can_por
 int ef_codrive_rx(ef_codrive_t *d, const ef_can_frame_t *f);
 
 /**
- * @brief Wall-clock duties: boot-up, heartbeat, retry of queued frames.
- * @param next_us out (may be NULL): when to call again at the latest
+ * @brief Wall-clock duties: boot-up, heartbeat, retry of queued frames, the SYNC-loss
+ * watchdog and the stop it steps on the wall clock (dt_us of it per call, at most
+ * ::EF_CODRIVE_SYNC_CALLS times (EF_DRIVE_MAX_STEPS - 1) servo periods).
+ * @param next_us out (may be NULL): when to call again at the latest (the next servo period
+ *                while the watchdog's stop runs, at the latest the watchdog deadline)
  * @retval EF_OK
- * @retval EF_ERR_ARG NULL
- * @retval EF_ERR_BUS the port reported bus-off / interface down
+ * @retval EF_ERR_ARG   NULL
+ * @retval EF_ERR_BUS   the port reported bus-off / interface down (takes precedence)
+ * @retval EF_ERR_DRIVE this call raised a drive fault: the watchdog (EMCY sent)
  */
 int ef_codrive_process(ef_codrive_t *d, uint32_t dt_us, uint32_t *next_us);
 
