@@ -777,8 +777,8 @@ static void part_masterdeath(void)
     char log[512], trace[512];
     snprintf(log, sizeof log, "%s/death.log", g_out);
     snprintf(trace, sizeof trace, "%s/death.csv", g_out);
-    char *argv[] = {(char *)g_ef, "stream", "--can", "vcan0", "--mode", "segment", "--log", log,
-                    "--trace", trace, prog, NULL};
+    char *argv[] = {(char *)g_ef, "stream", "--can",   "vcan0", "--mode", "segment",
+                    "--log",      log,      "--trace", trace,   prog,     NULL};
     tm_proc_t st;
     EF_CHECK_EQ(tm_spawn(argv, 1, &st), 0);
     /* Wait (bounded) until x is well into the straight cut at 20 mm/s (x 0 -> 60 mm). */
@@ -799,8 +799,7 @@ static void part_masterdeath(void)
     /* The stop ends by itself; give the drives' own clocks the stopping time. */
     for (int i = 0; i < 100; i++) {
         hil_dtrace_t T;
-        int done = hil_dtrace_load(1, &T) == 0 && T.np > 0 &&
-                   T.p[T.np - 1].power == EF_CO_PS_FAULT;
+        int done = hil_dtrace_load(1, &T) == 0 && T.np > 0 && T.p[T.np - 1].power == EF_CO_PS_FAULT;
         hil_dtrace_free(&T);
         if (done)
             break;
