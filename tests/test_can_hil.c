@@ -266,13 +266,21 @@ typedef struct {
     int emcy, emcy_code, reached_op;
 } hil_dtrace_t;
 
+/* Open OUT/NAME for reading and clear the trace it fills (NULL if it is not there). */
+static FILE *hil_open_trace(const char *name, void *trace, size_t size)
+{
+    char path[512];
+    snprintf(path, sizeof path, "%s/%s", g_out, name);
+    memset(trace, 0, size);
+    return fopen(path, "r");
+}
+
 /* Parse a drive trace (p/s/e lines). */
 static int hil_dtrace_load(int node, hil_dtrace_t *T)
 {
-    char path[512];
-    snprintf(path, sizeof path, "%s/drive%d.csv", g_out, node);
-    memset(T, 0, sizeof *T);
-    FILE *f = fopen(path, "r");
+    char name[32];
+    snprintf(name, sizeof name, "drive%d.csv", node);
+    FILE *f = hil_open_trace(name, T, sizeof *T);
     if (!f)
         return -1;
     char line[512];
@@ -330,10 +338,9 @@ typedef struct {
 /* Parse the streamer's trace (y/a/t/m lines). */
 static int hil_strace_load(const char *name, hil_strace_t *T)
 {
-    char path[512];
-    snprintf(path, sizeof path, "%s/%s.csv", g_out, name);
-    memset(T, 0, sizeof *T);
-    FILE *f = fopen(path, "r");
+    char file[256];
+    snprintf(file, sizeof file, "%s.csv", name);
+    FILE *f = hil_open_trace(file, T, sizeof *T);
     if (!f)
         return -1;
     char line[512];
