@@ -6,6 +6,7 @@
 #include <stdint.h>
 #include <string.h>
 #include "ef_test.h"
+#include "ef_testmove.h"
 #include "evenfeed/ef_codrive.h"
 #include "evenfeed/ef_err.h"
 
@@ -201,87 +202,23 @@ static uint32_t sdo_write_seg(uint16_t idx, uint8_t sub, const uint8_t *data, ui
     return 0;
 }
 
-/* ------------------------------------------------------------------ moves (as test_drive.c) */
+/* ------------------------------------------------------------------ moves (ef_testmove.h) */
 
-static void bz1(const ef_vec3_t *b, int deg, double t, double *out)
-{
-    double p[6];
-    for (int i = 0; i <= deg; i++)
-        p[i] = b[i].x;
-    for (int r = 0; r < deg; r++)
-        for (int i = 0; i < deg - r; i++)
-            p[i] = (1 - t) * p[i] + t * p[i + 1];
-    *out = p[0];
-}
-
-static double arclen1(const ef_vec3_t *b, int deg)
-{
-    double prev, cur, len = 0;
-    bz1(b, deg, 0, &prev);
-    for (int i = 1; i <= 4000; i++) {
-        bz1(b, deg, i / 4000.0, &cur);
-        len += fabs(cur - prev);
-        prev = cur;
-    }
-    return len;
-}
-
-enum { LAW_ACCEL, LAW_CRUISE, LAW_DECEL };
-
-/* A move along x through b[0..deg] with a one-phase law (as tests/test_drive.c). */
+/* A move along x through xs[0..deg] with a one-phase law at V0 (ef_testmove.h). */
 static ef_move_t mk_move(uint32_t seq, int deg, const float *xs, int law)
 {
-    ef_move_t m;
-    memset(&m, 0, sizeof m);
-    m.degree = (uint8_t)deg;
-    m.seq = seq;
+    ef_vec3_t p[6];
     for (int i = 0; i <= deg; i++)
-        m.b[i] = ef_v3(xs[i], 0, 0);
-    double L = arclen1(m.b, deg);
-    m.length = (float)L;
-    float D;
-    if (law == LAW_CRUISE) {
-        D = (float)(L / V0);
-        m.law.c[0][1] = 1.0f / D;
-        m.v_exit = V0;
-    } else {
-        D = (float)(2.0 * L / V0);
-        if (law == LAW_ACCEL) {
-            m.law.c[0][2] = 1.0f / (D * D);
-            m.v_exit = V0;
-        } else {
-            m.law.c[0][1] = 2.0f / D;
-            m.law.c[0][2] = -1.0f / (D * D);
-            m.v_exit = 0.0f;
-            m.flags = EF_MOVE_STOP_END;
-        }
-    }
-    m.duration = D;
-    m.law.dt[0] = D;
-    return m;
+        p[i] = ef_v3(xs[i], 0, 0);
+    return tm_move(seq, deg, p, law, V0);
 }
 
-static double law_tau(const ef_move_t *m, double u)
-{
-    if (u >= m->duration)
-        return 1.0;
-    const float *c = m->law.c[0];
-    double t = c[0] + u * (c[1] + u * (c[2] + u * (c[3] + u * (double)c[4])));
-    return t < 0 ? 0 : t > 1 ? 1 : t;
-}
-
-/* Where a chain of moves started at time 0 is at time T. */
+/* Where a chain of moves started at time 0 is along x at time T. */
 static double chain_x(const ef_move_t *mv, int n, double T)
 {
-    double t0 = 0, x = 0;
-    for (int i = 0; i < n; i++) {
-        if (T < t0 + mv[i].duration || i == n - 1) {
-            bz1(mv[i].b, mv[i].degree, law_tau(&mv[i], T - t0), &x);
-            return x;
-        }
-        t0 += mv[i].duration;
-    }
-    return x;
+    double p[3];
+    tm_chain_pos(mv, n, T, p);
+    return p[0];
 }
 
 /* The three test moves: accelerate 0..10 (line), cruise 10..20 (a quintic of uneven parametric

@@ -5,6 +5,7 @@
 #include <stdint.h>
 #include <string.h>
 #include "ef_test.h"
+#include "ef_testmove.h"
 #include "evenfeed/ef_drive.h"
 #include "evenfeed/ef_err.h"
 #include "evenfeed/ef_modbus.h"
@@ -14,73 +15,10 @@
 
 /* ------------------------------------------------------------------ helpers */
 
-/* Bézier point in double by de Casteljau. */
-static void bz(const ef_vec3_t *b, int deg, double t, double out[3])
-{
-    double p[6][3];
-    for (int i = 0; i <= deg; i++) {
-        p[i][0] = b[i].x;
-        p[i][1] = b[i].y;
-        p[i][2] = b[i].z;
-    }
-    for (int r = 0; r < deg; r++)
-        for (int i = 0; i < deg - r; i++)
-            for (int c = 0; c < 3; c++)
-                p[i][c] = (1 - t) * p[i][c] + t * p[i + 1][c];
-    for (int c = 0; c < 3; c++)
-        out[c] = p[0][c];
-}
-
-/* Arc length in double by dense chords. */
-static double arclen(const ef_vec3_t *b, int deg)
-{
-    double prev[3], cur[3], len = 0;
-    bz(b, deg, 0, prev);
-    for (int i = 1; i <= 4000; i++) {
-        bz(b, deg, i / 4000.0, cur);
-        len +=
-            sqrt((cur[0] - prev[0]) * (cur[0] - prev[0]) + (cur[1] - prev[1]) * (cur[1] - prev[1]) +
-                 (cur[2] - prev[2]) * (cur[2] - prev[2]));
-        memcpy(prev, cur, sizeof prev);
-    }
-    return len;
-}
-
-/* Law kinds of the test moves: accelerate from rest, cruise, decelerate to rest. */
-enum { LAW_ACCEL, LAW_CRUISE, LAW_DECEL };
-
-/* A move through points b[0..deg] with a one-phase law at cruise speed V0 (or ramping). */
+/* A move through pts[0..deg] with a one-phase law at V0 (ef_testmove.h). */
 static ef_move_t mk_move(uint32_t seq, int deg, const ef_vec3_t *pts, int law)
 {
-    ef_move_t m;
-    memset(&m, 0, sizeof m);
-    m.degree = (uint8_t)deg;
-    m.seq = seq;
-    for (int i = 0; i <= deg; i++)
-        m.b[i] = pts[i];
-    double L = arclen(pts, deg);
-    m.length = (float)L;
-    float D;
-    if (law == LAW_CRUISE) {
-        D = (float)(L / V0);
-        m.law.c[0][1] = 1.0f / D;
-        m.v_exit = V0;
-    } else {
-        D = (float)(2.0 * L / V0);
-        if (law == LAW_ACCEL) {
-            m.law.c[0][2] = 1.0f / (D * D); /* tau = (u/D)^2 */
-            m.v_exit = V0;
-        } else {
-            m.law.c[0][1] = 2.0f / D; /* tau = 2u/D - (u/D)^2 */
-            m.law.c[0][2] = -1.0f / (D * D);
-            m.v_exit = 0.0f;
-            m.flags = EF_MOVE_STOP_END;
-        }
-    }
-    m.duration = D;
-    m.law.dt[0] = D;
-    m.v_entry = law == LAW_ACCEL ? 0.0f : V0;
-    return m;
+    return tm_move(seq, deg, pts, law, V0);
 }
 
 /* A straight move from a to b. */
@@ -88,29 +26,6 @@ static ef_move_t mk_line(uint32_t seq, ef_vec3_t a, ef_vec3_t b, int law)
 {
     ef_vec3_t p[2] = {a, b};
     return mk_move(seq, 1, p, law);
-}
-
-/* tau of a test move's law at time u in double. */
-static double law_tau(const ef_move_t *m, double u)
-{
-    if (u >= m->duration)
-        return 1.0;
-    const float *c = m->law.c[0];
-    double t = c[0] + u * (c[1] + u * (c[2] + u * (c[3] + u * (double)c[4])));
-    return t < 0 ? 0 : t > 1 ? 1 : t;
-}
-
-/* Where a chain of moves (started at time 0) is at time T, in double. */
-static void chain_pos(const ef_move_t *mv, int n, double T, double out[3])
-{
-    double t0 = 0;
-    for (int i = 0; i < n; i++) {
-        if (T < t0 + mv[i].duration || i == n - 1) {
-            bz(mv[i].b, mv[i].degree, law_tau(&mv[i], T - t0), out);
-            return;
-        }
-        t0 += mv[i].duration;
-    }
 }
 
 static double dist3(ef_vec3_t a, const double b[3])
@@ -438,7 +353,7 @@ static void test_chain(void)
         uint64_t steps = elapsed / PERIOD_US;
         EF_CHECK_EQ(next_us, PERIOD_US - elapsed % PERIOD_US);
         double T = (double)steps * PERIOD_US * 1e-6, want[3];
-        chain_pos(mv, n, T, want);
+        tm_chain_pos(mv, n, T, want);
         double e = dist3(d->cmd, want);
         if (e > worst)
             worst = e;
