@@ -71,18 +71,28 @@ typedef struct {
 
 static hil_ref_t g_ref;
 
+/* Room for element n of a growing array (capacity doubling); exits on no memory, which a
+ * test cannot go on from. */
+static void *hil_grow(void *arr, size_t *cap, size_t n, size_t elem)
+{
+    if (n < *cap)
+        return arr;
+    *cap = *cap ? 2 * *cap : 4096;
+    void *a = realloc(arr, *cap * elem);
+    if (!a) {
+        fprintf(stderr, "test_can_hil: out of memory\n");
+        exit(1);
+    }
+    return a;
+}
+
 /* Collect every setpoint of the reference run. */
 static int hil_on_sp(void *user, double t, const ef_setpoint_t *sp, const ef_pipe_move_info_t *mi)
 {
     (void)t;
     (void)mi;
     hil_ref_t *R = user;
-    if (R->n == R->cap) {
-        R->cap = R->cap ? 2 * R->cap : 65536;
-        R->p = realloc(R->p, R->cap * 3 * sizeof(double));
-        if (!R->p)
-            return EF_ERR_NOMEM;
-    }
+    R->p = hil_grow(R->p, &R->cap, R->n, 3 * sizeof(double));
     R->p[3 * R->n] = sp->p.x;
     R->p[3 * R->n + 1] = sp->p.y;
     R->p[3 * R->n + 2] = sp->p.z;
@@ -291,20 +301,14 @@ static int hil_dtrace_load(int node, hil_dtrace_t *T)
             if (sscanf(line, "p,%u,%u,%d,%lf,%lf,%lf", &r.sync, &r.sw, &r.power, &r.cmd, &r.act,
                        &r.ferr) != 6)
                 continue;
-            if (T->np == capp) {
-                capp = capp ? 2 * capp : 4096;
-                T->p = realloc(T->p, capp * sizeof *T->p);
-            }
+            T->p = hil_grow(T->p, &capp, T->np, sizeof *T->p);
             T->p[T->np++] = r;
             T->reached_op |= r.power == EF_CO_PS_OP_ENABLED;
         } else if (line[0] == 's') {
             long s;
             if (sscanf(line, "s,%ld", &s) != 1)
                 continue;
-            if (T->ns == caps) {
-                caps = caps ? 2 * caps : 1024;
-                T->seq = realloc(T->seq, caps * sizeof *T->seq);
-            }
+            T->seq = hil_grow(T->seq, &caps, T->ns, sizeof *T->seq);
             T->seq[T->ns++] = s;
         } else if (line[0] == 'e') {
             unsigned sy, code;
@@ -356,10 +360,7 @@ static int hil_strace_load(const char *name, hil_strace_t *T)
                 y = 0;
             if (k < 4)
                 z = 0;
-            if (T->na == capa) {
-                capa = capa ? 2 * capa : 8192;
-                T->a = realloc(T->a, capa * 3 * sizeof(double));
-            }
+            T->a = hil_grow(T->a, &capa, T->na, 3 * sizeof(double));
             T->a[3 * T->na] = x;
             T->a[3 * T->na + 1] = y;
             T->a[3 * T->na + 2] = z;
@@ -369,10 +370,7 @@ static int hil_strace_load(const char *name, hil_strace_t *T)
             double t;
             if (sscanf(line, "y,%u,%lf", &sy, &t) != 2)
                 continue;
-            if (T->ny == capy) {
-                capy = capy ? 2 * capy : 8192;
-                T->ty = realloc(T->ty, capy * sizeof(double));
-            }
+            T->ty = hil_grow(T->ty, &capy, T->ny, sizeof(double));
             T->ty[T->ny++] = t;
         } else if (line[0] == 'm') {
             T->nm++;
