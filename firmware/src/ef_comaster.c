@@ -1063,6 +1063,7 @@ static void com_emcy(ef_comaster_t *m, int k, const ef_can_frame_t *f)
         com_error(m, EF_ERR_DRIVE, EF_COM_WHAT_EMCY, k, 0, 0);
         m->err.emcy = code;
         m->err.drive_fault = f->data[3];
+        m->err.value = ef_co_get32(&f->data[4]); /* the drive's SYNC count at the fault */
     }
     com_enter_stop(m);
 }

@@ -65,7 +65,6 @@ typedef struct {
     double pushed_time; /* durations of the moves pushed (s) */
     double longest;     /* longest move (s) */
     cs_name_t names[EF_CAN_STREAM_MAX_NODES];
-    uint32_t emcy_sync[EF_CAN_STREAM_MAX_NODES]; /* drive SYNC count in the last EMCY */
     /* Executed path: the n-th TPDO1 of every node answers the same SYNC (type 1: one per
      * SYNC, in order, all nodes operational from the same NMT start), so rows pair them by
      * count, not by arrival time, which a loaded host stretches. */
@@ -241,26 +240,10 @@ static void cs_snoop_name(cs_t *S, const ef_can_frame_t *f)
     }
 }
 
-/* Keep the drive's SYNC count of each node's latest EMCY (payload bytes 4..7) for the
- * error message: the master keeps the code and the fault only. */
-static void cs_snoop_emcy(cs_t *S, const ef_can_frame_t *f)
-{
-    if (f->flags || f->dlc != 8 || (f->id & ~0x7Fu) != EF_CO_COB_EMCY)
-        return;
-    int k = cs_node_index(S, f->id & 0x7Fu);
-    if (k >= 0 && ef_co_get16(f->data) != EF_CO_EMCY_NONE)
-        S->emcy_sync[k] = ef_co_get32(&f->data[4]);
-}
-
-/* The master's error as text, with the EMCY's SYNC count filled in. */
+/* The master's error as text. */
 static void cs_error_text(const cs_t *S, char *buf, size_t n)
 {
-    ef_com_error_t e = *ef_comaster_error(&S->ms);
-    if (e.what == EF_COM_WHAT_EMCY && e.value == 0) {
-        int k = cs_node_index(S, e.node);
-        e.value = k >= 0 ? S->emcy_sync[k] : 0;
-    }
-    ef_can_error_text(&e, &S->mc, S->c->iface, buf, n);
+    ef_can_error_text(ef_comaster_error(&S->ms), &S->mc, S->c->iface, buf, n);
 }
 
 /* Every SYNC the master sends: timestamp, period statistics, trace of the actual positions. */
@@ -382,7 +365,6 @@ static void cs_pump(cs_t *S, uint32_t max_wait_us)
         S->res->rx_frames++;
         S->res->rx_bits += ef_can_frame_bits(&f);
         cs_snoop_name(S, &f);
-        cs_snoop_emcy(S, &f);
         cs_snoop_tpdo(S, &f);
         ef_comaster_rx(&S->ms, &f);
         cs_note_error(S);

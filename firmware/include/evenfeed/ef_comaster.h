@@ -171,7 +171,8 @@ typedef struct {
     uint8_t power;       /**< ::ef_co_power_t of that statusword */
     uint8_t pad;
     uint32_t abort;    /**< SDO abort code (0: none) */
-    uint32_t value;    /**< CHECK: the value read; STREAM: the sequence number */
+    uint32_t value;    /**< CHECK: the value read; STREAM: the sequence number; EMCY: the
+                            drive's SYNC count at the fault (EMCY bytes 4..7) */
     uint32_t expected; /**< CHECK: the value expected */
 } ef_com_error_t;
 

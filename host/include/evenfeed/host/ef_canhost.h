@@ -119,8 +119,7 @@ int ef_can_stream(ef_gcode_t *r, const ef_can_stream_cfg_t *c, ef_can_stream_res
  * @brief One line for a master error: "node 2: EMCY 0xFF04 (fault injected), drive fault 4,
  * at SYNC 1234", "node 1: heartbeat lost (200 ms)", "vcan0: bus-off"...
  * @param e     the master's error (for an EMCY, value is printed as the drive's SYNC count
- *              at the fault: the master leaves it 0, ef_can_stream() fills it in from the
- *              EMCY's payload)
+ *              at the fault, from the EMCY's payload)
  * @param c     the master's configuration (timeouts named in the text; may be NULL)
  * @param iface interface name for bus errors (may be NULL)
  */
