@@ -34,6 +34,7 @@
 #include "ef_test.h"
 #include "evenfeed/ef_canopen.h"
 #include "evenfeed/ef_drive.h"
+#include "evenfeed/host/ef_canload.h"
 #include "evenfeed/host/ef_gcode.h"
 #include "evenfeed/host/ef_pipeline.h"
 
@@ -62,14 +63,9 @@ static const char *g_ef, *g_src, *g_out;
 
 /* ------------------------------------------------------------------ reference path */
 
-typedef struct {
-    double *p; /* 3 per point */
-    size_t n, cap;
-    uint32_t moves;
-    double end[3];
-} hil_ref_t;
-
-static hil_ref_t g_ref;
+/* The commanded path: the program smoothed with the streamer's defaults, its moves and its
+ * setpoints every 1 ms (ef_canload_path(), as the bus-load benchmark takes them). */
+static ef_canload_path_t g_ref;
 
 /* Room for element n of a growing array (capacity doubling); exits on no memory, which a
  * test cannot go on from. */
@@ -86,29 +82,6 @@ static void *hil_grow(void *arr, size_t *cap, size_t n, size_t elem)
     return a;
 }
 
-/* Collect every setpoint of the reference run. */
-static int hil_on_sp(void *user, double t, const ef_setpoint_t *sp, const ef_pipe_move_info_t *mi)
-{
-    (void)t;
-    (void)mi;
-    hil_ref_t *R = user;
-    R->p = hil_grow(R->p, &R->cap, R->n, 3 * sizeof(double));
-    R->p[3 * R->n] = sp->p.x;
-    R->p[3 * R->n + 1] = sp->p.y;
-    R->p[3 * R->n + 2] = sp->p.z;
-    R->n++;
-    return 0;
-}
-
-/* Count moves as the streamer numbers them. */
-static int hil_on_move(void *user, const ef_move_t *m, const ef_pipe_move_info_t *mi)
-{
-    (void)m;
-    (void)mi;
-    ((hil_ref_t *)user)->moves++;
-    return 0;
-}
-
 /* Smooth the program with the streamer's defaults; setpoints every 1 ms. */
 static int hil_reference(const char *prog)
 {
@@ -122,28 +95,18 @@ static int hil_reference(const char *prog)
     ef_pipe_cfg_default(&pc);
     pc.g2 = &ef_tbl_g2_default;
     pc.g1 = &ef_tbl_g1_default;
-    pc.interp_modes = EF_PIPE_INTERP_CORRECTED;
     pc.step_mode = EF_STEP_CORRECTED;
-    ef_pipe_cb_t cb = {0};
-    cb.on_setpoint = hil_on_sp;
-    cb.on_move = hil_on_move;
-    cb.user = &g_ref;
-    ef_pipe_stats_t st;
-    int rc = ef_pipe_run(&r, &pc, &cb, &st, &m);
+    int rc = ef_canload_path(&r, &pc, &g_ref, &m);
     ef_gcode_free(&r);
     if (rc != EF_OK) {
         fprintf(stderr, "reference: %s\n", m.text);
         return -1;
     }
-    memcpy(g_ref.end, st.end, sizeof g_ref.end);
-    if (getenv("EF_HIL_DEBUG"))
-        printf("reference: %zu setpoints, %u moves, first (%g %g %g), end (%g %g %g)\n", g_ref.n,
-               g_ref.moves, g_ref.p[0], g_ref.p[1], g_ref.p[2], st.end[0], st.end[1], st.end[2]);
     return 0;
 }
 
 /* Distance from q to the segment a-b. */
-static double hil_seg_dist(const double *q, const double *a, const double *b)
+static double hil_seg_dist(const double *q, const float *a, const float *b)
 {
     double ab[3], aq[3], L2 = 0, t = 0;
     for (int i = 0; i < 3; i++) {
@@ -165,7 +128,7 @@ static double hil_seg_dist(const double *q, const double *a, const double *b)
  * advance along the path), widening to the whole path when nothing near is close. */
 static double hil_path_dist(const double *q, size_t *cursor)
 {
-    size_t n = g_ref.n;
+    size_t n = g_ref.nsp;
     if (n < 2)
         return INFINITY;
     size_t lo = *cursor > 200 ? *cursor - 200 : 0,
@@ -174,7 +137,7 @@ static double hil_path_dist(const double *q, size_t *cursor)
     size_t at = *cursor;
     for (int pass = 0; pass < 2; pass++) {
         for (size_t k = lo; k < hi; k++) {
-            double d = hil_seg_dist(q, g_ref.p + 3 * k, g_ref.p + 3 * (k + 1));
+            double d = hil_seg_dist(q, g_ref.sp + 3 * k, g_ref.sp + 3 * (k + 1));
             if (d < best) {
                 best = d;
                 at = k;
@@ -622,10 +585,11 @@ static void part_stream(const char *mode, int drop)
     hil_check_path(mode, &S, 1, (size_t)-1);
     int seg = !strcmp(mode, "segment");
     if (seg) {
-        printf("%s: %zu segments pushed, %u moves in the program\n", mode, S.nm, g_ref.moves);
-        EF_CHECK_EQ(S.nm, g_ref.moves);
+        printf("%s: %zu segments pushed, %u moves in the program\n", mode, S.nm,
+               (unsigned)g_ref.nmv);
+        EF_CHECK_EQ(S.nm, (unsigned)g_ref.nmv);
     }
-    hil_check_drives(mode, seg ? (int)g_ref.moves : -1);
+    hil_check_drives(mode, seg ? (int)g_ref.nmv : -1);
     hil_check_log("stream");
     if (drop) {
         /* The dropped chunks were sent again: the summary counts go-back-N rounds, and the
