@@ -31,12 +31,6 @@ enum { CS_ITEM_MOVE = 1, CS_ITEM_SETPOINT = 2, CS_ITEM_EVENT = 3 };
 /** TPDO1 positions kept per node until every node's answer to the same SYNC is in. */
 #define CS_TP_RING 256u
 
-/* Segmented upload of a device name, followed from the SDO answers on the bus. */
-typedef struct {
-    uint8_t active; /* an upload of 0x1008 is under way */
-    uint32_t got;
-} cs_name_t;
-
 typedef struct {
     const ef_can_stream_cfg_t *c;
     ef_can_stream_result_t *res;
@@ -64,7 +58,6 @@ typedef struct {
     int start_checked;
     double pushed_time; /* durations of the moves pushed (s) */
     double longest;     /* longest move (s) */
-    cs_name_t names[EF_CAN_STREAM_MAX_NODES];
     /* Executed path: the n-th TPDO1 of every node answers the same SYNC (type 1: one per
      * SYNC, in order, all nodes operational from the same NMT start), so rows pair them by
      * count, not by arrival time, which a loaded host stretches. */
@@ -202,44 +195,6 @@ static int cs_node_index(const cs_t *S, uint32_t id)
     return -1;
 }
 
-/* Follow SDO answers on the bus to keep each node's device name (0x1008). */
-static void cs_snoop_name(cs_t *S, const ef_can_frame_t *f)
-{
-    if (f->flags || f->dlc != 8 || (f->id & ~0x7Fu) != EF_CO_COB_SDO_TX)
-        return;
-    int k = cs_node_index(S, f->id & 0x7Fu);
-    if (k < 0)
-        return;
-    cs_name_t *nm = &S->names[k];
-    char *name = S->res->names[k];
-    uint8_t cmd = f->data[0];
-    if ((cmd & 0xE0u) == 0x40u) { /* upload initiate response */
-        nm->active = 0;
-        if (ef_co_get16(&f->data[1]) != EF_CO_OBJ_DEVICE_NAME)
-            return;
-        nm->got = 0;
-        name[0] = 0;
-        if (cmd & 0x02u) { /* expedited: up to 4 bytes here */
-            uint32_t len = (cmd & 0x01u) ? 4u - ((cmd >> 2) & 3u) : 4u;
-            for (uint32_t i = 0; i < len && f->data[4 + i]; i++)
-                name[nm->got++] = (char)f->data[4 + i];
-            name[nm->got] = 0;
-        } else {
-            nm->active = 1;
-        }
-    } else if ((cmd & 0xE0u) == 0x00u && nm->active) { /* upload segment response */
-        uint32_t len = 7u - ((cmd >> 1) & 7u);
-        for (uint32_t i = 0; i < len; i++)
-            if (nm->got + 1 < EF_CAN_NAME_LEN && f->data[1 + i])
-                name[nm->got++] = (char)f->data[1 + i];
-        name[nm->got] = 0;
-        if (cmd & 0x01u)
-            nm->active = 0;
-    } else if (cmd == EF_CO_SDO_ABORT) {
-        nm->active = 0;
-    }
-}
-
 /* The master's error as text. */
 static void cs_error_text(const cs_t *S, char *buf, size_t n)
 {
@@ -364,7 +319,6 @@ static void cs_pump(cs_t *S, uint32_t max_wait_us)
     for (int n = 0; rc == EF_OK; n++) {
         S->res->rx_frames++;
         S->res->rx_bits += ef_can_frame_bits(&f);
-        cs_snoop_name(S, &f);
         cs_snoop_tpdo(S, &f);
         ef_comaster_rx(&S->ms, &f);
         cs_note_error(S);
@@ -737,6 +691,10 @@ static void cs_result(cs_t *S)
         res->load = (double)(res->tx_bits + res->rx_bits) / S->c->bitrate / res->wall_time;
     res->state = ef_comaster_state(&S->ms);
     res->err = *ef_comaster_error(&S->ms);
+    for (int k = 0; k < S->c->n_nodes; k++) {
+        const char *nm = ef_comaster_name(&S->ms, k);
+        snprintf(res->names[k], sizeof res->names[k], "%s", nm ? nm : "");
+    }
     uint32_t acked = UINT32_MAX;
     for (int k = 0; k < S->c->n_nodes; k++) {
         const ef_com_node_t *nd = ef_comaster_node(&S->ms, k);
