@@ -4,12 +4,6 @@
 #include "evenfeed/ef_drive.h"
 #include "evenfeed/ef_err.h"
 
-/* Finite test without libm. */
-static int ef_co_finite(float x)
-{
-    return (x - x) == 0.0f;
-}
-
 /* Text of an SDO abort code. */
 const char *ef_co_abort_str(uint32_t code)
 {
@@ -148,7 +142,7 @@ int ef_co_pos_to_inc(float x, uint32_t inc_per_unit, int32_t *out)
 {
     if (!out || inc_per_unit == 0u)
         return EF_ERR_ARG;
-    if (!ef_co_finite(x))
+    if (!ef_finitef(x))
         return EF_ERR_NONFINITE;
     float v = x * (float)inc_per_unit;
     /* 2^31 is exact in float32; anything at or beyond it does not fit. */
@@ -349,7 +343,7 @@ int ef_co_law_decode(const uint8_t *rec, uint32_t len, ef_move_t *m)
         return EF_ERR_ARG;
     ef_timelaw_t law;
     float length = ef_co_getf(rec + 4), v_exit = ef_co_getf(rec + 8), dur = 0.0f;
-    int fin = ef_co_finite(length) & ef_co_finite(v_exit);
+    int fin = ef_finitef(length) & ef_finitef(v_exit);
     uint32_t at = 12;
     for (int k = 0; k < EF_TIMELAW_PHASES; k++) {
         law.dt[k] = 0.0f;
@@ -358,10 +352,10 @@ int ef_co_law_decode(const uint8_t *rec, uint32_t len, ef_move_t *m)
         if (!(mask & (1u << k)))
             continue;
         law.dt[k] = ef_co_getf(rec + at);
-        fin &= ef_co_finite(law.dt[k]);
+        fin &= ef_finitef(law.dt[k]);
         for (int j = 0; j < 5; j++) {
             law.c[k][j] = ef_co_getf(rec + at + 4u + 4u * (uint32_t)j);
-            fin &= ef_co_finite(law.c[k][j]);
+            fin &= ef_finitef(law.c[k][j]);
         }
         at += 24u;
     }
@@ -390,7 +384,7 @@ int ef_co_axis_decode(const uint8_t *rec, uint32_t len, ef_move_t *m, uint16_t *
     int fin = 1;
     for (int i = 0; i <= deg; i++) {
         x[i] = ef_co_getf(rec + 4 + 4 * i);
-        fin &= ef_co_finite(x[i]);
+        fin &= ef_finitef(x[i]);
     }
     if (!fin)
         return EF_ERR_NONFINITE;

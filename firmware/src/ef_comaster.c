@@ -64,12 +64,6 @@ typedef struct {
     uint32_t ent[4]; /**< EF_CO_MAP entries */
 } com_pdo_t;
 
-/* Finite test without libm (NaN and infinities give NaN when subtracted from themselves). */
-static int com_finite(float x)
-{
-    return (x - x) == 0.0f;
-}
-
 /* Node index of a node id, -1 when it is none of ours. */
 static int com_node_of(const ef_comaster_t *m, uint32_t id)
 {
@@ -1379,14 +1373,14 @@ static int com_move_ok(const ef_move_t *mv)
 {
     if (mv->degree != 1 && mv->degree != 3 && mv->degree != 5)
         return 0;
-    int ok = com_finite(mv->duration) & com_finite(mv->length) & com_finite(mv->v_exit);
+    int ok = ef_finitef(mv->duration) & ef_finitef(mv->length) & ef_finitef(mv->v_exit);
     for (int p = 0; p < EF_TIMELAW_PHASES; p++) {
-        ok &= com_finite(mv->law.dt[p]);
+        ok &= ef_finitef(mv->law.dt[p]);
         for (int i = 0; i < 5; i++)
-            ok &= com_finite(mv->law.c[p][i]);
+            ok &= ef_finitef(mv->law.c[p][i]);
     }
     for (int i = 0; i <= mv->degree; i++)
-        ok &= com_finite(mv->b[i].x) & com_finite(mv->b[i].y) & com_finite(mv->b[i].z);
+        ok &= ef_finitef(mv->b[i].x) & ef_finitef(mv->b[i].y) & ef_finitef(mv->b[i].z);
     return ok && mv->duration > 0.0f;
 }
 

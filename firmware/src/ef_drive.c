@@ -16,23 +16,17 @@
 
 /* The stop destination lives in ef_drive_t::pad (private, see ef_drive.h). */
 
-/* Finite test without libm (NaN and infinities fail), for validating input. */
-static int drv_finite(float x)
-{
-    return (x - x) == 0.0f;
-}
-
 /* A point finite and within EF_MAX_COORD on every axis, as the interpolator requires. */
 static int drv_vok(ef_vec3_t v)
 {
-    return drv_finite(v.x) & drv_finite(v.y) & drv_finite(v.z) & (ef_fabsf(v.x) <= EF_MAX_COORD) &
+    return ef_finitef(v.x) & ef_finitef(v.y) & ef_finitef(v.z) & (ef_fabsf(v.x) <= EF_MAX_COORD) &
            (ef_fabsf(v.y) <= EF_MAX_COORD) & (ef_fabsf(v.z) <= EF_MAX_COORD);
 }
 
 /* A servo parameter must be positive and finite to give a stable, meaningful model. */
 static int drv_pos(float x)
 {
-    return drv_finite(x) && x > 0.0f;
+    return ef_finitef(x) && x > 0.0f;
 }
 
 /* Servo period in seconds, the step of every model in here. */

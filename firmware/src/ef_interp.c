@@ -14,18 +14,11 @@
 /** Newton steps of a resynchronisation. */
 #define EF_INTERP_RESYNC_ITER 3
 
-/* Finite test without libm, for validating pushed moves. */
-static int ef_interp_finite(float x)
-{
-    return (x - x) == 0.0f;
-}
-
 /* A point finite and within EF_MAX_COORD on every axis. */
 static int ef_interp_vok(ef_vec3_t v)
 {
-    return ef_interp_finite(v.x) & ef_interp_finite(v.y) & ef_interp_finite(v.z) &
-           (ef_fabsf(v.x) <= EF_MAX_COORD) & (ef_fabsf(v.y) <= EF_MAX_COORD) &
-           (ef_fabsf(v.z) <= EF_MAX_COORD);
+    return ef_finitef(v.x) & ef_finitef(v.y) & ef_finitef(v.z) & (ef_fabsf(v.x) <= EF_MAX_COORD) &
+           (ef_fabsf(v.y) <= EF_MAX_COORD) & (ef_fabsf(v.z) <= EF_MAX_COORD);
 }
 
 /* Start an empty interpolator at rest at home (contract in ef_interp.h). */
@@ -60,14 +53,13 @@ int ef_interp_check(const ef_move_t *m, ef_vec3_t start)
         return EF_ERR_ARG;
     if (m->degree != 1 && m->degree != 3 && m->degree != 5)
         return EF_ERR_ARG;
-    int ok =
-        ef_interp_finite(m->duration) & ef_interp_finite(m->length) & ef_interp_finite(m->v_exit);
+    int ok = ef_finitef(m->duration) & ef_finitef(m->length) & ef_finitef(m->v_exit);
     for (int i = 0; i <= m->degree; i++)
         ok &= ef_interp_vok(m->b[i]);
     for (int k = 0; k < EF_TIMELAW_PHASES; k++) {
-        ok &= ef_interp_finite(m->law.dt[k]) & (m->law.dt[k] >= 0.0f);
+        ok &= ef_finitef(m->law.dt[k]) & (m->law.dt[k] >= 0.0f);
         for (int i = 0; i < 5; i++)
-            ok &= ef_interp_finite(m->law.c[k][i]);
+            ok &= ef_finitef(m->law.c[k][i]);
     }
     if (!ok || !(m->duration > 0.0f) || !(m->length > 0.0f) || !(m->v_exit >= 0.0f))
         return EF_ERR_ARG;
@@ -164,7 +156,7 @@ static void ef_interp_eval(ef_interp_t *ip, const ef_move_t *m, float *v)
             float next = tn;
             if (sp0 > EF_INTERP_MIN_DERIV)
                 next = tn + (s - s0 - arc) / sp0;
-            tn = ef_interp_finite(next) ? ef_maxf(t0, ef_minf(1.0f, next)) : tn;
+            tn = ef_finitef(next) ? ef_maxf(t0, ef_minf(1.0f, next)) : tn;
         }
         arc = ef_interp_arc(lb, m->degree, t0, tn);
         ef_interp_kahan(&ip->s_done, &ip->s_c, arc);
@@ -178,7 +170,7 @@ static void ef_interp_eval(ef_interp_t *ip, const ef_move_t *m, float *v)
     float tn = tau_law;
     if (sp > EF_INTERP_MIN_DERIV)
         tn = ip->tau + gap / sp;
-    if (!ef_interp_finite(tn))
+    if (!ef_finitef(tn))
         tn = tau_law;
     /* Never step back; never more than the larger of EF_INTERP_RESYNC of the curve and four
      * times the law's own step per servo period (where |f'| is small the Newton step would

@@ -89,23 +89,17 @@ float ef_mb_get_f32(const uint16_t *w)
     return p.f;
 }
 
-/* Finite test without libm, for validating slot data. */
-static int mb_finite(float x)
-{
-    return (x - x) == 0.0f;
-}
-
 /* Whether every number a slot carries for this move is finite. */
 static int mb_move_finite(const ef_move_t *m)
 {
-    int ok = mb_finite(m->duration) & mb_finite(m->length) & mb_finite(m->v_exit);
+    int ok = ef_finitef(m->duration) & ef_finitef(m->length) & ef_finitef(m->v_exit);
     for (int k = 0; k < EF_TIMELAW_PHASES; k++) {
-        ok &= mb_finite(m->law.dt[k]);
+        ok &= ef_finitef(m->law.dt[k]);
         for (int i = 0; i < EF_MB_LAW_COEFFS; i++)
-            ok &= mb_finite(m->law.c[k][i]);
+            ok &= ef_finitef(m->law.c[k][i]);
     }
     for (int i = 0; i <= m->degree && i < EF_MB_POINTS; i++)
-        ok &= mb_finite(m->b[i].x) & mb_finite(m->b[i].y) & mb_finite(m->b[i].z);
+        ok &= ef_finitef(m->b[i].x) & ef_finitef(m->b[i].y) & ef_finitef(m->b[i].z);
     return ok;
 }
 
@@ -377,7 +371,7 @@ static int mb_write_control(ef_mbdev_t *dev, uint16_t addr, uint16_t n, const ui
 static int mb_write_target(ef_mbdev_t *dev, const uint16_t *v)
 {
     ef_vec3_t p = ef_v3(ef_mb_get_f32(&v[0]), ef_mb_get_f32(&v[2]), ef_mb_get_f32(&v[4]));
-    if (!mb_finite(p.x) || !mb_finite(p.y) || !mb_finite(p.z))
+    if (!ef_finitef(p.x) || !ef_finitef(p.y) || !ef_finitef(p.z))
         return EF_ERR_ARG;
     int rc = ef_drive_set_target(&dev->drv, p);
     if (rc == EF_ERR_NONFINITE)

@@ -20,18 +20,11 @@
  *  coefficients would only carry rounding noise). */
 #define EF_PLAN_DV_REL 1e-6f
 
-/* Finite test without libm, for validating limits and moves. */
-static int ef_plan_finite(float x)
-{
-    return (x - x) == 0.0f; /* NaN and +-inf give NaN */
-}
-
 /* A point finite and within EF_MAX_COORD on every axis. */
 static int ef_plan_vfinite(ef_vec3_t v)
 {
-    return ef_plan_finite(v.x) & ef_plan_finite(v.y) & ef_plan_finite(v.z) &
-           (ef_fabsf(v.x) <= EF_MAX_COORD) & (ef_fabsf(v.y) <= EF_MAX_COORD) &
-           (ef_fabsf(v.z) <= EF_MAX_COORD);
+    return ef_finitef(v.x) & ef_finitef(v.y) & ef_finitef(v.z) & (ef_fabsf(v.x) <= EF_MAX_COORD) &
+           (ef_fabsf(v.y) <= EF_MAX_COORD) & (ef_fabsf(v.z) <= EF_MAX_COORD);
 }
 
 /* Validate machine limits (contract in ef_plan.h). */
@@ -39,9 +32,9 @@ int ef_limits_check(const ef_limits_t *lim)
 {
     if (!lim)
         return EF_ERR_ARG;
-    int fin = ef_plan_finite(lim->j_max) & ef_plan_finite(lim->a_normal_frac);
+    int fin = ef_finitef(lim->j_max) & ef_finitef(lim->a_normal_frac);
     for (int i = 0; i < 3; i++)
-        fin &= ef_plan_finite(lim->v_axis[i]) & ef_plan_finite(lim->a_axis[i]);
+        fin &= ef_finitef(lim->v_axis[i]) & ef_finitef(lim->a_axis[i]);
     if (!fin)
         return EF_ERR_NONFINITE;
     if (!(lim->a_normal_frac > 0.0f && lim->a_normal_frac < 1.0f))
@@ -178,8 +171,8 @@ static void ef_law_ramp(ef_timelaw_t *law, int k, float va, float vb, float T, f
 static int ef_plan_timelaw_up(ef_move_t *m, float j_max, float up)
 {
     float len = m->length, v0 = m->v_entry, v1 = m->v_exit, vmax = m->v_max, a = m->a_max;
-    int fin = ef_plan_finite(len) & ef_plan_finite(v0) & ef_plan_finite(v1) & ef_plan_finite(vmax) &
-              ef_plan_finite(a) & ef_plan_finite(j_max);
+    int fin = ef_finitef(len) & ef_finitef(v0) & ef_finitef(v1) & ef_finitef(vmax) & ef_finitef(a) &
+              ef_finitef(j_max);
     if (!fin || !(len >= EF_MIN_CHORD) || !(v0 >= 0.0f) || !(v1 >= 0.0f) || !(vmax > 0.0f) ||
         !(a > 0.0f) || !(j_max >= 0.0f))
         return EF_ERR_ARG;
@@ -250,10 +243,10 @@ static int ef_plan_timelaw_up(ef_move_t *m, float j_max, float up)
     ef_law_ramp(&law, 2, vc, v1, T2, d0 + dc, len, j);
 
     float dur = T0 + Tc + T2;
-    int ok = ef_plan_finite(dur) & (dur > 0.0f);
+    int ok = ef_finitef(dur) & (dur > 0.0f);
     for (int k = 0; k < EF_TIMELAW_PHASES; k++)
         for (int i = 0; i < 5; i++)
-            ok &= ef_plan_finite(law.c[k][i]);
+            ok &= ef_finitef(law.c[k][i]);
     if (!ok)
         return EF_ERR_ARG;
     m->law = law;
@@ -374,7 +367,7 @@ int ef_plan_push(ef_plan_t *p, const ef_move_t *m)
         return EF_ERR_ARG;
     if (m->degree != 1 && m->degree != 3 && m->degree != 5)
         return EF_ERR_ARG;
-    int fin = ef_plan_finite(m->length) & ef_plan_finite(m->kappa_max) & ef_plan_finite(m->feed) &
+    int fin = ef_finitef(m->length) & ef_finitef(m->kappa_max) & ef_finitef(m->feed) &
               ef_plan_vfinite(m->tabs);
     for (int i = 0; i <= m->degree; i++)
         fin &= ef_plan_vfinite(m->b[i]);
@@ -406,7 +399,7 @@ int ef_plan_push(ef_plan_t *p, const ef_move_t *m)
     if (m->kappa_max > 0.0f)
         vmax = ef_minf(vmax, ef_sqrtf(an / m->kappa_max));
     float amax = (1.0f - l->a_normal_frac) * apath;
-    if (!(vmax > 0.0f) || !(amax > 0.0f) || !ef_plan_finite(vmax) || !ef_plan_finite(amax))
+    if (!(vmax > 0.0f) || !(amax > 0.0f) || !ef_finitef(vmax) || !ef_finitef(amax))
         return EF_ERR_FEED;
 
     uint32_t idx = (p->head + p->count) % EF_LOOKAHEAD;

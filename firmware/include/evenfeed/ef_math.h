@@ -21,6 +21,13 @@ typedef struct {
 
 #define EF_PI_F 3.14159265358979323846f
 
+/** Whether x is finite (not NaN, not +-inf), without libm: x - x is NaN exactly then. The
+ *  firmware is never built with -ffast-math, which would fold this to 1. */
+static inline int ef_finitef(float x)
+{
+    return (x - x) == 0.0f;
+}
+
 static inline ef_vec3_t ef_v3(float x, float y, float z)
 {
     ef_vec3_t r = {x, y, z};
