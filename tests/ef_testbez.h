@@ -6,7 +6,7 @@
 #ifndef EF_TESTBEZ_H
 #define EF_TESTBEZ_H
 
-#include "evenfeed/ef_math.h"
+#include "evenfeed/core/ef_math.h"
 
 /* pts[0..d-k] receive the k-th forward differences of b[0..d]; returns d (d-1) ... (d-k+1). */
 static inline double ef_t_bezier_diffs(const ef_vec3_t *b, int d, int k, double pts[8][3])

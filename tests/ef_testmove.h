@@ -10,7 +10,7 @@
 #include <stdint.h>
 #include <string.h>
 
-#include "evenfeed/ef_path.h"
+#include "evenfeed/path/ef_path.h"
 
 /* Bézier point in double by de Casteljau. */
 static inline void tm_bz(const ef_vec3_t *b, int deg, double t, double out[3])

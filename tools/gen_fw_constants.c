@@ -1,6 +1,6 @@
 /*
- * Generator for the numeric constants in firmware/src/ef_math.c (atan polynomial) and
- * firmware/src/ef_bezier.c (Gauss–Legendre nodes). Run: cc -O2 gen_fw_constants.c -lm && ./a.out
+ * Generator for the numeric constants in firmware/src/core/ef_math.c (atan polynomial) and
+ * firmware/src/geom/ef_bezier.c (Gauss–Legendre nodes). Run: cc -O2 gen_fw_constants.c -lm && ./a.out
  * The firmware's tests recompute both and compare, so a hand edit is caught.
  */
 #include <math.h>

@@ -14,14 +14,14 @@
  * sets up .data/.bss and the FPU before main, as a real board's startup must.
  */
 #include <stdint.h>
-#include "evenfeed/ef_codrive.h"
-#include "evenfeed/ef_comaster.h"
-#include "evenfeed/ef_err.h"
-#include "evenfeed/ef_interp.h"
-#include "evenfeed/ef_modbus.h"
-#include "evenfeed/ef_seg.h"
-#include "evenfeed/ef_smooth.h"
-#include "evenfeed/ef_table.h"
+#include "evenfeed/canopen/ef_codrive.h"
+#include "evenfeed/canopen/ef_comaster.h"
+#include "evenfeed/core/ef_err.h"
+#include "evenfeed/motion/ef_interp.h"
+#include "evenfeed/modbus/ef_modbus.h"
+#include "evenfeed/seg/ef_seg.h"
+#include "evenfeed/motion/ef_smooth.h"
+#include "evenfeed/table/ef_table.h"
 
 #define LC_PI 3.14159265f
 

@@ -1,5 +1,5 @@
 /*
- * ef_opt.comp: the reference optimizer (host/lib/ef_ref_opt.c, ef_ref_optimize) as an
+ * ef_opt.comp: the reference optimizer (host/lib/tables/ef_ref_opt.c, ef_ref_optimize) as an
  * OpenGL 4.3 compute shader in double precision, for normalized planar configurations:
  * p0 = (0, 0), p1 = (1, 0), t_i = (cos, sin), n_i = t_i turned +90 degrees, kappa_i = k_i.
  * The same functional, objective, gradient, Hessian, box, starts, stopping rules, tie rules

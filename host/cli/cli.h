@@ -3,9 +3,9 @@
 #define EF_CLI_H
 
 #include <stdio.h>
-#include "evenfeed/ef_table.h"
-#include "evenfeed/host/ef_host.h"
-#include "evenfeed/host/ef_pipeline.h"
+#include "evenfeed/table/ef_table.h"
+#include "evenfeed/host/core/ef_host.h"
+#include "evenfeed/host/program/ef_pipeline.h"
 
 /* Exit status: the negated ef_err code (usage errors are EF_ERR_ARG, exit 1). */
 int ef_cli_exit(int code);

@@ -8,8 +8,8 @@
 #include <string.h>
 #include <unistd.h>
 #include "cli.h"
-#include "evenfeed/host/ef_canload.h"
-#include "evenfeed/host/ef_mb.h"
+#include "evenfeed/host/can/ef_canload.h"
+#include "evenfeed/host/modbus/ef_mb.h"
 
 /* Generated from samples/NAME.ngc by host/CMakeLists.txt. */
 extern const char ef_sample_bracket[];

@@ -1,7 +1,7 @@
 /* evenfeed gcode: read a part program and print its item stream. */
 #include <string.h>
 #include "cli.h"
-#include "evenfeed/host/ef_gcode.h"
+#include "evenfeed/host/program/ef_gcode.h"
 
 static const char usage[] =
     "usage: evenfeed gcode FILE [--json]\n"

@@ -4,10 +4,10 @@
 #include <stdlib.h>
 #include <string.h>
 #include "cli.h"
-#include "evenfeed/ef_bezier.h"
-#include "evenfeed/ef_seg.h"
-#include "evenfeed/host/ef_ref.h"
-#include "evenfeed/host/ef_tfile.h"
+#include "evenfeed/geom/ef_bezier.h"
+#include "evenfeed/seg/ef_seg.h"
+#include "evenfeed/host/tables/ef_ref.h"
+#include "evenfeed/host/tables/ef_tfile.h"
 
 static const char usage[] =
     "usage: evenfeed segment (--g1 | --g2 | --quartic) END-DATA [--optimize] [--table FILE] [--json]\n"

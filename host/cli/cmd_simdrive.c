@@ -3,8 +3,8 @@
 #include <stdlib.h>
 #include <string.h>
 #include "cli.h"
-#include "evenfeed/host/ef_canhost.h"
-#include "evenfeed/host/ef_mb.h"
+#include "evenfeed/host/can/ef_canhost.h"
+#include "evenfeed/host/modbus/ef_mb.h"
 
 static const char usage[] =
     "usage: evenfeed sim-drive modbus (--tcp HOST:PORT | --rtu DEVICE[,BAUD[,8N1]]) [options]\n"

@@ -4,8 +4,8 @@
 #include <stdlib.h>
 #include <string.h>
 #include "cli.h"
-#include "evenfeed/host/ef_canhost.h"
-#include "evenfeed/host/ef_mb.h"
+#include "evenfeed/host/can/ef_canhost.h"
+#include "evenfeed/host/modbus/ef_mb.h"
 
 static const char usage[] =
     "usage: evenfeed stream --modbus ADDRESS [options] PROGRAM.ngc\n"

@@ -8,12 +8,12 @@
 #include <time.h>
 #include <unistd.h>
 #include "cli.h"
-#include "evenfeed/host/ef_build.h"
+#include "evenfeed/host/tables/ef_build.h"
 #ifdef EF_HAVE_GL
 #include "evenfeed/gpu/ef_gl.h"
 #endif
-#include "evenfeed/host/ef_tfile.h"
-#include "evenfeed/host/ef_verify.h"
+#include "evenfeed/host/tables/ef_tfile.h"
+#include "evenfeed/host/tables/ef_verify.h"
 
 static const char usage[] =
     "usage: evenfeed table info FILE\n"

@@ -1,6 +1,6 @@
 /*
  * GENERATED FILE - DO NOT EDIT.
- * Written by evenfeed ef_tfile_emit_c() (host/lib/ef_tfile_emit.c) from a table file;
+ * Written by evenfeed ef_tfile_emit_c() (host/lib/tables/ef_tfile_emit.c) from a table file;
  * regenerate it from the .eft file instead of editing: hand edits bypass the
  * file's CRC and the parser's value checks.
  *
@@ -8,7 +8,7 @@
  * Axis 0: [0, 1.5707963267948966], 49 nodes.
  * Axis 1: [0, 3.1415926535897931], 97 nodes.
  */
-#include "evenfeed/ef_table.h"
+#include "evenfeed/table/ef_table.h"
 
 extern const ef_table_t ef_tbl_g1_default;
 

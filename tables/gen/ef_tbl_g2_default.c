@@ -1,6 +1,6 @@
 /*
  * GENERATED FILE - DO NOT EDIT.
- * Written by evenfeed ef_tfile_emit_c() (host/lib/ef_tfile_emit.c) from a table file;
+ * Written by evenfeed ef_tfile_emit_c() (host/lib/tables/ef_tfile_emit.c) from a table file;
  * regenerate it from the .eft file instead of editing: hand edits bypass the
  * file's CRC and the parser's value checks.
  *
@@ -10,7 +10,7 @@
  * Axis 2: [-2, 2], 9 nodes.
  * Axis 3: [-2, 2], 9 nodes.
  */
-#include "evenfeed/ef_table.h"
+#include "evenfeed/table/ef_table.h"
 
 extern const ef_table_t ef_tbl_g2_default;
 

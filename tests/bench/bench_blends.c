@@ -40,11 +40,11 @@
 #include <stdlib.h>
 #include <string.h>
 #include "ef_test.h"
-#include "evenfeed/ef_blend.h"
-#include "evenfeed/ef_err.h"
-#include "evenfeed/ef_table.h"
+#include "evenfeed/blend/ef_blend.h"
+#include "evenfeed/core/ef_err.h"
+#include "evenfeed/table/ef_table.h"
 #ifdef EF_BENCH_SMOOTH
-#include "evenfeed/ef_smooth.h"
+#include "evenfeed/motion/ef_smooth.h"
 #endif
 
 extern const ef_table_t ef_tbl_g2_default;

@@ -7,7 +7,7 @@
 #include <string.h>
 #include <time.h>
 #include "evenfeed/gpu/ef_gl.h"
-#include "evenfeed/host/ef_build.h"
+#include "evenfeed/host/tables/ef_build.h"
 
 /* Wall-clock seconds. */
 static double now(void)

@@ -15,7 +15,7 @@
  */
 #include <stdio.h>
 
-#include "evenfeed/host/ef_canload.h"
+#include "evenfeed/host/can/ef_canload.h"
 
 extern const ef_table_t ef_tbl_g1_default;
 extern const ef_table_t ef_tbl_g2_default;

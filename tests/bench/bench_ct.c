@@ -43,13 +43,13 @@
 #define CALLGRIND_DUMP_STATS ((void)0)
 #endif
 #include "ef_test.h"
-#include "evenfeed/ef_blend.h"
-#include "evenfeed/ef_err.h"
-#include "evenfeed/ef_seg.h"
-#include "evenfeed/ef_table.h"
+#include "evenfeed/blend/ef_blend.h"
+#include "evenfeed/core/ef_err.h"
+#include "evenfeed/seg/ef_seg.h"
+#include "evenfeed/table/ef_table.h"
 #ifdef EF_BENCH_PATH
-#include "evenfeed/ef_path.h"
-#include "evenfeed/ef_smooth.h"
+#include "evenfeed/path/ef_path.h"
+#include "evenfeed/motion/ef_smooth.h"
 #endif
 
 #ifdef EF_BENCH_DEFAULT_TABLES

@@ -16,7 +16,7 @@
 #include <math.h>
 #include <modbus/modbus.h>
 #include "../ef_proc.h"
-#include "evenfeed/host/ef_mb.h"
+#include "evenfeed/host/modbus/ef_mb.h"
 
 extern const ef_table_t ef_tbl_g1_default;
 extern const ef_table_t ef_tbl_g2_default;

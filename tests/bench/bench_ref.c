@@ -6,7 +6,7 @@
 #include <time.h>
 
 #include "../ef_test.h"
-#include "evenfeed/host/ef_ref.h"
+#include "evenfeed/host/tables/ef_ref.h"
 
 /* This thread's CPU time in seconds: steadier than wall time on a shared machine. */
 static double now(void)

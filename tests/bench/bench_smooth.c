@@ -22,12 +22,12 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
-#include "evenfeed/ef_err.h"
-#include "evenfeed/ef_interp.h"
-#include "evenfeed/ef_path.h"
-#include "evenfeed/ef_smooth.h"
-#include "evenfeed/host/ef_gcode.h"
-#include "evenfeed/host/ef_host.h"
+#include "evenfeed/core/ef_err.h"
+#include "evenfeed/motion/ef_interp.h"
+#include "evenfeed/path/ef_path.h"
+#include "evenfeed/motion/ef_smooth.h"
+#include "evenfeed/host/program/ef_gcode.h"
+#include "evenfeed/host/core/ef_host.h"
 
 extern const ef_table_t ef_tbl_g2_default;
 

@@ -4,8 +4,8 @@
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
-#include "evenfeed/ef_seg.h"
-#include "evenfeed/host/ef_ref.h"
+#include "evenfeed/seg/ef_seg.h"
+#include "evenfeed/host/tables/ef_ref.h"
 
 extern const ef_table_t ef_tbl_g1_default;
 

@@ -22,9 +22,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "evenfeed/ef_codrive.h"
-#include "evenfeed/ef_comaster.h"
-#include "evenfeed/ef_err.h"
+#include "evenfeed/canopen/ef_codrive.h"
+#include "evenfeed/canopen/ef_comaster.h"
+#include "evenfeed/core/ef_err.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 

@@ -13,7 +13,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "evenfeed/host/ef_gcode.h"
+#include "evenfeed/host/program/ef_gcode.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 

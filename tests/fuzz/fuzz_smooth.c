@@ -17,9 +17,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "evenfeed/ef_err.h"
-#include "evenfeed/ef_interp.h"
-#include "evenfeed/ef_smooth.h"
+#include "evenfeed/core/ef_err.h"
+#include "evenfeed/motion/ef_interp.h"
+#include "evenfeed/motion/ef_smooth.h"
 
 extern const ef_table_t ef_tbl_g1_default;
 extern const ef_table_t ef_tbl_g2_default;

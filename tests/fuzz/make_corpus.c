@@ -18,7 +18,7 @@
 #include <string.h>
 
 #include "../ef_le.h"
-#include "evenfeed/host/ef_tfile.h"
+#include "evenfeed/host/tables/ef_tfile.h"
 
 #define PI         3.14159265358979323846
 #define PROVENANCE "evenfeed tests/fuzz/make_corpus.c: seed corpus v1" /* 49 B: padded */

@@ -15,8 +15,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "evenfeed/ef_err.h"
-#include "evenfeed/ef_table.h"
+#include "evenfeed/core/ef_err.h"
+#include "evenfeed/table/ef_table.h"
 #include "fuzz_table_parse.h"
 #include "replay.h"
 

@@ -2,7 +2,7 @@
 # Guest side of the hil_can_* tests (run by uml_run.sh inside User-Mode Linux, vcan0 up):
 #   can.sh TEST_BINARY EVENFEED SRC_DIR WORKDIR PART
 # Runs test_can_hil, which starts three simulated drives and the streamer on vcan0 and
-# checks what they wrote (tests/test_can_hil.c).
+# checks what they wrote (tests/can/test_can_hil.c).
 set -u
 test_bin=$1
 ef=$2

@@ -13,8 +13,8 @@
 #define EF_GL_H
 
 #include <stdint.h>
-#include "evenfeed/host/ef_build.h"
-#include "evenfeed/host/ef_ref.h"
+#include "evenfeed/host/tables/ef_build.h"
+#include "evenfeed/host/tables/ef_ref.h"
 
 #ifdef __cplusplus
 extern "C" {

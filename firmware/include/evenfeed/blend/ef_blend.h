@@ -1,0 +1,261 @@
+/**
+ * @file ef_blend.h
+ * @brief Corner blends between two straight moves: a G2 quintic from the G2 table that
+ * replaces the corner, deviating from it by at most a tolerance P.
+ *
+ * ## Geometry (line–line corners)
+ * The programmed path comes in along the unit direction u_in, reaches the corner v and
+ * leaves along u_out. The turn angle is theta = angle(u_in, u_out) in [0, pi] and the half
+ * turn phi = theta / 2. The blend is symmetric: with trim L on both sides it runs from
+ * A = v - L u_in to B = v + L u_out, so its chord B - A = L (u_in + u_out) has length
+ * s = 2 L cos(phi) and lies along the bisector direction. In the table's normalized frame
+ * the configuration is alpha = -beta = phi (the mirror image, alpha = -phi, has the same
+ * DOFs), k0 = k1 = 0: the blend meets the lines with curvature 0, so the path stays G2.
+ *
+ * The configuration is its own image under the reversal symmetry (reflection in the
+ * chord's perpendicular bisector plus running the curve backwards), which maps DOFs
+ * (x1_0, x2_0, x1_1, x2_1) to (x1_1, -x2_1, x1_0, -x2_0). The optimum is therefore
+ * symmetric, x1_0 = x1_1 = x1 and x2_0 = -x2_1 = x2; the lookup is evaluated and its two
+ * halves averaged (x1 = (x1_0 + x1_1)/2, x2 = (x2_0 - x2_1)/2) so the curve is symmetric
+ * about the bisector to float precision whatever rounding the table has. With
+ * a = 2 x1/5 + x2/20 (x1, x2 in program units, i.e. per unit chord times s), the control
+ * points are
+ *
+ *     b0 = A,  b1 = A + (x1/5) u_in,  b2 = A + a u_in,
+ *     b5 = B,  b4 = B - (x1/5) u_out, b3 = B - a u_out.
+ *
+ * The curve's midpoint is f(1/2) = v + c (u_out - u_in) / 32 with c = 16 - x1/L - 10 a/L,
+ * on the bisector; it is the curve's point nearest to v (tests/blend/test_blend.c checks this
+ * numerically), so the deviation of the blend from the programmed corner is
+ *
+ *     dev = |f(1/2) - v| = L g(theta),   g = |c| sin(phi) / 16,
+ *
+ * linear in L because everything (DOFs included) scales with L. The blend takes
+ * L = min((P - q) / g, max_in, max_out, EF_MAX_COORD) and reports dev = L g, where
+ * q = 4 eps max|v_i| (eps = 2^-23) is kept for the float32 rounding of the control
+ * points, so the curve as stored, not only the exact one, stays within P.
+ *
+ * ## Outcomes for valid input (all return ::EF_OK; the cost does not depend on which)
+ * - a blend: out->seg is the quintic (degree 5), trims L; ::EF_BLEND_CLAMPED when a
+ *   neighbour limited L (then dev < P);
+ * - ::EF_BLEND_STRAIGHT: turn below ::EF_BLEND_MIN_TURN, nothing to blend (trims 0,
+ *   out->seg degree 0): the path goes straight through v;
+ * - ::EF_BLEND_STOP: the blend that fits is too small for float32 to represent (its chord is
+ *   below max(EF_MIN_CHORD, EF_MIN_CHORD_REL * max|v_i|), as for any segment, or P <= q,
+ *   P below the float32 resolution of the coordinates): no blend,
+ *   trims 0, out->seg degree 0, and the caller must stop exactly at v.
+ *
+ * ## Near reversals
+ * A turn above ::EF_BLEND_MAX_TURN (179 degrees by default) is ::EF_ERR_REVERSAL: the blend
+ * would be a hairpin whose tangents point nearly straight back (the table's alpha near its
+ * domain edge pi/2), the caller must stop exactly at the vertex. Up to the threshold the
+ * blend is built and tested like any other.
+ *
+ * ## Corners with arc ends (ef_blend_prims())
+ * When either side is an arc or helix, the blend runs from the point at distance L_in
+ * before the vertex on the incoming primitive to the point at distance L_out after it on
+ * the outgoing one, with the primitives' tangents and curvature vectors there (an arc end
+ * has curvature 1/r towards the centre), through the G2 table in its general,
+ * asymmetric configuration. There is no closed form for the deviation, so it is measured:
+ * the largest distance from the blend's points (::EF_BLEND_DEV_SAMPLES of them) to the
+ * replaced pieces of the two primitives, plus a bound for what lies between samples. The
+ * trims start from the line–line estimate with the vertex tangents and are shrunk in a
+ * fixed number of steps (::EF_BLEND_ITER) until the measured deviation is within
+ * tol - q; if none is, the outcome is ::EF_BLEND_STOP. Trims are limited by max_in and
+ * max_out separately (asymmetric trims: a short neighbour on one side shortens only that
+ * side, the other keeps the trim the tolerance allows).
+ *
+ * ## Tangent joins (ef_blend_prims())
+ * A vertex whose tangents turn by less than ::EF_BLEND_MIN_TURN but whose curvature vectors
+ * differ (a line tangent to an arc, tangent arcs of different radii or turning ways) is
+ * only G1: the curvature jumps there. When dk = |kappa_in n_in - kappa_out n_out| is large
+ * enough to matter (dk tol >= EF_BLEND_MIN_TURN^2: the transition that deviates by tol
+ * turns the tangent by about sqrt(dk tol), at least a corner's worth; and dk above 1e-4 of
+ * the larger curvature, far above float32's rounding of the curvature vectors), the join is
+ * blended exactly like a corner with arc ends (same G2 quintic, measured deviation within
+ * tol - q, trim search and limits), and flagged as a normal blend. The trims start from
+ * sqrt(tol / dk) (where a transition's deviation, about dk L^2, reaches tol) instead of the
+ * line–line trim, bounded by max_in / max_out and the arc cap. If no blend fits the outcome
+ * is ::EF_BLEND_STRAIGHT (the G1 pass-through is safe), never ::EF_BLEND_STOP. Straight
+ * vertices between two lines, an arc continued by the same circle and negligible jumps stay
+ * ::EF_BLEND_STRAIGHT.
+ */
+#ifndef EF_BLEND_H
+#define EF_BLEND_H
+
+#include <stdint.h>
+#include "evenfeed/path/ef_path.h"
+#include "evenfeed/seg/ef_seg.h"
+#include "evenfeed/table/ef_table.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Turns (rad) below this need no blend (::EF_BLEND_STRAIGHT). Default 1e-4 rad. */
+#ifndef EF_BLEND_MIN_TURN
+#define EF_BLEND_MIN_TURN 1e-4f
+#endif
+
+/** Turns (rad) above this are reversals (::EF_ERR_REVERSAL). Default 179 degrees. */
+#ifndef EF_BLEND_MAX_TURN
+#define EF_BLEND_MAX_TURN 3.1241393f
+#endif
+
+/** Blend flag: max_in or max_out limited the trim; the deviation is below the tolerance. */
+#define EF_BLEND_CLAMPED 1u
+/** Blend flag: the corner is straight (turn < EF_BLEND_MIN_TURN; for ef_blend_prims(), a
+ *  tangent join that needs or fits no blend); no blend, trims 0. */
+#define EF_BLEND_STRAIGHT 2u
+/** Blend flag: the blend that fits is below float32 resolution; no blend, trims 0, the
+ *  caller stops exactly at the vertex. */
+#define EF_BLEND_STOP 4u
+/** Blend flag: the table lookup clamped the configuration (never for turns up to
+ *  EF_BLEND_MAX_TURN with the default table; kept for tables of smaller domain). */
+#define EF_BLEND_TBL_CLAMPED 8u
+
+/** A corner blend. On error everything is zero. */
+typedef struct {
+    ef_seg_t seg;    /**< the quintic (degree 5) from p_in to p_out; degree 0 when there
+                          is no blend (EF_BLEND_STRAIGHT, EF_BLEND_STOP) */
+    ef_vec3_t p_in;  /**< where the incoming straight part now ends (v - trim_in u_in) */
+    ef_vec3_t p_out; /**< where the outgoing straight part now starts (v + trim_out u_out) */
+    float trim_in;   /**< length cut from the end of the incoming line (0: none) */
+    float trim_out;  /**< length cut from the start of the outgoing line */
+    float dev;       /**< predicted deviation from the corner, L g (<= tol - q); 0 if no blend */
+    float gain;      /**< g(turn): deviation per unit trim */
+    float turn;      /**< turn angle theta (rad), in [0, EF_BLEND_MAX_TURN] */
+    uint32_t flags;  /**< EF_BLEND_* */
+} ef_blend_t;
+
+/**
+ * @brief Blend the corner between two straight moves. Constant instruction count for valid
+ * input (the blend, straight and stop outcomes included).
+ * @param g2      G2 quintic table (e.g. ef_tbl_g2_default)
+ * @param v       the corner (programmed vertex), |v_i| <= EF_MAX_COORD
+ * @param u_in    unit direction of the incoming line (| |u| - 1 | within EF_UNIT_TOL)
+ * @param u_out   unit direction of the outgoing line
+ * @param tol     the largest allowed deviation P from the corner, > 0, finite
+ * @param max_in  longest trim allowed on the incoming line (e.g. half its length, so the
+ *                blends at its two ends cannot overlap), > 0, finite
+ * @param max_out longest trim allowed on the outgoing line, > 0, finite (trims are also
+ *                never longer than EF_MAX_COORD, so FLT_MAX may stand for "no limit")
+ * @param out     the blend
+ * @retval EF_OK            out valid; see out->flags
+ * @retval EF_ERR_ARG       NULL pointer, tol <= 0, max_in <= 0 or max_out <= 0
+ * @retval EF_ERR_KIND      not a G2 quintic table
+ * @retval EF_ERR_NONFINITE NaN/inf in v, u_in, u_out, tol, max_in or max_out, or |v_i| or
+ *                          |u_i| above EF_MAX_COORD
+ * @retval EF_ERR_TANGENT   u_in or u_out not of unit length (covers a zero-length move)
+ * @retval EF_ERR_REVERSAL  turn above EF_BLEND_MAX_TURN: stop exactly at v
+ */
+int ef_blend_corner(const ef_table_t *g2, ef_vec3_t v, ef_vec3_t u_in, ef_vec3_t u_out, float tol,
+                    float max_in, float max_out, ef_blend_t *out);
+
+/** Samples of the blend used to measure its deviation (ef_blend_prims()). */
+#ifndef EF_BLEND_DEV_SAMPLES
+#define EF_BLEND_DEV_SAMPLES 16
+#endif
+/** Fixed number of trim refinement steps in ef_blend_prims(). */
+#ifndef EF_BLEND_ITER
+#define EF_BLEND_ITER 6
+#endif
+
+/**
+ * @brief Blend the corner between two checked primitives (lines, arcs, helices). For two
+ * lines this is ef_blend_corner() with the lines' directions; otherwise the measured
+ * construction of the file comment. Fixed instruction count per pair of kinds (fixed
+ * iteration and sample counts; only keeping the best trial and the outcome differ).
+ *
+ * Details of the measured construction (firmware/src/blend/ef_blend_arc.c):
+ * - both primitives are checked again (ef_prim_check(); its error codes are returned) and
+ *   len_in / len_out must be their lengths to 1e-5 relative (else EF_ERR_ARG);
+ * - vertex tangents turning by less than EF_BLEND_MIN_TURN: a tangent join (see the file
+ *   comment) when the curvature vectors differ by dk with dk tol >= EF_BLEND_MIN_TURN^2 and
+ *   dk > 1e-4 max(kappa_in, kappa_out): blended as below (trims from sqrt(tol / dk), the
+ *   secant growing lambda by the square root of the deviation ratio), STRAIGHT if no trial
+ *   fits (never STOP); otherwise outcome STRAIGHT;
+ * - the trim on an arc side is also at most EF_ARC_PIECE_SWEEP of its sweep;
+ * - trims are lambda x (the line–line trim for the vertex tangents), each side clamped by
+ *   its own limit; EF_BLEND_ITER trials (secant towards 0.99 (tol - q), bracketed), the
+ *   longest feasible one is kept. q = 4 eps (max|v_i| + r_in + r_out), r = 0 for lines;
+ * - a trial is feasible if the table did not clamp its tangent angles (a lopsided hairpin,
+ *   a tangent beyond 90 degrees from the chord, would; a clamped curvature is accepted) and
+ *   its measured deviation is within tol - q. The deviation is two-sided:
+ *   (a) blend to path: the distances of EF_BLEND_DEV_SAMPLES + 2 blend points (ends
+ *   included) to each replaced piece, in closed form: exact for lines and circles (for an
+ *   arc the radial and axial offset when the point's angle about the axis is inside the
+ *   piece, else the nearer end), for helices the distance to an actual point of the piece
+ *   (an upper bound); on an arc plus 2 ulp of the arc's angle at the piece's far end times
+ *   its radius (the float32 frames place the blend's ends up to that far off the exact
+ *   piece); per interval each distance is bounded by its linear interpolant plus
+ *   (local max |second difference|) / 8, and the top of the smaller of the two bounds
+ *   (at an end or at their crossing, the blend's middle) is the interval's bound; the
+ *   interval with the largest bound is sampled 7 times more and bounded again; times 1.02;
+ *   (b) path to blend: the vertex and 3 points of each replaced piece to the blend (nearest
+ *   sample plus one Newton step, an upper bound). Without (b) a blend between two nearly
+ *   parallel pieces could cut a hairpin's tip short and still be close to the path;
+ * - res->dev is that measured deviation, res->gain the line–line g(turn) of the vertex
+ *   tangents (for information), EF_BLEND_CLAMPED when max_in, max_out or the arc cap
+ *   limited a trim.
+ * @param g2       G2 quintic table
+ * @param start_in where the incoming primitive starts
+ * @param in       incoming primitive (ends at the vertex)
+ * @param len_in   its length (from ef_prim_check())
+ * @param out      outgoing primitive (starts at the vertex, in->end)
+ * @param len_out  its length
+ * @param tol      largest allowed deviation P, > 0
+ * @param max_in   longest trim allowed on the incoming primitive, in (0, len_in]
+ * @param max_out  longest trim allowed on the outgoing primitive, in (0, len_out]
+ * @param res      the blend (seg degree 5, p_in / p_out on the primitives, trims, dev
+ *                 measured, turn between the vertex tangents)
+ * @retval EF_OK            res valid; see res->flags (STRAIGHT, STOP, CLAMPED)
+ * @retval EF_ERR_ARG       NULL pointer, tol, max_in or max_out out of range
+ * @retval EF_ERR_KIND      not a G2 quintic table
+ * @retval EF_ERR_NONFINITE non-finite input
+ * @retval EF_ERR_REVERSAL  the vertex tangents turn by more than EF_BLEND_MAX_TURN: stop
+ *                          exactly at the vertex
+ */
+int ef_blend_prims(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in, float len_in,
+                   const ef_prim_t *out, float len_out, float tol, float max_in, float max_out,
+                   ef_blend_t *res);
+
+/**
+ * @brief One piece of a checked arc/helix primitive, from arc length s0 to s1 along it, as a
+ * G2 quintic through the table with the arc's exact end data (position, tangent,
+ * curvature vector). The piece's measured deviation from the true arc is in m->dev.
+ * @param g2     G2 quintic table
+ * @param start  where the primitive starts
+ * @param pr     the arc primitive
+ * @param s0,s1  0 <= s0 < s1 <= its length; the sweep of the piece must not exceed
+ *               ::EF_ARC_PIECE_SWEEP (plus rounding)
+ * @param m      out: b, degree 5, kind EF_MOVE_ARC, dev, tag, feed; length and kappa_max
+ *               via ef_move_measure(); planner fields zero; flags EF_MOVE_CLAMPED when the
+ *               lookup clamped. dev: the largest of 64 interior samples' distances to the
+ *               piece (closed form as in ef_blend_prims(): exact for circles, an upper
+ *               bound for helices), plus 2 ulp of the arc's angle at s1 times its radius
+ *               (the float32 frames place the quintic's ends up to that far off the exact
+ *               piece); tests/blend/test_prim.c finds it at least the true maximum less float32
+ *               rounding, and at most 5.1 times it (only where both are at float32
+ *               rounding level). On error m is all zero.
+ *               The primitive is checked again (ef_prim_check(); its codes are
+ *               returned).
+ * @retval EF_OK
+ * @retval EF_ERR_ARG  NULL pointer, not an arc, s0/s1 out of range or piece too long
+ * @retval EF_ERR_KIND not a G2 quintic table
+ * @retval others      as ef_seg_g2_quintic()
+ */
+int ef_blend_arc_piece(const ef_table_t *g2, ef_vec3_t start, const ef_prim_t *pr, float s0,
+                       float s1, ef_move_t *m);
+
+/** Longest sweep (rad) of one arc piece. Callers split arcs into ceil(|sweep| / this) pieces
+ *  or more; tests/blend/test_prim.c measures the deviation this gives. */
+#ifndef EF_ARC_PIECE_SWEEP
+#define EF_ARC_PIECE_SWEEP 1.5707964f
+#endif
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* EF_BLEND_H */

@@ -1,0 +1,56 @@
+/**
+ * @file ef_bezier.h
+ * @brief Bézier curves of degree 1..::EF_BEZIER_MAX_DEGREE in 3-D (float32): evaluation with
+ * derivatives, degree elevation, and the constant-speed functional.
+ */
+#ifndef EF_BEZIER_H
+#define EF_BEZIER_H
+
+#include "evenfeed/core/ef_config.h"
+#include "evenfeed/core/ef_math.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/**
+ * @brief Position and derivatives of a Bézier curve at parameter t.
+ * @param b      degree+1 control points
+ * @param degree 1..EF_BEZIER_MAX_DEGREE
+ * @param t      parameter, normally in [0,1] (extrapolates outside)
+ * @param nder   number of derivatives wanted, 0..degree; out[k] receives the k-th derivative
+ * @param out    nder+1 vectors
+ * @retval EF_OK
+ * @retval EF_ERR_ARG NULL pointer, degree or nder out of range
+ */
+int ef_bezier_eval(const ef_vec3_t *b, int degree, float t, int nder, ef_vec3_t *out);
+
+/**
+ * @brief Degree elevation by one: the same curve with degree+1 control points.
+ * @param b      degree+1 control points
+ * @param degree 1..EF_BEZIER_MAX_DEGREE-1
+ * @param out    degree+2 control points (must not alias b)
+ * @retval EF_OK
+ * @retval EF_ERR_ARG NULL pointer, aliasing, or degree out of range
+ */
+int ef_bezier_elevate(const ef_vec3_t *b, int degree, ef_vec3_t *out);
+
+/**
+ * @brief The constant-speed functional C(f) = sqrt( ∫_0^1 <f',f''>^2 |f'|^2 dt ).
+ *
+ * Gauss–Legendre quadrature with ceil((6·degree−7)/2) nodes, which integrates the
+ * degree-(6·degree−8) polynomial integrand exactly; the only error is float32 rounding
+ * (see docs/math.md for measured figures).
+ * @param b      degree+1 control points
+ * @param degree 1..EF_BEZIER_MAX_DEGREE
+ * @param out    C(f)
+ * @retval EF_OK
+ * @retval EF_ERR_ARG NULL pointer or degree out of range
+ */
+int ef_bezier_functional(const ef_vec3_t *b, int degree, float *out);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* EF_BEZIER_H */

@@ -1,0 +1,191 @@
+/**
+ * @file ef_smooth.h
+ * @brief The streaming smoother: push path primitives, pull feed-planned moves.
+ *
+ * Fixed buffers only (sizes below); every call does a bounded amount of work and never
+ * blocks, so it can run in a periodic task. Typical loop:
+ *
+ *     rc = ef_smooth_push(&s, &prim);
+ *     while (rc == EF_ERR_FULL) {            // look-ahead full: drain first
+ *         while (ef_smooth_pull(&s, &m) == EF_OK) ef_interp_push(&ip, &m) ...;
+ *         rc = ef_smooth_push(&s, &prim);
+ *     }
+ *     ...
+ *     ef_smooth_finish(&s);                  // end of program, or an event that needs rest
+ *     while (ef_smooth_pull(&s, &m) == EF_OK) ...;
+ *
+ * ## What happens at each vertex (docs/smoothing.md)
+ * Vertex = where one primitive ends and the next begins. In this order:
+ * 1. **Exact stop** when the next primitive has ::EF_PRIM_STOP_BEFORE or tol == 0, when the
+ *    turn exceeds EF_BLEND_MAX_TURN (a reversal), or when the blend that fits is below float32
+ *    resolution: the move ending there gets ::EF_MOVE_STOP_END.
+ * 2. **Collinear collapse** (G64 Q): consecutive lines whose inner vertices all lie within
+ *    min(qtol, tol / 2) of the merged line become one line (at most ::EF_SMOOTH_MERGE_MAX
+ *    vertices). What the merge used of the tolerance is taken from the blends at the merged
+ *    line's ends, so the total deviation from the program stays within tol.
+ * 3. **Smooth vertex** (CAM micro-segments; the tolerance-gated rule): between two lines
+ *    both no longer than micro_len, turning by at most micro_turn, whose lengths differ by at
+ *    most a factor ::EF_SMOOTH_LEN_RATIO, and where the curve through the neighbouring points
+ *    stays within tol of both chords (estimated sagitta kappa L^2 / 8 <= tol). The vertex is
+ *    interpolated with the tangent and curvature of the circle through it and its two
+ *    neighbours; the chord between two smooth vertices becomes a G2 quintic (or G1 cubic)
+ *    segment through the table (::EF_MOVE_SMOOTH).
+ * 4. Otherwise a **corner**: a G2 blend within tol (ef_blend_prims()). Each primitive gives
+ *    at most half its length to the blend at either end, so blends never overlap.
+ * Arcs between vertices become equal G2 quintic pieces of at most ::EF_ARC_PIECE_SWEEP,
+ * split further (doubling, at most ::EF_SMOOTH_ARC_SPLITS times) until a piece deviates from
+ * the true arc by at most max(tol / 2, ::EF_SMOOTH_ARC_TOL_MIN). Equal pieces of one arc
+ * have the same normalized configuration, so checking the first checks them all.
+ *
+ * ## Errors
+ * A primitive that fails validation is refused with its error (nothing is queued, the state
+ * is unchanged); the caller reports it and normally calls ef_smooth_finish(), which brings
+ * everything accepted so far to an exact stop at the last accepted end. Nothing invalid is
+ * ever emitted.
+ */
+#ifndef EF_SMOOTH_H
+#define EF_SMOOTH_H
+
+#include <stdint.h>
+#include "evenfeed/blend/ef_blend.h"
+#include "evenfeed/path/ef_path.h"
+#include "evenfeed/motion/ef_plan.h"
+#include "evenfeed/table/ef_table.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Primitives held by the geometry stage (pending vertex decisions). */
+#ifndef EF_SMOOTH_PRIMS
+#define EF_SMOOTH_PRIMS 8
+#endif
+/** Most inner vertices one collinear merge absorbs. */
+#ifndef EF_SMOOTH_MERGE_MAX
+#define EF_SMOOTH_MERGE_MAX 32
+#endif
+/** Smooth vertices need neighbouring chords whose lengths differ by at most this factor. */
+#ifndef EF_SMOOTH_LEN_RATIO
+#define EF_SMOOTH_LEN_RATIO 4.0f
+#endif
+/** Most doublings of an arc's piece count to meet the tolerance. */
+#ifndef EF_SMOOTH_ARC_SPLITS
+#define EF_SMOOTH_ARC_SPLITS 6
+#endif
+/** Deviation allowed to arc pieces where the tolerance is 0 (exact-stop mode), units. */
+#ifndef EF_SMOOTH_ARC_TOL_MIN
+#define EF_SMOOTH_ARC_TOL_MIN 1e-4f
+#endif
+/** Moves one pushed primitive may produce before the planner must take them (an arc is
+ *  emitted piece by piece as the planner has room, so this bounds the staging buffer, not
+ *  the arc). */
+#ifndef EF_SMOOTH_STAGE
+#define EF_SMOOTH_STAGE 8
+#endif
+
+/** Configuration. */
+typedef struct {
+    const ef_table_t *g2;  /**< G2 quintic table (required) */
+    const ef_table_t *g1;  /**< G1 cubic table (required only when smooth_degree == 3) */
+    ef_limits_t lim;       /**< motion limits for the planner */
+    float micro_len;       /**< longest chord treated as a CAM micro-segment; 0 disables
+                                smooth sections */
+    float micro_turn;      /**< largest turn (rad) at a smooth vertex, e.g. 0.35 (20 deg) */
+    uint8_t smooth_degree; /**< 5: G2 quintic smooth sections; 3: G1 cubic */
+} ef_smooth_cfg_t;
+
+/** Counters, for summaries and tests. */
+typedef struct {
+    uint32_t prims;      /**< primitives accepted */
+    uint32_t moves;      /**< moves emitted (pulled) */
+    uint32_t blends;     /**< corners blended */
+    uint32_t straight;   /**< vertices passed straight (turn below EF_BLEND_MIN_TURN) */
+    uint32_t stops;      /**< exact stops (requested, reversal, too small, finish) */
+    uint32_t reversals;  /**< of those, reversals */
+    uint32_t merged;     /**< vertices removed by collinear collapse */
+    uint32_t smooth;     /**< smooth vertices */
+    uint32_t arc_pieces; /**< arc pieces emitted */
+    float dev_max;       /**< largest deviation of any emitted move from the programmed path */
+} ef_smooth_stats_t;
+
+/** One held primitive with what the geometry stage has decided about it. */
+typedef struct {
+    ef_prim_t pr;
+    ef_vec3_t start;                  /**< where it starts */
+    float len;                        /**< its length */
+    float trim_start;                 /**< length taken by the blend at its start */
+    float trim_end;                   /**< length taken by the blend at its end */
+    uint8_t end_kind;                 /**< how its end vertex was resolved (internal) */
+    uint8_t start_smooth, end_smooth; /**< smooth vertex at start / end */
+    ef_frame_t fs, fe;                /**< smooth vertex frames at start / end */
+    ef_blend_t blend;                 /**< blend at its end (when end_kind says so) */
+    ef_vec3_t blend_in_end;           /**< where the blend at its start ended (its first point) */
+    float blend_len;      /**< end blend's length (measured once, when the vertex is decided) */
+    float blend_kmax;     /**< end blend's curvature bound (likewise) */
+    ef_vec3_t blend_tabs; /**< end blend's axis tangent bounds (likewise) */
+    uint32_t nmerged;     /**< inner vertices merged into it */
+    float merge_dev;      /**< largest distance of those vertices from it: the blends and
+                               smooth sections at its ends get only tol - merge_dev */
+    ef_vec3_t merged[EF_SMOOTH_MERGE_MAX]; /**< those vertices (for the Q check) */
+} ef_smooth_prim_t;
+
+/** Smoother state (public for static allocation; treat as private). */
+typedef struct {
+    ef_smooth_cfg_t cfg;
+    ef_plan_t plan;
+    ef_smooth_prim_t pq[EF_SMOOTH_PRIMS]; /**< held primitives, oldest at ph */
+    uint32_t ph, pn;
+    ef_vec3_t pos;     /**< end of the last accepted primitive */
+    ef_vec3_t out_end; /**< where the last emitted move ends (moves chain exactly) */
+    ef_move_t stage[EF_SMOOTH_STAGE];
+    uint32_t sh, sn;   /**< staged moves waiting for planner room */
+    uint32_t arc_next; /**< arc emission cursor: next piece of the oldest primitive */
+    uint32_t arc_n;    /**< pieces the oldest primitive's arc is split into */
+    int emitting;      /**< the oldest primitive is partly emitted */
+    ef_smooth_stats_t st;
+} ef_smooth_t;
+
+/**
+ * @brief Initialise at rest at `start`.
+ * @retval EF_OK
+ * @retval EF_ERR_ARG       NULL, missing table, smooth_degree not 3 or 5, micro_len < 0,
+ *                          micro_turn outside [0, pi/2]
+ * @retval EF_ERR_KIND      a table of the wrong kind
+ * @retval EF_ERR_NONFINITE start not finite / beyond EF_MAX_COORD, or a non-finite setting
+ * @retval EF_ERR_FEED      as ef_limits_check()
+ */
+int ef_smooth_init(ef_smooth_t *s, const ef_smooth_cfg_t *cfg, ef_vec3_t start);
+
+/**
+ * @brief Push the next primitive (it starts at the previous one's end).
+ * @retval EF_OK
+ * @retval EF_ERR_FULL  no room: pull moves, then push the same primitive again
+ * @retval EF_ERR_ARG, EF_ERR_NONFINITE, EF_ERR_FEED, EF_ERR_DEGENERATE, EF_ERR_ARC
+ *                      as ef_prim_check(): the primitive is refused, nothing changed
+ */
+int ef_smooth_push(ef_smooth_t *s, const ef_prim_t *pr);
+
+/**
+ * @brief Exact stop at the current end: everything pushed becomes pullable and ends at
+ * rest. Pushing afterwards continues from rest (use it for events, and at program end).
+ * @retval EF_OK
+ * @retval EF_ERR_ARG NULL
+ */
+int ef_smooth_finish(ef_smooth_t *s);
+
+/**
+ * @brief Pull the next planned move.
+ * @retval EF_OK        m filled
+ * @retval EF_ERR_ARG   NULL pointer
+ * @retval EF_ERR_AGAIN nothing final yet: push more, or finish
+ */
+int ef_smooth_pull(ef_smooth_t *s, ef_move_t *m);
+
+/** @brief Counters so far (zeroes for NULL). */
+ef_smooth_stats_t ef_smooth_stats(const ef_smooth_t *s);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* EF_SMOOTH_H */

@@ -1,0 +1,149 @@
+/* Corner blends between straight moves: a symmetric G2 quintic from the G2 table. The
+ * construction and its reasoning are in ef_blend.h and docs/math.md ("Corner blends"). */
+#include "evenfeed/blend/ef_blend.h"
+#include "evenfeed/core/ef_config.h"
+#include "evenfeed/core/ef_err.h"
+
+/* 4 x FLT_EPSILON (2^-23): the share of the tolerance kept for float32 rounding of the
+ * control points, per unit of the corner's largest coordinate. */
+#define EF_BLEND_ROUND_MARGIN (4.0f * 1.1920929e-7f)
+
+/* Hide an integer's value from the optimizer (an empty asm, no code), so a 0/1 flag used
+ * in arithmetic stays arithmetic instead of being turned back into branches. */
+static inline int ef_blend_hidei(int x)
+{
+#ifdef __GNUC__
+    __asm__("" : "+r"(x));
+#endif
+    return x;
+}
+
+/* Zero the whole result so a failed call leaves nothing a caller could send to a drive. */
+static int ef_blend_fail(ef_blend_t *out, int rc)
+{
+    ef_blend_t zero = {0};
+    *out = zero;
+    return rc;
+}
+
+/* Every component bounded by EF_MAX_COORD (false for NaN and inf). */
+static inline int ef_blend_v3_ok(ef_vec3_t a)
+{
+    int ox = ef_fabsf(a.x) <= EF_MAX_COORD, oy = ef_fabsf(a.y) <= EF_MAX_COORD;
+    int oz = ef_fabsf(a.z) <= EF_MAX_COORD;
+    return ox & oy & oz;
+}
+
+/* Finite without libm: NaN fails x == x, inf fails x - x == 0. */
+static inline int ef_blend_finite(float x)
+{
+    return (x == x) & (x - x == 0.0f);
+}
+
+int ef_blend_corner(const ef_table_t *g2, ef_vec3_t v, ef_vec3_t u_in, ef_vec3_t u_out, float tol,
+                    float max_in, float max_out, ef_blend_t *out)
+{
+    if (!out)
+        return EF_ERR_ARG;
+    if (!g2)
+        return ef_blend_fail(out, EF_ERR_ARG);
+    if (g2->kind != EF_TABLE_G2_QUINTIC)
+        return ef_blend_fail(out, EF_ERR_KIND);
+    int finite = ef_blend_v3_ok(v) & ef_blend_v3_ok(u_in) & ef_blend_v3_ok(u_out) &
+                 ef_blend_finite(tol) & ef_blend_finite(max_in) & ef_blend_finite(max_out);
+    if (!ef_blend_hidei(finite))
+        return ef_blend_fail(out, EF_ERR_NONFINITE);
+    int positive = (tol > 0.0f) & (max_in > 0.0f) & (max_out > 0.0f);
+    if (!ef_blend_hidei(positive))
+        return ef_blend_fail(out, EF_ERR_ARG);
+    float ii = ef_v3_dot(u_in, u_in), oo = ef_v3_dot(u_out, u_out);
+    int unit_in = ef_fabsf(ii - 1.0f) <= 2.0f * EF_UNIT_TOL;
+    int unit_out = ef_fabsf(oo - 1.0f) <= 2.0f * EF_UNIT_TOL;
+    int unit = unit_in & unit_out;
+    if (!ef_blend_hidei(unit))
+        return ef_blend_fail(out, EF_ERR_TANGENT);
+
+    /* Unit directions; the turn from |u_in x u_out| and <u_in, u_out> (accurate at both
+     * ends of [0, pi]); 2 cos(phi) and 2 sin(phi) as |ui + uo| and |uo - ui|, likewise. */
+    ef_vec3_t ui = ef_v3_scale(u_in, 1.0f / ef_sqrtf(ii));
+    ef_vec3_t uo = ef_v3_scale(u_out, 1.0f / ef_sqrtf(oo));
+    float theta = ef_atan2f(ef_v3_norm(ef_v3_cross(ui, uo)), ef_v3_dot(ui, uo));
+    if (!(theta <= EF_BLEND_MAX_TURN))
+        return ef_blend_fail(out, EF_ERR_REVERSAL);
+    ef_vec3_t sum = ef_v3_add(ui, uo);
+    float two_cos = ef_v3_norm(sum);               /* chord per unit trim, 2 cos(phi) */
+    float two_sin = ef_v3_norm(ef_v3_sub(uo, ui)); /* 2 sin(phi) */
+    float phi = 0.5f * theta;
+
+    /* DOFs per unit chord for (phi, -phi, 0, 0), symmetrized (reversal symmetry). */
+    float c[4] = {phi, -phi, 0.0f, 0.0f}, d[4];
+    uint32_t tclamp = 0;
+    int rc = ef_table_lookup_g2(g2, c, d, &tclamp);
+    if (rc != EF_OK)
+        return ef_blend_fail(out, rc);
+    /* Per unit trim (L = 1): x1, x2 in program units are the table's times the chord. */
+    float x1 = 0.5f * (d[0] + d[2]) * two_cos;
+    float x2 = 0.5f * (d[1] - d[3]) * two_cos;
+    float a = 0.4f * x1 + 0.05f * x2;
+    /* f(1/2) - v = cc (u_out - u_in) / 32 at L = 1, so g = |cc| 2 sin(phi) / 32. */
+    float cc = 16.0f - x1 - 10.0f * a;
+    float g = ef_fabsf(cc) * two_sin * (1.0f / 32.0f);
+
+    /* The control points are rounded to float32 at the corner's coordinates: each is off by
+     * about an ulp per component, so a margin of 4 eps max|v_i| of the tolerance is kept for
+     * it and the curve as stored stays within tol (tests/blend/test_blend.c measures it). */
+    float scale = ef_maxf(ef_maxf(ef_fabsf(v.x), ef_fabsf(v.y)), ef_fabsf(v.z));
+    float tol_geo = tol - EF_BLEND_ROUND_MARGIN * scale;
+    /* Trim: as long as the tolerance allows, no longer than either neighbour allows. */
+    float l_tol = ef_maxf(tol_geo, 0.0f) / ef_maxf(g, 1e-30f);
+    /* Bounded by EF_MAX_COORD too, so a caller's "no limit" (FLT_MAX) cannot overflow. */
+    float l_max = ef_minf(ef_minf(max_in, max_out), EF_MAX_COORD);
+    float len = ef_minf(l_tol, l_max);
+    int clamped = l_max < l_tol;
+
+    int straight = theta < EF_BLEND_MIN_TURN;
+    float chord = len * two_cos;
+    int stop = (chord < EF_MIN_CHORD) | (chord < EF_MIN_CHORD_REL * scale) | (tol_geo <= 0.0f);
+    stop &= straight ^ 1;
+    int blend = ef_blend_hidei((straight | stop) ^ 1);
+    float m = (float)blend;
+    float lb = len * m;
+
+    /* Control points (ef_blend.h); all zero when there is no blend. */
+    float x1l = x1 * lb, x2l = x2 * lb, al = a * lb;
+    ef_vec3_t pa = ef_v3_axpy(v, -lb, ui), pb = ef_v3_axpy(v, lb, uo);
+    ef_seg_t *s = &out->seg;
+    s->b[0] = ef_v3_scale(pa, m);
+    s->b[1] = ef_v3_scale(ef_v3_axpy(pa, 0.2f * x1l, ui), m);
+    s->b[2] = ef_v3_scale(ef_v3_axpy(pa, al, ui), m);
+    s->b[3] = ef_v3_scale(ef_v3_axpy(pb, -al, uo), m);
+    s->b[4] = ef_v3_scale(ef_v3_axpy(pb, -0.2f * x1l, uo), m);
+    s->b[5] = ef_v3_scale(pb, m);
+    s->degree = (uint8_t)(5 * blend);
+    s->ndof = (uint8_t)(4 * blend);
+    s->flags = (uint32_t)(tclamp != 0) * (uint32_t)blend * EF_SEG_CLAMPED;
+    s->clamp = tclamp * (uint32_t)blend;
+    s->dof[0] = x1l;
+    s->dof[1] = x2l;
+    s->dof[2] = x1l;
+    s->dof[3] = -x2l;
+    s->norm.alpha = phi * m;
+    s->norm.beta = -phi * m;
+    s->norm.k0 = s->norm.k1 = 0.0f;
+    s->norm.chord = chord * m;
+    s->norm.e1 = ef_v3_scale(sum, m / ef_maxf(two_cos, 1e-30f));
+    s->norm.t0 = ef_v3_scale(ui, m);
+    s->norm.t1 = ef_v3_scale(uo, m);
+
+    out->p_in = pa;
+    out->p_out = pb;
+    out->trim_in = lb;
+    out->trim_out = lb;
+    out->dev = lb * g;
+    out->gain = g;
+    out->turn = theta;
+    out->flags = (uint32_t)(clamped & blend) * EF_BLEND_CLAMPED +
+                 (uint32_t)straight * EF_BLEND_STRAIGHT + (uint32_t)stop * EF_BLEND_STOP +
+                 (uint32_t)((tclamp != 0) & blend) * EF_BLEND_TBL_CLAMPED;
+    return EF_OK;
+}

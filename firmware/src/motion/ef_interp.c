@@ -1,0 +1,234 @@
+/* Interpolator: planned moves -> setpoints at the servo period (see ef_interp.h). */
+#include "evenfeed/motion/ef_interp.h"
+#include "evenfeed/geom/ef_bezier.h"
+#include "evenfeed/core/ef_err.h"
+
+/** Smallest parametric speed |f'(tau)| the corrected step divides by (below it the law's
+ *  tau is used for that sample). */
+#define EF_INTERP_MIN_DERIV 1e-12f
+
+/** Largest parameter step of the corrected mode (1/64 of a curve: the chord of a quintic
+ *  over that span is within a few 1e-5 of its arc length); a deficit larger than that share
+ *  of the length resynchronises with the time law. */
+#define EF_INTERP_RESYNC (1.0f / 64.0f)
+/** Newton steps of a resynchronisation. */
+#define EF_INTERP_RESYNC_ITER 3
+
+/* A point finite and within EF_MAX_COORD on every axis. */
+static int ef_interp_vok(ef_vec3_t v)
+{
+    return ef_finitef(v.x) & ef_finitef(v.y) & ef_finitef(v.z) & (ef_fabsf(v.x) <= EF_MAX_COORD) &
+           (ef_fabsf(v.y) <= EF_MAX_COORD) & (ef_fabsf(v.z) <= EF_MAX_COORD);
+}
+
+/* Start an empty interpolator at rest at home (contract in ef_interp.h). */
+int ef_interp_init(ef_interp_t *ip, ef_vec3_t home, uint32_t period_us, int mode)
+{
+    if (!ip || period_us == 0u || (mode != EF_STEP_UNIFORM && mode != EF_STEP_CORRECTED))
+        return EF_ERR_ARG;
+    if (!ef_interp_vok(home))
+        return EF_ERR_NONFINITE;
+    ip->head = ip->count = 0;
+    ip->mode = mode;
+    ip->period_us = period_us;
+    ip->t = ip->tau = ip->s_done = 0.0f;
+    ip->t_c = ip->s_c = 0.0f;
+    ip->pos = ip->end = home;
+    ip->v_end = 0.0f;
+    ip->last_seq = ip->last_tag = 0;
+    return EF_OK;
+}
+
+/* Free queue slots, so callers push only when there is room (see ef_interp.h). */
+uint32_t ef_interp_space(const ef_interp_t *ip)
+{
+    return ip ? (uint32_t)EF_INTERP_QUEUE - ip->count : 0u;
+}
+
+/* A move the interpolator can execute after `start` (contract in ef_interp.h); shared with
+ * the drive, which refuses a bad segment when it arrives rather than when it runs. */
+int ef_interp_check(const ef_move_t *m, ef_vec3_t start)
+{
+    if (!m)
+        return EF_ERR_ARG;
+    if (m->degree != 1 && m->degree != 3 && m->degree != 5)
+        return EF_ERR_ARG;
+    int ok = ef_finitef(m->duration) & ef_finitef(m->length) & ef_finitef(m->v_exit);
+    for (int i = 0; i <= m->degree; i++)
+        ok &= ef_interp_vok(m->b[i]);
+    for (int k = 0; k < EF_TIMELAW_PHASES; k++) {
+        ok &= ef_finitef(m->law.dt[k]) & (m->law.dt[k] >= 0.0f);
+        for (int i = 0; i < 5; i++)
+            ok &= ef_finitef(m->law.c[k][i]);
+    }
+    if (!ok || !(m->duration > 0.0f) || !(m->length > 0.0f) || !(m->v_exit >= 0.0f))
+        return EF_ERR_ARG;
+    ef_vec3_t gap = ef_v3_sub(m->b[0], start);
+    if (!(ef_v3_dot(gap, gap) <= EF_INTERP_JOIN_TOL * EF_INTERP_JOIN_TOL))
+        return EF_ERR_ARG;
+    return EF_OK;
+}
+
+/* Queue a planned move that joins the previous end (contract in ef_interp.h). */
+int ef_interp_push(ef_interp_t *ip, const ef_move_t *m)
+{
+    if (!ip || !m)
+        return EF_ERR_ARG;
+    int rc = ef_interp_check(m, ip->end);
+    if (rc != EF_OK)
+        return rc;
+    if (ip->count >= EF_INTERP_QUEUE)
+        return EF_ERR_FULL;
+    if (ip->count == 0) {
+        ip->t = ip->tau = ip->s_done = 0.0f;
+        ip->t_c = ip->s_c = 0.0f;
+    }
+    ip->q[(ip->head + ip->count) % EF_INTERP_QUEUE] = *m;
+    ip->count++;
+    ip->end = m->b[m->degree];
+    ip->v_end = m->v_exit;
+    return EF_OK;
+}
+
+/* Compensated (Kahan) sum *sum += x: the running error *c is fed back, so adding many
+ * small steps to a large total keeps full precision (the firmware is never built with
+ * -ffast-math, which would undo it). */
+static void ef_interp_kahan(float *sum, float *c, float x)
+{
+    float y = x - *c;
+    float t = *sum + y;
+    *c = (t - *sum) - y;
+    *sum = t;
+}
+
+/* Arc length of the curve between parameters a and b by 8-point Gauss-Legendre quadrature
+ * of |f'| (exact to float rounding for the smooth speeds of degree <= 5 curves). */
+static float ef_interp_arc(const ef_vec3_t *lb, int degree, float a, float b)
+{
+    static const float gx[4] = {0.1834346425f, 0.5255324099f, 0.7966664774f,
+                                0.9602898565f}; /* abscissae on [-1, 1] */
+    static const float gw[4] = {0.1813418917f, 0.1568533229f, 0.1111905172f,
+                                0.0506142681f}; /* weights / 2 */
+    float span = b - a, mid = 0.5f * (a + b), sum = 0.0f;
+    for (int k = 0; k < 4; k++) {
+        ef_vec3_t e[2], f[2];
+        ef_bezier_eval(lb, degree, mid - 0.5f * span * gx[k], 1, e);
+        ef_bezier_eval(lb, degree, mid + 0.5f * span * gx[k], 1, f);
+        sum += gw[k] * (ef_v3_norm(e[1]) + ef_v3_norm(f[1]));
+    }
+    return sum * span;
+}
+
+/** Position on the head move at time ip->t (uniform or corrected parameter step). */
+static void ef_interp_eval(ef_interp_t *ip, const ef_move_t *m, float *v)
+{
+    float tau_law = 0.0f;
+    ef_timelaw_eval(m, ip->t, &tau_law, v);
+    /* The curve is evaluated relative to b0 and b0 added last: at the curve's own scale
+     * float32 resolves one servo period's step far better than at machine coordinates,
+     * where the evaluation's rounding (several ulps of ~100 mm) is a few per cent of a
+     * slow 1 um step. The corrected step's chords need the same resolution. */
+    ef_vec3_t d[2], lb[6];
+    for (int i = 0; i <= m->degree && i < 6; i++)
+        lb[i] = ef_v3_sub(m->b[i], m->b[0]);
+    if (ip->mode != EF_STEP_CORRECTED) {
+        ef_bezier_eval(lb, m->degree, tau_law, 0, d);
+        ip->tau = tau_law;
+        ip->pos = ef_v3_add(m->b[0], d[0]);
+        return;
+    }
+    /* One Newton-like step on arc length: S (chords so far) towards s(t) = L tau_law. */
+    ef_bezier_eval(lb, m->degree, ip->tau, 1, d);
+    float s = tau_law * m->length;
+    float gap = s - ip->s_done;
+    float law_ds = *v * (float)ip->period_us * 1e-6f; /* the law's distance per period */
+    if (gap > ef_maxf(EF_INTERP_RESYNC * m->length, 4.0f * law_ds) && tau_law > ip->tau) {
+        /* Far behind (a late call, or a move entered part-way through): find the parameter
+         * whose arc length is s by EF_INTERP_RESYNC_ITER Newton steps from the law's, the
+         * arc from here measured by quadrature each time (chords would understate a long
+         * span, one linear step misses on an uneven curve), so S stays a true arc length. */
+        float t0 = ip->tau, s0 = ip->s_done, tn = tau_law, arc = 0.0f;
+        for (int it = 0; it < EF_INTERP_RESYNC_ITER; it++) {
+            arc = ef_interp_arc(lb, m->degree, t0, tn);
+            ef_vec3_t e[2];
+            ef_bezier_eval(lb, m->degree, tn, 1, e);
+            float sp0 = ef_v3_norm(e[1]);
+            float next = tn;
+            if (sp0 > EF_INTERP_MIN_DERIV)
+                next = tn + (s - s0 - arc) / sp0;
+            tn = ef_finitef(next) ? ef_maxf(t0, ef_minf(1.0f, next)) : tn;
+        }
+        arc = ef_interp_arc(lb, m->degree, t0, tn);
+        ef_interp_kahan(&ip->s_done, &ip->s_c, arc);
+        ef_vec3_t q0;
+        ef_bezier_eval(lb, m->degree, tn, 0, &q0);
+        ip->tau = tn;
+        ip->pos = ef_v3_add(m->b[0], q0);
+        return;
+    }
+    float sp = ef_v3_norm(d[1]);
+    float tn = tau_law;
+    if (sp > EF_INTERP_MIN_DERIV)
+        tn = ip->tau + gap / sp;
+    if (!ef_finitef(tn))
+        tn = tau_law;
+    /* Never step back; never more than the larger of EF_INTERP_RESYNC of the curve and four
+     * times the law's own step per servo period (where |f'| is small the Newton step would
+     * overshoot; a fixed cap alone would hold back a short curve that slows parametrically). */
+    float law_step = law_ds / ef_maxf(m->length, 1e-30f);
+    float cap = ef_maxf(EF_INTERP_RESYNC, 4.0f * law_step);
+    tn = ef_maxf(ip->tau, ef_minf(ef_minf(1.0f, ip->tau + cap), tn));
+    ef_vec3_t p[1];
+    ef_bezier_eval(lb, m->degree, tn, 0, p);
+    ef_interp_kahan(&ip->s_done, &ip->s_c, ef_v3_norm(ef_v3_sub(p[0], d[0])));
+    ip->tau = tn;
+    ip->pos = ef_v3_add(m->b[0], p[0]);
+}
+
+/* Advance by dt_us and give the next setpoint (contract in ef_interp.h). */
+int ef_interp_process(ef_interp_t *ip, uint32_t dt_us, uint32_t *next_us, ef_setpoint_t *sp)
+{
+    if (!ip || !sp)
+        return EF_ERR_ARG;
+    if (next_us)
+        *next_us = ip->period_us;
+    int rc = EF_OK;
+    float v = 0.0f;
+    if (ip->count > 0) {
+        ef_interp_kahan(&ip->t, &ip->t_c, (float)dt_us * 1e-6f);
+        /* Finish every move the elapsed time covers; the leftover carries into the next. */
+        for (uint32_t i = 0; i < EF_INTERP_QUEUE && ip->count > 0; i++) {
+            const ef_move_t *m = &ip->q[ip->head];
+            if (ip->t < m->duration)
+                break;
+            ef_interp_kahan(&ip->t, &ip->t_c, -m->duration);
+            ip->pos = m->b[m->degree];
+            ip->last_seq = m->seq;
+            ip->last_tag = m->tag;
+            ip->tau = ip->s_done = 0.0f;
+            ip->s_c = 0.0f;
+            ip->head = (ip->head + 1u) % EF_INTERP_QUEUE;
+            ip->count--;
+        }
+        if (ip->count > 0) {
+            const ef_move_t *m = &ip->q[ip->head];
+            ef_interp_eval(ip, m, &v);
+            sp->p = ip->pos;
+            sp->v_plan = v;
+            sp->seq = m->seq;
+            sp->tag = m->tag;
+            sp->moving = 1;
+            return EF_OK;
+        }
+        ip->t = ip->t_c = 0.0f;
+        ip->pos = ip->end;
+    }
+    if (ip->v_end > 0.0f)
+        rc = EF_ERR_UNDERRUN; /* ran dry while moving: hold the end position */
+    sp->p = ip->pos;
+    sp->v_plan = 0.0f;
+    sp->seq = ip->last_seq;
+    sp->tag = ip->last_tag;
+    sp->moving = 0;
+    return rc;
+}

@@ -1,0 +1,338 @@
+/* Path primitives (lines, arcs, helices): validation, exact frames at an arc length, and the
+ * measurement of a move's curve (length, curvature bound, largest tangent components).
+ * Freestanding float32, no libm: sin/cos are a fixed-count polynomial below. */
+#include "evenfeed/path/ef_path.h"
+#include "evenfeed/geom/ef_bezier.h"
+#include "evenfeed/core/ef_config.h"
+#include "evenfeed/core/ef_err.h"
+
+/* pi/2 split so k * EF_PIO2_1 and k * EF_PIO2_2 are exact for |k| < 2^12 (11 significant
+ * bits each): Cody–Waite reduction exact enough for |x| up to EF_ARC_MAX_SWEEP + 2 pi. */
+#define EF_PIO2_1      1.5703125f
+#define EF_PIO2_2      4.837512969970703e-4f
+#define EF_PIO2_3      7.549790126e-8f
+#define EF_TWO_OVER_PI 0.63661977236758134f
+#define EF_TWO_PI      6.28318530717958648f
+#define EF_FLT_EPS     1.1920929e-7f
+
+/* Finite without libm: NaN fails x == x, inf fails x - x == 0. */
+static inline int ef_prim_finite(float x)
+{
+    return (x == x) & (x - x == 0.0f);
+}
+
+/* Every component bounded by EF_MAX_COORD (false for NaN and inf). */
+static inline int ef_prim_v3_ok(ef_vec3_t a)
+{
+    int ox = ef_fabsf(a.x) <= EF_MAX_COORD, oy = ef_fabsf(a.y) <= EF_MAX_COORD;
+    int oz = ef_fabsf(a.z) <= EF_MAX_COORD;
+    return ox & oy & oz;
+}
+
+/* All three components finite (no range bound), to reject NaN/inf control points. */
+static inline int ef_prim_v3_finite(ef_vec3_t a)
+{
+    return ef_prim_finite(a.x) & ef_prim_finite(a.y) & ef_prim_finite(a.z);
+}
+
+/* sin and cos of x (|x| < 6400) with a fixed instruction count: Cody–Waite reduction to
+ * [-pi/4, pi/4] and the fdlibm float kernels (error about 1 ulp on the reduced argument). */
+static void ef_sincosf(float x, float *s, float *c)
+{
+    float kf = ef_floorf(x * EF_TWO_OVER_PI + 0.5f);
+    int k = (int)kf;
+    float r = ((x - kf * EF_PIO2_1) - kf * EF_PIO2_2) - kf * EF_PIO2_3;
+    float z = r * r;
+    float sr = r + r * z *
+                       (-1.6666667163e-01f +
+                        z * (8.3333337680e-03f + z * (-1.9841270114e-04f + z * 2.7183114939e-06f)));
+    float cr = 1.0f - 0.5f * z +
+               z * z *
+                   (4.1666667908e-02f +
+                    z * (-1.3888889225e-03f +
+                         z * (2.4801587642e-05f +
+                              z * (-2.7557314297e-07f +
+                                   z * (2.0875723372e-09f + z * -1.1359647598e-11f)))));
+    /* Quadrant q = k mod 4 (two's complement keeps it right for k < 0). */
+    int q = k & 3;
+    const float ssel[4] = {sr, cr, -sr, -cr};
+    const float csel[4] = {cr, -sr, -cr, sr};
+    *s = ssel[q];
+    *c = csel[q];
+}
+
+/* An arc's frame: the axis point `base` level with the start, radial unit e_u towards the
+ * start, e_v = axis x e_u, start radius r0, axial rise h of the end, length len. Computed
+ * without validation (ef_prim_check() validates). */
+typedef struct {
+    ef_vec3_t a, base, eu, ev;
+    float r0, h, len;
+} ef_arc_geo_t;
+
+/* Fill an arc's frame (ef_arc_geo_t) from its start point, shared by check and frame. */
+static void ef_arc_geo(ef_vec3_t start, const ef_prim_t *pr, ef_arc_geo_t *g)
+{
+    float aa = ef_v3_dot(pr->axis, pr->axis);
+    ef_vec3_t a = ef_v3_scale(pr->axis, 1.0f / ef_sqrtf(ef_maxf(aa, 1e-30f)));
+    ef_vec3_t d0 = ef_v3_sub(start, pr->centre);
+    float h0 = ef_v3_dot(d0, a);
+    ef_vec3_t w0 = ef_v3_axpy(d0, -h0, a); /* radial part of start - centre */
+    float r0 = ef_v3_norm(w0);
+    ef_vec3_t eu = ef_v3_scale(w0, 1.0f / ef_maxf(r0, 1e-30f));
+    ef_vec3_t d1 = ef_v3_sub(pr->end, pr->centre);
+    float h = ef_v3_dot(d1, a) - h0;
+    float ang = r0 * ef_fabsf(pr->sweep);
+    g->a = a;
+    g->base = ef_v3_axpy(start, -r0, eu);
+    g->eu = eu;
+    g->ev = ef_v3_cross(a, eu);
+    g->r0 = r0;
+    g->h = h;
+    g->len = ef_sqrtf(ang * ang + h * h);
+}
+
+/* Validate a primitive and give its length (contract in ef_path.h). */
+int ef_prim_check(ef_vec3_t start, const ef_prim_t *pr, float *len)
+{
+    if (!len)
+        return EF_ERR_ARG;
+    *len = 0.0f;
+    if (!pr)
+        return EF_ERR_ARG;
+    int line = pr->kind == EF_PRIM_LINE, arc = pr->kind == EF_PRIM_ARC;
+    if (!(line | arc) || (pr->flags & ~(uint32_t)EF_PRIM_STOP_BEFORE) != 0u)
+        return EF_ERR_ARG;
+    int finite = ef_prim_v3_ok(start) & ef_prim_v3_ok(pr->end) & ef_prim_finite(pr->feed) &
+                 ef_prim_finite(pr->tol) & ef_prim_finite(pr->qtol);
+    if (arc)
+        finite &=
+            ef_prim_v3_ok(pr->centre) & ef_prim_v3_finite(pr->axis) & ef_prim_finite(pr->sweep);
+    if (!finite)
+        return EF_ERR_NONFINITE;
+    if (!(pr->tol >= 0.0f) || !(pr->qtol >= 0.0f))
+        return EF_ERR_ARG;
+    if (!(pr->feed > 0.0f))
+        return EF_ERR_FEED;
+
+    if (line) {
+        float l = ef_v3_norm(ef_v3_sub(pr->end, start));
+        if (!(l >= EF_MIN_CHORD))
+            return EF_ERR_DEGENERATE;
+        *len = l;
+        return EF_OK;
+    }
+
+    /* Arc / helix. */
+    float aa = ef_v3_dot(pr->axis, pr->axis);
+    if (!(ef_fabsf(aa - 1.0f) <= 2.0f * EF_UNIT_TOL))
+        return EF_ERR_ARC;
+    float asw = ef_fabsf(pr->sweep);
+    if (!(asw > 0.0f) || !(asw <= EF_ARC_MAX_SWEEP))
+        return EF_ERR_ARC;
+    ef_arc_geo_t g;
+    ef_arc_geo(start, pr, &g);
+    if (!(g.r0 >= EF_MIN_CHORD))
+        return EF_ERR_DEGENERATE;
+    float rtol = ef_maxf(EF_ARC_ABS_TOL, EF_ARC_REL_TOL * g.r0);
+    ef_vec3_t d1 = ef_v3_sub(pr->end, pr->centre);
+    float x1 = ef_v3_dot(d1, g.eu), y1 = ef_v3_dot(d1, g.ev);
+    float r1 = ef_sqrtf(x1 * x1 + y1 * y1);
+    if (!(ef_fabsf(r1 - g.r0) <= rtol))
+        return EF_ERR_ARC;
+    /* The end's angle against the sweep, modulo 2 pi. The allowance is the radius tolerance
+     * as an arc length, plus float32 rounding of the sweep itself (a few ulp of |sweep| and
+     * of the angle evaluation), so a many-turn arc is not refused for its representation. */
+    float ang1 = ef_atan2f(y1, x1);
+    float diff = ang1 - pr->sweep;
+    diff -= EF_TWO_PI * ef_floorf(diff * (1.0f / EF_TWO_PI) + 0.5f);
+    float allow = rtol / g.r0 + 8.0f * EF_FLT_EPS * (asw + EF_TWO_PI);
+    if (!(ef_fabsf(diff) <= allow))
+        return EF_ERR_ARC;
+    if (!(g.len >= EF_MIN_CHORD) || !ef_prim_finite(g.len))
+        return EF_ERR_DEGENERATE;
+    /* Every point of the arc, not only its ends and centre, within EF_MAX_COORD: the
+     * circle's reach from the centre (radius plus the helix's rise) bounds it. Without this
+     * a large arc near the limit makes pieces and blends no move may hold. */
+    float cm =
+        ef_maxf(ef_maxf(ef_fabsf(pr->centre.x), ef_fabsf(pr->centre.y)), ef_fabsf(pr->centre.z));
+    if (!(cm + g.r0 + rtol + ef_fabsf(g.h) <= EF_MAX_COORD))
+        return EF_ERR_NONFINITE;
+    *len = g.len;
+    return EF_OK;
+}
+
+/* Exact position, tangent, normal, curvature at arc length s (contract in ef_path.h). */
+int ef_prim_frame(ef_vec3_t start, const ef_prim_t *pr, float s, ef_frame_t *out)
+{
+    if (!out)
+        return EF_ERR_ARG;
+    ef_frame_t zero = {{0.0f, 0.0f, 0.0f}, {0.0f, 0.0f, 0.0f}, {0.0f, 0.0f, 0.0f}, 0.0f};
+    *out = zero;
+    if (!pr || (pr->kind != EF_PRIM_LINE && pr->kind != EF_PRIM_ARC))
+        return EF_ERR_ARG;
+    if (pr->kind == EF_PRIM_LINE) {
+        ef_vec3_t d = ef_v3_sub(pr->end, start);
+        float len = ef_v3_norm(d);
+        float inv = 1.0f / ef_maxf(len, 1e-30f);
+        float sc = ef_minf(ef_maxf(s, 0.0f), len); /* NaN s clamps to 0 */
+        int at_end = sc >= len;
+        ef_vec3_t u = ef_v3_scale(d, inv);
+        ef_vec3_t p = ef_v3_axpy(start, sc, u);
+        out->p.x = ef_selectf(at_end, pr->end.x, p.x);
+        out->p.y = ef_selectf(at_end, pr->end.y, p.y);
+        out->p.z = ef_selectf(at_end, pr->end.z, p.z);
+        out->t = u;
+        return EF_OK;
+    }
+    ef_arc_geo_t g;
+    ef_arc_geo(start, pr, &g);
+    float len = g.len;
+    float sc = ef_minf(ef_maxf(s, 0.0f), len);
+    float frac = sc / ef_maxf(len, 1e-30f);
+    float th = pr->sweep * frac;
+    float sn, cs;
+    ef_sincosf(th, &sn, &cs);
+    ef_vec3_t rad = ef_v3_add(ef_v3_scale(g.eu, cs), ef_v3_scale(g.ev, sn)); /* outward */
+    ef_vec3_t p = ef_v3_axpy(ef_v3_axpy(g.base, g.r0, rad), g.h * frac, g.a);
+    /* dp/ds: (r0 sweep / len) (-sin e_u + cos e_v) + (h / len) a, unit by construction. */
+    float il = 1.0f / ef_maxf(len, 1e-30f);
+    ef_vec3_t tan = ef_v3_add(ef_v3_scale(g.eu, -sn), ef_v3_scale(g.ev, cs));
+    ef_vec3_t t = ef_v3_axpy(ef_v3_scale(tan, g.r0 * pr->sweep * il), g.h * il, g.a);
+    t = ef_v3_scale(t, 1.0f / ef_maxf(ef_v3_norm(t), 1e-30f));
+    int at_end = sc >= len, at_start = sc <= 0.0f;
+    out->p.x = ef_selectf(at_end, pr->end.x, ef_selectf(at_start, start.x, p.x));
+    out->p.y = ef_selectf(at_end, pr->end.y, ef_selectf(at_start, start.y, p.y));
+    out->p.z = ef_selectf(at_end, pr->end.z, ef_selectf(at_start, start.z, p.z));
+    out->t = t;
+    out->n = ef_v3_scale(rad, -1.0f); /* towards the axis */
+    /* r / (r^2 + c^2), c = h / sweep, written as r sweep^2 / len^2 (len^2 = r^2 sw^2 + h^2). */
+    float q = pr->sweep * il;
+    out->kappa = g.r0 * q * q;
+    return EF_OK;
+}
+
+/* Gauss–Legendre, 16 nodes on [0, 1]: offsets from 1/2 and weights of each symmetric pair's
+ * members. Exact for polynomials up to degree 31; |f'| of a quintic with near-constant speed
+ * is smooth, so the rule's error is far below float32 rounding for evenfeed's curves. */
+static const float ef_gl16[8][2] = {
+    {4.750625492e-02f, 9.472530523e-02f}, {1.408017754e-01f, 9.130170752e-02f},
+    {2.290083888e-01f, 8.457825970e-02f}, {3.089381222e-01f, 7.479799441e-02f},
+    {3.777022042e-01f, 6.231448563e-02f}, {4.328156012e-01f, 4.757925584e-02f},
+    {4.722875115e-01f, 3.112676197e-02f}, {4.947004675e-01f, 1.357622971e-02f},
+};
+
+/* Points of Bezier curves of degree 4 and 3 at t: the control points weighted by the
+ * Bernstein polynomials (all positive, so no cancellation: as accurate as de Casteljau's
+ * algorithm, at a fraction of its instructions). */
+static ef_vec3_t ef_mm_b4(const ef_vec3_t *p, float t)
+{
+    float u = 1.0f - t, t2 = t * t, u2 = u * u;
+    ef_vec3_t r = ef_v3_scale(p[0], u2 * u2);
+    r = ef_v3_axpy(r, 4.0f * u2 * u * t, p[1]);
+    r = ef_v3_axpy(r, 6.0f * u2 * t2, p[2]);
+    r = ef_v3_axpy(r, 4.0f * u * t2 * t, p[3]);
+    return ef_v3_axpy(r, t2 * t2, p[4]);
+}
+
+/* Cubic Bernstein evaluation, for the second hodograph in ef_move_measure(). */
+static ef_vec3_t ef_mm_b3(const ef_vec3_t *p, float t)
+{
+    float u = 1.0f - t;
+    ef_vec3_t r = ef_v3_scale(p[0], u * u * u);
+    r = ef_v3_axpy(r, 3.0f * u * u * t, p[1]);
+    r = ef_v3_axpy(r, 3.0f * u * t * t, p[2]);
+    return ef_v3_axpy(r, t * t * t, p[3]);
+}
+
+/* Degree elevation of p (degree n, n + 1 points) in place to degree n + 1. */
+static void ef_mm_elevate(ef_vec3_t *p, int n)
+{
+    p[n + 1] = p[n];
+    for (int i = n; i >= 1; i--) {
+        float a = (float)i / (float)(n + 1);
+        p[i] = ef_v3_add(ef_v3_scale(p[i - 1], a), ef_v3_scale(p[i], 1.0f - a));
+    }
+}
+
+/* Clear a move's measured fields and pass rc on, so failures leave no stale data. */
+static int ef_move_measure_fail(ef_move_t *m, int rc)
+{
+    m->length = 0.0f;
+    m->kappa_max = 0.0f;
+    m->tabs = ef_v3(0.0f, 0.0f, 0.0f);
+    return rc;
+}
+
+/* Measure a move's length, curvature bound and tangent bounds (contract in ef_path.h). */
+int ef_move_measure(ef_move_t *m)
+{
+    if (!m)
+        return EF_ERR_ARG;
+    int deg = m->degree;
+    if (deg != 1 && deg != 3 && deg != 5)
+        return ef_move_measure_fail(m, EF_ERR_ARG);
+    int finite = 1;
+    for (int i = 0; i <= deg; i++)
+        finite &= ef_prim_v3_finite(m->b[i]);
+    if (!finite)
+        return ef_move_measure_fail(m, EF_ERR_NONFINITE);
+
+    if (deg == 1) {
+        ef_vec3_t d = ef_v3_sub(m->b[1], m->b[0]);
+        float l = ef_v3_norm(d);
+        float inv = 1.0f / ef_maxf(l, 1e-30f);
+        m->length = l;
+        m->kappa_max = 0.0f;
+        m->tabs = ef_v3(ef_fabsf(d.x) * inv, ef_fabsf(d.y) * inv, ef_fabsf(d.z) * inv);
+        if (!ef_prim_finite(l))
+            return ef_move_measure_fail(m, EF_ERR_NONFINITE);
+        return EF_OK;
+    }
+
+    /* Hodograph (degree deg - 1) and second hodograph (deg - 2) control points, once (for a
+     * cubic elevated to degrees 4 and 3, exact up to rounding); then every node is a
+     * Bernstein combination of them: the same nodes and samples as evaluating the curve's
+     * derivatives by de Casteljau's algorithm, in about a sixth of the instructions. */
+    ef_vec3_t h1[5], h2[4];
+    for (int i = 0; i < deg; i++)
+        h1[i] = ef_v3_scale(ef_v3_sub(m->b[i + 1], m->b[i]), (float)deg);
+    for (int i = 0; i + 1 < deg; i++)
+        h2[i] = ef_v3_scale(ef_v3_sub(h1[i + 1], h1[i]), (float)(deg - 1));
+    if (deg == 3) {
+        ef_mm_elevate(h1, 2);
+        ef_mm_elevate(h1, 3);
+        ef_mm_elevate(h2, 1);
+        ef_mm_elevate(h2, 2);
+    }
+    float len = 0.0f;
+    for (int i = 0; i < 8; i++) {
+        float a = ef_v3_norm(ef_mm_b4(h1, 0.5f - ef_gl16[i][0]));
+        float b = ef_v3_norm(ef_mm_b4(h1, 0.5f + ef_gl16[i][0]));
+        len += ef_gl16[i][1] * (a + b);
+    }
+    float kmax = 0.0f;
+    float ilen = 1.0f / ef_maxf(len, 1e-30f);
+    ef_vec3_t tabs = ef_v3(0.0f, 0.0f, 0.0f);
+    for (int i = 0; i <= EF_MOVE_SAMPLES; i++) {
+        float t = (float)i * (1.0f / (float)EF_MOVE_SAMPLES);
+        ef_vec3_t d1 = ef_mm_b4(h1, t), d2 = ef_mm_b3(h2, t);
+        float sp = ef_v3_norm(d1);
+        float isp = 1.0f / ef_maxf(sp, 1e-30f);
+        float k = ef_v3_norm(ef_v3_cross(d1, d2)) * isp * isp * isp;
+        kmax = ef_maxf(kmax, k);
+        /* Per axis, the larger of |t_i| (what arc-length stepping moves the axis by per unit
+         * path speed) and |f'_i| / L (what stepping tau uniformly by the time law does, where
+         * the curve's parametric speed exceeds its mean): the planner's axis limits then
+         * hold for both interpolator modes. */
+        float w = ef_maxf(isp, ilen);
+        tabs.x = ef_maxf(tabs.x, ef_fabsf(d1.x) * w);
+        tabs.y = ef_maxf(tabs.y, ef_fabsf(d1.y) * w);
+        tabs.z = ef_maxf(tabs.z, ef_fabsf(d1.z) * w);
+    }
+    if (!ef_prim_finite(len) || !ef_prim_finite(kmax))
+        return ef_move_measure_fail(m, EF_ERR_NONFINITE);
+    m->length = len;
+    m->kappa_max = kmax;
+    m->tabs = tabs;
+    return EF_OK;
+}

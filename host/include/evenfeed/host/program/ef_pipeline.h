@@ -1,0 +1,168 @@
+/**
+ * @file ef_pipeline.h
+ * @brief Host pipeline: a part program through the G-code reader, the streaming smoother
+ * (ef_smooth.h) and optionally the interpolator (ef_interp.h), with callbacks for moves,
+ * setpoints, events and notes (docs/smoothing-cli.md).
+ *
+ * ## Item conversion
+ * - Positions stay in millimetres (the reader's); feeds mm/min -> mm/s.
+ * - G0: a LINE primitive at the rapid speed, with ::EF_PRIM_STOP_BEFORE, and the primitive
+ *   after it also gets ::EF_PRIM_STOP_BEFORE (exact stops at both ends of a rapid).
+ * - G1: a LINE primitive. G2/G3: an ARC primitive about +Z (G17), +Y (G18) or +X (G19)
+ *   with the item's centre and signed sweep (full turns included); a helix ends at the
+ *   item's end.
+ * - G61/G61.1: tol 0 (exact stops) from then on. G64 P Q: tol = P (P absent or 0: the
+ *   configured default), qtol = Q (absent: the configured default). The program starts in
+ *   G64 with the defaults (LinuxCNC's default mode).
+ * - Events (tool change, spindle, coolant, dwell, G53 moves, work offsets, M0...):
+ *   ef_smooth_finish(), every move drained (and interpolated to rest), then on_event, so
+ *   moves and events keep their order. The first primitive after an event has
+ *   ::EF_PRIM_STOP_BEFORE. The program end is handled the same way.
+ * - ZERO_MOVE items, IGNORED notes and lines too short for float32 (refused by the
+ *   firmware as ::EF_ERR_DEGENERATE) go to on_note with "name:line:col: ..."; nothing is
+ *   dropped silently.
+ * - A primitive refused by ef_smooth_push() (NaN, inconsistent arc...) or a reader error:
+ *   controlled stop (ef_smooth_finish(), everything accepted drained), then the error with
+ *   "name:line: <ef_err_str>" (reader errors keep the reader's message).
+ */
+#ifndef EF_PIPELINE_H
+#define EF_PIPELINE_H
+
+#include <stdint.h>
+#include "evenfeed/motion/ef_interp.h"
+#include "evenfeed/motion/ef_smooth.h"
+#include "evenfeed/host/program/ef_gcode.h"
+#include "evenfeed/host/core/ef_host.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Step-mode bits for ::ef_pipe_cfg_t::interp_modes. */
+#define EF_PIPE_INTERP_UNIFORM   (1u << EF_STEP_UNIFORM)
+#define EF_PIPE_INTERP_CORRECTED (1u << EF_STEP_CORRECTED)
+
+/** Feed fluctuation counts samples whose planned speed is at least this fraction of the
+ *  move's speed limit (ramps to rest are excluded: relative errors there mean nothing). */
+#define EF_PIPE_FLUCT_VMIN_FRAC 0.1
+
+/** What the pipeline knows about a move beyond ef_move_t (looked up by its tag). */
+typedef struct {
+    double tol; /**< path tolerance P (mm) in force at the move's primitive (0: exact) */
+    int units;  /**< program units of the move's source line: 20 (inch) or 21 (mm) */
+    int rapid;  /**< the move belongs to a G0 primitive */
+} ef_pipe_move_info_t;
+
+/** Callbacks; any may be NULL. A nonzero return value stops the run with that code. */
+typedef struct {
+    /** Every reader item, as read (before it is acted on). */
+    int (*on_item)(void *user, const ef_gcode_item_t *it);
+    /** A planned move, in emission order (positions in mm). */
+    int (*on_move)(void *user, const ef_move_t *m, const ef_pipe_move_info_t *mi);
+    /** A setpoint of the interpolator in cfg.step_mode, at time t (s) since the start. */
+    int (*on_setpoint)(void *user, double t, const ef_setpoint_t *sp,
+                       const ef_pipe_move_info_t *mi);
+    /** An event item, after every move before it was emitted and run to rest. */
+    int (*on_event)(void *user, const ef_gcode_item_t *it);
+    /** A note: "name:line:col: text" (zero-length moves, ignored words). */
+    int (*on_note)(void *user, const ef_gcode_item_t *it, const char *text);
+    void *user;
+} ef_pipe_cb_t;
+
+/** Configuration (ef_pipe_cfg_default() fills every field). */
+typedef struct {
+    const ef_table_t *g2;  /**< G2 quintic table (required) */
+    const ef_table_t *g1;  /**< G1 cubic table (required when smooth_degree == 3) */
+    ef_limits_t lim;       /**< motion limits (mm/s, mm/s^2, mm/s^3) */
+    double tol_default;    /**< P (mm) at program start and for G64 without P */
+    double qtol_default;   /**< Q (mm) at program start and for G64 without Q (0: no merge) */
+    double micro_len;      /**< longest CAM micro-segment (mm); 0 disables smooth sections */
+    double micro_turn;     /**< largest turn at a smooth vertex (rad) */
+    int smooth_degree;     /**< 5 (G2 quintic) or 3 (G1 cubic) smooth sections */
+    double rapid_speed;    /**< G0 path speed (mm/s), > 0 */
+    uint32_t period_us;    /**< servo period (us), > 0 */
+    int step_mode;         /**< ::ef_step_mode_t whose setpoints go to on_setpoint */
+    unsigned interp_modes; /**< EF_PIPE_INTERP_* bits: interpolators to run (0: none) */
+} ef_pipe_cfg_t;
+
+/** Feed fluctuation of one step mode, measured on consecutive setpoints:
+ *  |(|p_k - p_k-1| / period) - v_ref| / v_ref with v_ref the mean planned speed of the two. */
+typedef struct {
+    uint64_t setpoints; /**< setpoints produced */
+    uint64_t samples;   /**< pairs counted (both moving, v_ref >= EF_PIPE_FLUCT_VMIN_FRAC
+                             x the move's v_max) */
+    double max_rel;     /**< largest relative fluctuation */
+    double rms_rel;     /**< RMS relative fluctuation */
+    uint32_t max_line;  /**< source line where the largest one occurred */
+    uint32_t underruns; /**< EF_ERR_UNDERRUN results (should be 0) */
+    double end_time;    /**< time of the last setpoint (s) */
+} ef_pipe_fluct_t;
+
+/** Counters and figures of a run. */
+typedef struct {
+    uint32_t items;         /**< reader items */
+    uint32_t prims;         /**< primitives pushed (accepted) */
+    uint32_t rapids;        /**< of those, G0 */
+    uint32_t arcs;          /**< of those, arcs and helices */
+    uint32_t events;        /**< event items */
+    uint32_t notes;         /**< notes (zero moves, ignored words, dropped tiny lines) */
+    uint32_t zero_moves;    /**< ZERO_MOVE items */
+    uint32_t moves;         /**< moves emitted */
+    uint32_t moves_kind[5]; /**< by ::ef_move_kind_t (index 1..4) */
+    ef_smooth_stats_t sm;   /**< the smoother's counters */
+    double length;          /**< path length of the moves (mm) */
+    double cycle_time;      /**< sum of the moves' durations (s) */
+    double rapid_time;      /**< of which rapids (s) */
+    double dev_max;         /**< largest move deviation (mm) */
+    double dev_max_tol;     /**< the tolerance in force at that move (mm) */
+    uint32_t dev_max_line;  /**< its source line */
+    uint32_t dev_over;      /**< moves whose deviation exceeds their tolerance (+1e-6 mm) */
+    double tol_max;         /**< largest tolerance in force at any primitive (mm) */
+    int units;              /**< program units at the first path item (20 or 21) */
+    double start[3];        /**< program start (mm) */
+    double end[3];          /**< where the last move ends (mm) */
+    ef_pipe_fluct_t fl[2];  /**< per ::ef_step_mode_t, when interpolated */
+} ef_pipe_stats_t;
+
+/** Defaults: P 0.02 mm, Q 0, 100 mm/s and 1000 mm/s^2 per axis, jerk 20000 mm/s^3,
+ *  a_normal_frac 0.5, micro_len 1 mm, micro_turn 0.35 rad, quintic smooth sections, rapid
+ *  100 mm/s, period 1000 us, corrected stepping, no interpolation; tables NULL. */
+void ef_pipe_cfg_default(ef_pipe_cfg_t *cfg);
+
+/**
+ * @brief Run a program already opened in a reader to its end (or first error).
+ * @param r     reader (ef_gcode_init() or ef_gcode_open())
+ * @param cfg   configuration
+ * @param cb    callbacks (may be NULL)
+ * @param st    statistics (may be NULL), filled also on error
+ * @param m     message on failure (may be NULL)
+ * @retval EF_OK
+ * @retval EF_ERR_ARG    NULL r or cfg, invalid configuration (message says which field)
+ * @retval EF_ERR_NOMEM  no memory for the smoother state
+ * @retval EF_ERR_GCODE  the reader's error (after a controlled stop)
+ * @retval EF_ERR_NONFINITE, EF_ERR_FEED, EF_ERR_DEGENERATE, EF_ERR_ARC  a primitive the
+ *                       smoother refused, "name:line: <ef_err_str>" (after a controlled stop)
+ * @retval other         as ef_smooth_init() / ef_interp_init(), or a callback's code
+ */
+int ef_pipe_run(ef_gcode_t *r, const ef_pipe_cfg_t *cfg, const ef_pipe_cb_t *cb,
+                ef_pipe_stats_t *st, ef_msg_t *m);
+
+/**
+ * @brief Convert one path item (RAPID, LINE, ARC) to a primitive; flags, tol, qtol and tag
+ * are left 0 for the caller.
+ * @param it          reader item
+ * @param rapid_speed G0 speed (mm/s)
+ * @param pr          out
+ * @retval EF_OK
+ * @retval EF_ERR_ARG NULL pointer, not a path item, or unknown plane
+ */
+int ef_pipe_item_prim(const ef_gcode_item_t *it, double rapid_speed, ef_prim_t *pr);
+
+/** @brief Name of a move kind: "line", "arc", "blend", "smooth" or "?". */
+const char *ef_pipe_move_kind_name(int kind);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* EF_PIPELINE_H */

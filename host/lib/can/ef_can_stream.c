@@ -1,0 +1,854 @@
+/* evenfeed stream --can as a library call: smooth a program and stream it over CANopen
+ * (SocketCAN) to up to three CiA 402 drives, in CSP or evenfeed segment mode. */
+#include <errno.h>
+#include <math.h>
+#include <pthread.h>
+#include <stdlib.h>
+#include <string.h>
+#include "evenfeed/host/can/ef_canhost.h"
+#include "evenfeed/host/can/ef_sockcan.h"
+
+/* Frames received in one pump iteration before time is advanced again. */
+#define CS_RX_BURST 64
+/* Longest receive wait while the socket's backlog holds frames (us). */
+#define CS_BACKLOG_WAIT_US 500u
+/* Time added to the master's stop timeout for the final wait (ms). */
+#define CS_STOP_MARGIN_MS 2000u
+
+/* Items the pipeline thread hands to the bus thread (moves, setpoints, events, in order). */
+#define CS_QUEUE 64
+
+typedef struct {
+    int kind; /* CS_ITEM_* */
+    ef_move_t mv;
+    ef_setpoint_t sp;
+    double t;
+    ef_gcode_item_t it;
+} cs_item_t;
+
+enum { CS_ITEM_MOVE = 1, CS_ITEM_SETPOINT = 2, CS_ITEM_EVENT = 3 };
+
+/** TPDO1 positions kept per node until every node's answer to the same SYNC is in. */
+#define CS_TP_RING 256u
+
+typedef struct {
+    const ef_can_stream_cfg_t *c;
+    ef_can_stream_result_t *res;
+    ef_com_cfg_t mc;
+    ef_comaster_t ms;
+    ef_sockcan_t sk;
+    int sk_open;
+    FILE *trace;
+    uint32_t t_prev; /* ef_sockcan_now_us() at the last pump */
+    uint64_t t_us;   /* time since the socket opened (us) */
+    uint64_t t_run;  /* t_us when RUN was reached */
+    /* SYNC periods. */
+    uint64_t sync_last_t;
+    double p_sum, p_sq;
+    uint64_t p_n;
+    uint32_t syncs;
+    uint32_t bus_reported; /* EF_SOCKCAN_* conditions passed to the master */
+    int io_rc;             /* a socket error that ends everything */
+    ef_msg_t io_msg;
+    int cb_rc; /* what a callback failed with (the pipeline only says it stopped) */
+    ef_msg_t cbm;
+    int cb_master;     /* the callback failed because the master left RUN */
+    uint32_t err_sync; /* SYNC count when the master's error was first seen */
+    int err_seen;
+    int start_checked;
+    double pushed_time; /* durations of the moves pushed (s) */
+    double longest;     /* longest move (s) */
+    /* Executed path: the n-th TPDO1 of every node answers the same SYNC (type 1: one per
+     * SYNC, in order, all nodes operational from the same NMT start), so rows pair them by
+     * count, not by arrival time, which a loaded host stretches. */
+    uint32_t tp_count[EF_CAN_STREAM_MAX_NODES];
+    int32_t tp_ring[EF_CAN_STREAM_MAX_NODES][CS_TP_RING];
+    uint32_t tp_rows; /* rows written */
+    /* The pipeline runs in its own thread so that smoothing never delays a SYNC or the
+     * heartbeat supervision; only this (the bus) thread touches the master and the socket. */
+    pthread_mutex_t mu;
+    pthread_cond_t cv;
+    cs_item_t q[CS_QUEUE];
+    uint32_t q_head, q_count;
+    int worker_done, worker_rc, abort;
+    ef_msg_t worker_msg;
+    ef_gcode_t *r;
+    ef_pipe_cfg_t pc;
+} cs_t;
+
+/* Defaults documented in ef_canhost.h. */
+void ef_can_stream_cfg_default(ef_can_stream_cfg_t *c, const ef_table_t *g2, const ef_table_t *g1)
+{
+    memset(c, 0, sizeof *c);
+    for (int k = 0; k < EF_CAN_STREAM_MAX_NODES; k++)
+        c->nodes[k] = (uint8_t)(k + 1);
+    c->n_nodes = EF_CAN_STREAM_MAX_NODES;
+    c->mode = EF_COM_MODE_SEGMENT;
+    ef_pipe_cfg_default(&c->pipe);
+    c->pipe.g2 = g2;
+    c->pipe.g1 = g1;
+    c->boot_timeout_ms = 3000;
+    c->hb_timeout_ms = 200;
+    c->sdo_timeout_ms = 200;
+    c->stop_timeout_ms = 5000;
+    c->bringup_ms = 20000;
+    c->stall_ms = 10000;
+    c->bitrate = 1000000;
+}
+
+/* Names of the bus conditions in a detail word. */
+static void cs_bus_text(uint32_t bits, char *buf, size_t n)
+{
+    buf[0] = 0;
+    if (bits & EF_SOCKCAN_BUS_OFF)
+        snprintf(buf + strlen(buf), n - strlen(buf), "%sbus-off", buf[0] ? ", " : "");
+    if (bits & EF_SOCKCAN_ERROR_PASSIVE)
+        snprintf(buf + strlen(buf), n - strlen(buf), "%serror-passive", buf[0] ? ", " : "");
+    if (bits & EF_SOCKCAN_DOWN)
+        snprintf(buf + strlen(buf), n - strlen(buf), "%sinterface down", buf[0] ? ", " : "");
+    if (!buf[0])
+        snprintf(buf, n, "bus error (0x%x)", (unsigned)bits);
+}
+
+/* One line for a master error (see ef_canhost.h). */
+void ef_can_error_text(const ef_com_error_t *e, const ef_com_cfg_t *c, const char *iface, char *buf,
+                       size_t n)
+{
+    if (!buf || n == 0)
+        return;
+    if (!e || e->code == 0) {
+        snprintf(buf, n, "no error");
+        return;
+    }
+    char who[32], bus[64];
+    snprintf(who, sizeof who, "node %u", (unsigned)e->node);
+    const char *dir = e->what == EF_COM_WHAT_SDO_WRITE ? "writing" : "reading";
+    switch (e->what) {
+    case EF_COM_WHAT_BOOT:
+        snprintf(buf, n, "%s: never booted (%u ms)", who, c ? (unsigned)c->boot_timeout_ms : 0u);
+        break;
+    case EF_COM_WHAT_SDO_READ:
+    case EF_COM_WHAT_SDO_WRITE:
+        if (e->abort)
+            snprintf(buf, n, "%s: SDO abort 0x%08X (%s) %s 0x%04X:%02X", who, (unsigned)e->abort,
+                     ef_co_abort_str(e->abort), dir, (unsigned)e->index, (unsigned)e->sub);
+        else if (e->code == EF_ERR_TIMEOUT)
+            snprintf(buf, n, "%s: no SDO answer (%u ms, retried) %s 0x%04X:%02X", who,
+                     c ? (unsigned)c->sdo_timeout_ms : 0u, dir, (unsigned)e->index,
+                     (unsigned)e->sub);
+        else
+            snprintf(buf, n, "%s: %s %s 0x%04X:%02X", who, ef_err_str(e->code), dir,
+                     (unsigned)e->index, (unsigned)e->sub);
+        break;
+    case EF_COM_WHAT_CHECK:
+        snprintf(buf, n, "%s: 0x%04X:%02X is 0x%08X, expected 0x%08X", who, (unsigned)e->index,
+                 (unsigned)e->sub, (unsigned)e->value, (unsigned)e->expected);
+        break;
+    case EF_COM_WHAT_ENABLE:
+        if (e->power == EF_CO_PS_FAULT || e->power == EF_CO_PS_FAULT_REACTION)
+            snprintf(buf, n,
+                     "%s: drive in fault (statusword 0x%04X): not enabling it; reset the "
+                     "fault first (--fault-reset)",
+                     who, (unsigned)e->statusword);
+        else
+            snprintf(buf, n, "%s: did not enable: power state %s (statusword 0x%04X)", who,
+                     ef_co_power_str(e->power), (unsigned)e->statusword);
+        break;
+    case EF_COM_WHAT_HEARTBEAT:
+        snprintf(buf, n, "%s: heartbeat lost (%u ms)", who, c ? (unsigned)c->hb_timeout_ms : 0u);
+        break;
+    case EF_COM_WHAT_EMCY:
+        snprintf(buf, n, "%s: EMCY 0x%04X (%s), drive fault %u, at SYNC %u", who, (unsigned)e->emcy,
+                 ef_co_emcy_str(e->emcy), (unsigned)e->drive_fault, (unsigned)e->value);
+        break;
+    case EF_COM_WHAT_FAULT:
+        snprintf(buf, n, "%s: drive reports FAULT (statusword 0x%04X, %s)", who,
+                 (unsigned)e->statusword, ef_co_power_str(e->power));
+        break;
+    case EF_COM_WHAT_RESTART:
+        snprintf(buf, n, "%s: restarted (boot-up message while running): its state is lost", who);
+        break;
+    case EF_COM_WHAT_BUS:
+        cs_bus_text(e->value, bus, sizeof bus);
+        snprintf(buf, n, "%s: %s", iface ? iface : "CAN", bus);
+        break;
+    case EF_COM_WHAT_STREAM:
+        snprintf(buf, n, "%s: stream failed at segment %u: %s", who, (unsigned)e->value,
+                 ef_err_str(e->code));
+        break;
+    case EF_COM_WHAT_STOP:
+        snprintf(buf, n, "%s: not at rest %u ms after the stop (power state %s)", who,
+                 c ? (unsigned)c->stop_timeout_ms : 0u, ef_co_power_str(e->power));
+        break;
+    default:
+        snprintf(buf, n, "%s: %s", e->node ? who : (iface ? iface : "CAN"), ef_err_str(e->code));
+        break;
+    }
+}
+
+/* Index of a node id in the configuration, -1 if none. */
+static int cs_node_index(const cs_t *S, uint32_t id)
+{
+    for (int k = 0; k < S->c->n_nodes; k++)
+        if (S->c->nodes[k] == id)
+            return k;
+    return -1;
+}
+
+/* The master's error as text. */
+static void cs_error_text(const cs_t *S, char *buf, size_t n)
+{
+    ef_can_error_text(ef_comaster_error(&S->ms), &S->mc, S->c->iface, buf, n);
+}
+
+/* Every SYNC the master sends: timestamp, period statistics, trace of the actual positions. */
+static void cs_on_sync(cs_t *S)
+{
+    uint64_t t = S->t_us + (uint32_t)(ef_sockcan_now_us() - S->t_prev);
+    S->syncs++;
+    if (S->syncs > 1) {
+        double p = (double)(t - S->sync_last_t);
+        S->p_sum += p;
+        S->p_sq += p * p;
+        S->p_n++;
+        if (S->p_n == 1 || p < S->res->sync_min_us)
+            S->res->sync_min_us = p;
+        if (S->p_n == 1 || p > S->res->sync_max_us)
+            S->res->sync_max_us = p;
+    }
+    S->sync_last_t = t;
+    if (!S->trace)
+        return;
+    fprintf(S->trace, "y,%u,%llu\n", (unsigned)S->syncs, (unsigned long long)t);
+}
+
+/* Each node's TPDO1 (statusword, position actual): when every node has answered the n-th
+ * SYNC, write the executed point "a,n,POS..." (program units). */
+static void cs_snoop_tpdo(cs_t *S, const ef_can_frame_t *f)
+{
+    if (f->flags || f->dlc < 6 || (f->id & ~0x7Fu) != EF_CO_COB_TPDO1)
+        return;
+    int k = cs_node_index(S, f->id & 0x7Fu);
+    if (k < 0)
+        return;
+    S->tp_ring[k][S->tp_count[k] % CS_TP_RING] = (int32_t)ef_co_get32(&f->data[2]);
+    S->tp_count[k]++;
+    if (!S->trace)
+        return;
+    for (;;) {
+        uint32_t n = S->tp_rows;
+        for (int j = 0; j < S->c->n_nodes; j++)
+            if (S->tp_count[j] <= n || S->tp_count[j] - n > CS_TP_RING)
+                return; /* not all in yet (or a node far ahead: its old ones are gone) */
+        fprintf(S->trace, "a,%u", (unsigned)(n + 1u));
+        for (int j = 0; j < S->c->n_nodes; j++) {
+            const ef_com_node_t *nd = ef_comaster_node(&S->ms, j);
+            fprintf(S->trace, ",%.6f",
+                    (double)ef_co_inc_to_pos(S->tp_ring[j][n % CS_TP_RING], nd->inc_per_unit));
+        }
+        fputc('\n', S->trace);
+        S->tp_rows++;
+    }
+}
+
+/* The master's port: ef_sockcan_send(), watching for the SYNCs it sends. */
+static int cs_send(void *ctx, const ef_can_frame_t *f)
+{
+    cs_t *S = ctx;
+    int rc = ef_sockcan_send(&S->sk, f);
+    if (rc == EF_OK && f->id == EF_CO_COB_SYNC && !(f->flags & EF_CAN_FLAG_EFF))
+        cs_on_sync(S);
+    return rc;
+}
+
+/* Keep the SYNC count at which the master's first error was seen (for the message). */
+static void cs_note_error(cs_t *S)
+{
+    if (!S->err_seen && ef_comaster_error(&S->ms)->code != 0) {
+        S->err_seen = 1;
+        S->err_sync = S->syncs;
+    }
+}
+
+/* Pass new bus conditions (bus-off, error-passive, interface down) to the master. */
+static void cs_check_bus(cs_t *S)
+{
+    uint32_t bad = S->sk.bus & (EF_SOCKCAN_BUS_OFF | EF_SOCKCAN_ERROR_PASSIVE | EF_SOCKCAN_DOWN);
+    if (bad & ~S->bus_reported) {
+        S->bus_reported |= bad;
+        ef_comaster_bus_error(&S->ms, bad);
+        cs_note_error(S);
+    }
+    /* Reported once; from then on the kernel decides whether a frame can go (the socket
+     * would refuse every send while it believes the bus is off, and the master's controlled
+     * stop must still be tried: a bus that recovers carries it). */
+    S->sk.bus &= ~EF_SOCKCAN_BUS_OFF;
+}
+
+/* A socket error ends the stream: nothing can be sent to the drives any more. */
+static void cs_io_error(cs_t *S)
+{
+    if (S->io_rc)
+        return;
+    S->io_rc = EF_ERR_IO;
+    ef_fail(&S->io_msg, EF_ERR_IO, "%s", S->sk.msg.text);
+}
+
+/* One round: advance the master by the time elapsed, send, wait for frames (at most until
+ * the master's next deadline or max_wait_us) and hand them to the master. */
+static void cs_pump(cs_t *S, uint32_t max_wait_us)
+{
+    if (S->io_rc)
+        return;
+    uint32_t now = ef_sockcan_now_us();
+    uint32_t dt = now - S->t_prev;
+    S->t_prev = now;
+    S->t_us += dt;
+    uint32_t next = max_wait_us;
+    ef_comaster_process(&S->ms, dt, &next); /* errors are kept by the master */
+    cs_note_error(S);
+    int rc = ef_sockcan_flush(&S->sk);
+    if (rc == EF_ERR_IO)
+        cs_io_error(S);
+    cs_check_bus(S);
+    uint32_t wait = next < max_wait_us ? next : max_wait_us;
+    if (S->sk.bl_count > 0 && wait > CS_BACKLOG_WAIT_US)
+        wait = CS_BACKLOG_WAIT_US;
+    ef_can_frame_t f;
+    rc = ef_sockcan_recv(&S->sk, &f, wait);
+    for (int n = 0; rc == EF_OK; n++) {
+        S->res->rx_frames++;
+        S->res->rx_bits += ef_can_frame_bits(&f);
+        cs_snoop_tpdo(S, &f);
+        ef_comaster_rx(&S->ms, &f);
+        cs_note_error(S);
+        if (n + 1 >= CS_RX_BURST)
+            break;
+        rc = ef_sockcan_recv(&S->sk, &f, 0);
+    }
+    if (rc == EF_ERR_IO)
+        cs_io_error(S);
+    cs_check_bus(S);
+}
+
+/* Microseconds since the socket opened, now. */
+static uint64_t cs_now(const cs_t *S)
+{
+    return S->t_us + (uint32_t)(ef_sockcan_now_us() - S->t_prev);
+}
+
+/* The master left RUN (or the socket failed) while the caller streams: its error. */
+static int cs_not_running(cs_t *S)
+{
+    S->cb_master = 1;
+    if (S->io_rc) {
+        S->cbm = S->io_msg;
+        return S->cb_rc = S->io_rc;
+    }
+    const ef_com_error_t *e = ef_comaster_error(&S->ms);
+    if (e->code != 0) {
+        char t[400];
+        cs_error_text(S, t, sizeof t);
+        return S->cb_rc = ef_fail(&S->cbm, e->code, "%s", t);
+    }
+    return S->cb_rc = ef_fail(&S->cbm, EF_ERR_STATE, "the master left RUN (state %d)",
+                              ef_comaster_state(&S->ms));
+}
+
+/* Give up waiting for a full queue to drain after stall_ms plus the longest move. */
+static int cs_stalled(cs_t *S, uint64_t t0, const char *what)
+{
+    uint64_t lim = (uint64_t)S->c->stall_ms * 1000u + (uint64_t)(S->longest * 1e6);
+    if (cs_now(S) - t0 <= lim)
+        return 0;
+    S->cb_rc = ef_fail(&S->cbm, EF_ERR_TIMEOUT, "%s: the master's queue has not drained for %.1f s",
+                       what, (double)lim * 1e-6);
+    return 1;
+}
+
+/* The program must start where the drives are (nothing may jump at the first SYNC). */
+static int cs_check_start(cs_t *S, const float *p)
+{
+    S->start_checked = 1;
+    int bad = 0;
+    for (int k = 0; k < S->c->n_nodes; k++) {
+        const ef_com_node_t *nd = ef_comaster_node(&S->ms, k);
+        double tol = 1e-3 + (nd->inc_per_unit ? 1.0 / nd->inc_per_unit : 0.0);
+        if (fabs((double)nd->pos - (double)p[k]) > tol)
+            bad = 1;
+    }
+    if (!bad)
+        return EF_OK;
+    char at[160], dr[160];
+    at[0] = dr[0] = 0;
+    for (int k = 0; k < S->c->n_nodes; k++) {
+        snprintf(at + strlen(at), sizeof at - strlen(at), "%s%.4f", k ? " " : "", (double)p[k]);
+        snprintf(dr + strlen(dr), sizeof dr - strlen(dr), "%s%.4f", k ? " " : "",
+                 (double)ef_comaster_node(&S->ms, k)->pos);
+    }
+    return S->cb_rc = ef_fail(&S->cbm, EF_ERR_ARG,
+                              "the path starts at (%s) but the drives are at (%s): move them "
+                              "there first",
+                              at, dr);
+}
+
+/* Segment mode: each planned move goes to the master's queue (pumping while it is full). */
+static int cs_move(void *user, const ef_move_t *mv, const ef_pipe_move_info_t *mi)
+{
+    (void)mi;
+    cs_t *S = user;
+    S->res->moves++;
+    S->res->path_time += mv->duration;
+    if (mv->duration > S->longest)
+        S->longest = mv->duration;
+    if (S->c->mode != EF_COM_MODE_SEGMENT)
+        return EF_OK;
+    if (!S->start_checked) {
+        const float p[3] = {mv->b[0].x, mv->b[0].y, mv->b[0].z};
+        if (cs_check_start(S, p) != EF_OK)
+            return S->cb_rc;
+    }
+    uint32_t seq = S->ms.next_seq;
+    uint64_t t0 = cs_now(S);
+    for (;;) {
+        if (S->io_rc || ef_comaster_state(&S->ms) != EF_COM_RUN)
+            return cs_not_running(S);
+        int rc = ef_comaster_push_move(&S->ms, mv);
+        if (rc == EF_OK)
+            break;
+        if (rc != EF_ERR_FULL)
+            return S->cb_rc = ef_fail(&S->cbm, rc, "segment %u (line %u) refused by the master: %s",
+                                      (unsigned)seq, (unsigned)mv->tag, ef_err_str(rc));
+        if (cs_stalled(S, t0, "segment"))
+            return S->cb_rc;
+        cs_pump(S, S->mc.cycle_us);
+    }
+    S->res->segments++;
+    S->pushed_time += mv->duration;
+    if (S->trace)
+        fprintf(S->trace, "m,%u,%u,%u\n", (unsigned)seq, (unsigned)mv->tag, (unsigned)mv->degree);
+    if (S->c->verbose && S->res->segments % 200 == 0)
+        fprintf(stderr, "stream: %u segments queued, SYNC %u\n", S->res->segments, S->syncs);
+    return EF_OK;
+}
+
+/* CSP: every setpoint (one per cycle) is the next target of the nodes' axes. */
+static int cs_setpoint(void *user, double t, const ef_setpoint_t *sp, const ef_pipe_move_info_t *mi)
+{
+    (void)t;
+    (void)mi;
+    cs_t *S = user;
+    float pos[EF_COM_MAX_NODES] = {sp->p.x, sp->p.y, sp->p.z};
+    if (!S->start_checked && cs_check_start(S, pos) != EF_OK)
+        return S->cb_rc;
+    uint64_t t0 = cs_now(S);
+    for (;;) {
+        if (S->io_rc || ef_comaster_state(&S->ms) != EF_COM_RUN)
+            return cs_not_running(S);
+        int rc = ef_comaster_push_target(&S->ms, pos);
+        if (rc == EF_OK)
+            break;
+        if (rc != EF_ERR_FULL)
+            return S->cb_rc = ef_fail(&S->cbm, rc, "target %u (line %u) refused by the master: %s",
+                                      (unsigned)S->res->targets, (unsigned)sp->tag, ef_err_str(rc));
+        if (cs_stalled(S, t0, "target"))
+            return S->cb_rc;
+        cs_pump(S, S->mc.cycle_us);
+    }
+    S->res->targets++;
+    if (S->trace) {
+        fprintf(S->trace, "t,%u", (unsigned)S->syncs);
+        for (int k = 0; k < S->c->n_nodes; k++)
+            fprintf(S->trace, ",%.6f", (double)pos[k]);
+        fputc('\n', S->trace);
+    }
+    return EF_OK;
+}
+
+/* Whether every node has received every pushed segment and reports it has executed them. */
+static int cs_seg_drained(const cs_t *S)
+{
+    for (int k = 0; k < S->c->n_nodes; k++) {
+        const ef_com_node_t *nd = ef_comaster_node(&S->ms, k);
+        /* TPDO1 carries the flow control and the statusword together: target reached with
+         * every segment received means every segment executed (bit 12 stays set while the
+         * queue runs, also at rest). */
+        if (nd->next_seq != S->ms.next_seq || !(nd->statusword & EF_CO_SW_TARGET_REACHED))
+            return 0;
+    }
+    return 1;
+}
+
+/* Events (tool changes, dwells) come after the motion before them has gone to the drives:
+ * CSP waits until the target queue is empty; segment mode, once execution has started,
+ * until every node has executed everything (before that, the moves wait in the queue). */
+static int cs_event(void *user, const ef_gcode_item_t *it)
+{
+    cs_t *S = user;
+    uint64_t t0 = cs_now(S);
+    uint64_t lim = (uint64_t)S->c->stall_ms * 1000u + (uint64_t)(S->pushed_time * 1e6);
+    for (;;) {
+        if (S->io_rc || ef_comaster_state(&S->ms) != EF_COM_RUN)
+            return cs_not_running(S);
+        if (S->c->mode == EF_COM_MODE_CSP) {
+            if (ef_comaster_space(&S->ms) >= EF_COM_TARGETQ)
+                break;
+        } else if (!S->ms.running || cs_seg_drained(S)) {
+            break;
+        }
+        if (cs_now(S) - t0 > lim)
+            return S->cb_rc = ef_fail(&S->cbm, EF_ERR_TIMEOUT,
+                                      "event at line %u: the drives did not finish the moves "
+                                      "before it in %.1f s",
+                                      (unsigned)it->line, (double)lim * 1e-6);
+        cs_pump(S, S->mc.cycle_us);
+    }
+    if (S->c->verbose)
+        fprintf(stderr, "stream: event at line %u after %u moves, SYNC %u\n", (unsigned)it->line,
+                S->res->moves, S->syncs);
+    return EF_OK;
+}
+
+/* Pipeline thread: queue one item, waiting while the queue is full; EF_ERR_STATE once the
+ * bus thread has given up. */
+static int cs_enqueue(cs_t *S, const cs_item_t *it)
+{
+    pthread_mutex_lock(&S->mu);
+    while (S->q_count >= CS_QUEUE && !S->abort)
+        pthread_cond_wait(&S->cv, &S->mu);
+    int rc = S->abort ? EF_ERR_STATE : EF_OK;
+    if (rc == EF_OK) {
+        S->q[(S->q_head + S->q_count) % CS_QUEUE] = *it;
+        S->q_count++;
+    }
+    pthread_mutex_unlock(&S->mu);
+    return rc;
+}
+
+/* Pipeline thread: a planned move. */
+static int cs_w_move(void *user, const ef_move_t *mv, const ef_pipe_move_info_t *mi)
+{
+    (void)mi;
+    static const cs_item_t zero;
+    cs_item_t it = zero;
+    it.kind = CS_ITEM_MOVE;
+    it.mv = *mv;
+    return cs_enqueue(user, &it);
+}
+
+/* Pipeline thread: a CSP setpoint. */
+static int cs_w_setpoint(void *user, double t, const ef_setpoint_t *sp,
+                         const ef_pipe_move_info_t *mi)
+{
+    (void)mi;
+    static const cs_item_t zero;
+    cs_item_t it = zero;
+    it.kind = CS_ITEM_SETPOINT;
+    it.t = t;
+    it.sp = *sp;
+    return cs_enqueue(user, &it);
+}
+
+/* Pipeline thread: an event. */
+static int cs_w_event(void *user, const ef_gcode_item_t *gi)
+{
+    static const cs_item_t zero;
+    cs_item_t it = zero;
+    it.kind = CS_ITEM_EVENT;
+    it.it = *gi;
+    return cs_enqueue(user, &it);
+}
+
+/* The pipeline thread: smooth (and in CSP interpolate) the program into the queue. */
+static void *cs_worker(void *arg)
+{
+    cs_t *S = arg;
+    ef_pipe_cb_t cb;
+    memset(&cb, 0, sizeof cb);
+    cb.on_move = cs_w_move;
+    cb.on_event = cs_w_event;
+    if (S->c->mode == EF_COM_MODE_CSP)
+        cb.on_setpoint = cs_w_setpoint;
+    cb.user = S;
+    int rc = ef_pipe_run(S->r, &S->pc, &cb, &S->res->pipe, &S->worker_msg);
+    pthread_mutex_lock(&S->mu);
+    S->worker_rc = rc;
+    S->worker_done = 1;
+    pthread_mutex_unlock(&S->mu);
+    return NULL;
+}
+
+/* Bus thread: run the pipeline thread and hand its items to the master, pumping the bus
+ * all the while. Returns EF_OK, a handler's error (S->cb_rc, S->cbm) or the pipeline's
+ * (message in m). */
+static int cs_run_pipeline(cs_t *S, ef_msg_t *m)
+{
+    pthread_t th;
+    if (pthread_create(&th, NULL, cs_worker, S) != 0)
+        return ef_fail(m, EF_ERR_NOMEM, "stream: cannot start the pipeline thread");
+    int rc = EF_OK;
+    for (;;) {
+        cs_item_t it;
+        int have = 0, done = 0;
+        pthread_mutex_lock(&S->mu);
+        if (S->q_count > 0) {
+            it = S->q[S->q_head];
+            S->q_head = (S->q_head + 1u) % CS_QUEUE;
+            S->q_count--;
+            have = 1;
+            pthread_cond_signal(&S->cv);
+        } else {
+            done = S->worker_done;
+        }
+        pthread_mutex_unlock(&S->mu);
+        if (have) {
+            if (it.kind == CS_ITEM_MOVE)
+                rc = cs_move(S, &it.mv, NULL);
+            else if (it.kind == CS_ITEM_SETPOINT)
+                rc = cs_setpoint(S, it.t, &it.sp, NULL);
+            else
+                rc = cs_event(S, &it.it);
+            if (rc != EF_OK)
+                break;
+            continue;
+        }
+        if (done)
+            break;
+        if (S->io_rc || ef_comaster_state(&S->ms) != EF_COM_RUN) {
+            rc = cs_not_running(S);
+            break;
+        }
+        cs_pump(S, S->mc.cycle_us); /* the pipeline is working: keep the bus going */
+    }
+    pthread_mutex_lock(&S->mu);
+    S->abort = 1;
+    pthread_cond_broadcast(&S->cv);
+    pthread_mutex_unlock(&S->mu);
+    pthread_join(th, NULL);
+    if (rc != EF_OK)
+        return rc;
+    if (S->worker_rc != EF_OK)
+        return ef_fail(m, S->worker_rc, "%s", S->worker_msg.text);
+    return EF_OK;
+}
+
+/* Pump until the master is DONE or in ERROR, for at most lim_us; 1 if it got there. */
+static int cs_wait_end(cs_t *S, uint64_t lim_us)
+{
+    uint64_t t0 = cs_now(S);
+    for (;;) {
+        int st = ef_comaster_state(&S->ms);
+        if (st == EF_COM_DONE || st == EF_COM_ERROR)
+            return 1;
+        if (S->io_rc || cs_now(S) - t0 > lim_us)
+            return 0;
+        cs_pump(S, S->mc.cycle_us);
+    }
+}
+
+/* Check the configuration before anything touches the bus. */
+static int cs_check_cfg(const ef_can_stream_cfg_t *c, ef_msg_t *m)
+{
+    if (!c->iface || !c->iface[0])
+        return ef_fail(m, EF_ERR_ARG, "stream: no CAN interface");
+    if (c->n_nodes < 1 || c->n_nodes > EF_CAN_STREAM_MAX_NODES)
+        return ef_fail(m, EF_ERR_ARG, "stream: 1..%d nodes (got %u)", EF_CAN_STREAM_MAX_NODES,
+                       (unsigned)c->n_nodes);
+    for (int k = 0; k < c->n_nodes; k++) {
+        if (c->nodes[k] < 1 || c->nodes[k] > 127)
+            return ef_fail(m, EF_ERR_ARG, "stream: node id %u: must be 1..127",
+                           (unsigned)c->nodes[k]);
+        for (int j = 0; j < k; j++)
+            if (c->nodes[j] == c->nodes[k])
+                return ef_fail(m, EF_ERR_ARG, "stream: node id %u given twice",
+                               (unsigned)c->nodes[k]);
+    }
+    if (c->mode != EF_COM_MODE_CSP && c->mode != EF_COM_MODE_SEGMENT)
+        return ef_fail(m, EF_ERR_ARG, "stream: mode must be csp or segment");
+    if (c->boot_timeout_ms == 0 || c->hb_timeout_ms == 0 || c->sdo_timeout_ms == 0 ||
+        c->stop_timeout_ms == 0 || c->bringup_ms == 0 || c->bitrate == 0)
+        return ef_fail(m, EF_ERR_ARG, "stream: a timeout or the bit rate is 0");
+    return EF_OK;
+}
+
+/* Figures of the run into the result. */
+static void cs_result(cs_t *S)
+{
+    ef_can_stream_result_t *res = S->res;
+    res->syncs = S->syncs;
+    if (S->p_n > 0) {
+        res->sync_mean_us = S->p_sum / (double)S->p_n;
+        double var = S->p_sq / (double)S->p_n - res->sync_mean_us * res->sync_mean_us;
+        res->sync_std_us = var > 0.0 ? sqrt(var) : 0.0;
+    }
+    res->tx_frames = S->sk.tx;
+    res->tx_bits = S->sk.tx_bits;
+    res->err_frames = S->sk.err_frames;
+    res->wall_time = (double)cs_now(S) * 1e-6;
+    res->run_time = S->t_run ? (double)(cs_now(S) - S->t_run) * 1e-6 : 0.0;
+    res->bus_time_s = (double)res->tx_bits / S->c->bitrate;
+    if (res->wall_time > 0.0)
+        res->load = (double)(res->tx_bits + res->rx_bits) / S->c->bitrate / res->wall_time;
+    res->state = ef_comaster_state(&S->ms);
+    res->err = *ef_comaster_error(&S->ms);
+    for (int k = 0; k < S->c->n_nodes; k++) {
+        const char *nm = ef_comaster_name(&S->ms, k);
+        snprintf(res->names[k], sizeof res->names[k], "%s", nm ? nm : "");
+    }
+    uint32_t acked = UINT32_MAX;
+    for (int k = 0; k < S->c->n_nodes; k++) {
+        const ef_com_node_t *nd = ef_comaster_node(&S->ms, k);
+        res->resends += nd->resends;
+        if (nd->next_seq < acked)
+            acked = nd->next_seq;
+    }
+    res->starved = S->ms.starved;
+    int done = res->state == EF_COM_DONE && S->ms.finishing;
+    if (S->c->mode == EF_COM_MODE_SEGMENT)
+        res->executed = done ? res->segments : (acked < res->segments ? acked : res->segments);
+    else
+        res->executed = done ? res->targets
+                             : (S->ms.tq_count < res->targets ? res->targets - S->ms.tq_count : 0);
+}
+
+/* The whole stream (see ef_canhost.h). */
+int ef_can_stream(ef_gcode_t *r, const ef_can_stream_cfg_t *c, ef_can_stream_result_t *res,
+                  ef_msg_t *m)
+{
+    if (!r || !c || !res)
+        return ef_fail(m, EF_ERR_ARG, "stream: missing argument");
+    memset(res, 0, sizeof *res);
+    int rc = cs_check_cfg(c, m);
+    if (rc != EF_OK)
+        return rc;
+    cs_t *S = calloc(1, sizeof *S);
+    if (!S)
+        return ef_fail(m, EF_ERR_NOMEM, "stream: no memory for the CANopen master");
+    S->c = c;
+    S->res = res;
+    pthread_mutex_init(&S->mu, NULL);
+    pthread_cond_init(&S->cv, NULL);
+    ef_comaster_cfg_default(&S->mc, c->mode);
+    for (int k = 0; k < c->n_nodes; k++)
+        S->mc.nodes[k] = c->nodes[k];
+    S->mc.n_nodes = c->n_nodes;
+    S->mc.fault_reset = c->fault_reset;
+    if (c->cycle_us)
+        S->mc.cycle_us = c->cycle_us;
+    S->mc.boot_timeout_ms = c->boot_timeout_ms;
+    S->mc.hb_timeout_ms = (uint16_t)(c->hb_timeout_ms > 65535u ? 65535u : c->hb_timeout_ms);
+    S->mc.sdo_timeout_ms = c->sdo_timeout_ms;
+    S->mc.stop_timeout_ms = c->stop_timeout_ms;
+    if (c->trace) {
+        S->trace = fopen(c->trace, "w");
+        if (!S->trace) {
+            rc = ef_fail(m, EF_ERR_IO, "stream: trace %s: %s", c->trace, strerror(errno));
+            free(S);
+            return rc;
+        }
+    }
+    rc = ef_sockcan_open(&S->sk, c->iface, NULL, 0, c->log, m);
+    if (rc != EF_OK) {
+        if (S->trace)
+            fclose(S->trace);
+        free(S);
+        return rc;
+    }
+    S->t_prev = ef_sockcan_now_us();
+    ef_can_port_t port = {cs_send, S};
+    rc = ef_comaster_init(&S->ms, &S->mc, &port);
+    if (rc != EF_OK) {
+        ef_fail(m, rc,
+                "stream: the CANopen master refused its configuration (nodes, cycle "
+                "%u us, timeouts)",
+                (unsigned)S->mc.cycle_us);
+        goto out;
+    }
+    if (S->trace) {
+        fprintf(S->trace, "# evenfeed stream can %s nodes",
+                c->mode == EF_COM_MODE_CSP ? "csp" : "segment");
+        for (int k = 0; k < c->n_nodes; k++)
+            fprintf(S->trace, "%c%u", k ? ',' : ' ', (unsigned)c->nodes[k]);
+        fprintf(S->trace, " iface %s cycle_us %u\n", c->iface, (unsigned)S->mc.cycle_us);
+    }
+
+    /* Bring-up: boot, configuration, start, enable (errors come from the master). */
+    uint64_t lim = (uint64_t)c->bringup_ms * 1000u;
+    while (!S->io_rc) {
+        int st = ef_comaster_state(&S->ms);
+        if (st == EF_COM_RUN || st == EF_COM_DONE || st == EF_COM_ERROR)
+            break;
+        if (cs_now(S) > lim) {
+            rc = ef_fail(m, EF_ERR_TIMEOUT,
+                         "stream: %s: drives not running %u ms after the start "
+                         "(master state %d)",
+                         c->iface, (unsigned)c->bringup_ms, st);
+            break;
+        }
+        cs_pump(S, 100000u);
+    }
+    if (rc == EF_OK && ef_comaster_state(&S->ms) == EF_COM_RUN) {
+        S->t_run = cs_now(S);
+        if (c->verbose)
+            fprintf(stderr, "stream: %s: %u drives operation enabled after %.3f s\n", c->iface,
+                    (unsigned)c->n_nodes, (double)S->t_run * 1e-6);
+        S->r = r;
+        S->pc = c->pipe;
+        if (c->mode == EF_COM_MODE_CSP) {
+            S->pc.period_us = S->mc.cycle_us;
+            S->pc.interp_modes = 1u << S->pc.step_mode;
+        }
+        rc = cs_run_pipeline(S, m);
+        if (rc != EF_OK && S->cb_rc != EF_OK) {
+            rc = S->cb_rc;
+            ef_fail(m, rc, "stream: %s", S->cbm.text);
+        } else if (rc != EF_OK) {
+            char t[sizeof m->text];
+            snprintf(t, sizeof t, "%s", m ? m->text : ef_err_str(rc));
+            ef_fail(m, rc, "stream: %s", t);
+        }
+        if (rc == EF_OK && ef_comaster_finish(&S->ms) != EF_OK) {
+            rc = cs_not_running(S);
+            ef_fail(m, rc, "stream: %s", S->cbm.text);
+        }
+        if (rc == EF_OK) {
+            /* Everything queued is executed, then the drives are disabled at rest. */
+            uint64_t fin = (uint64_t)(S->pushed_time * 1e6) + (uint64_t)c->stall_ms * 1000u +
+                           (uint64_t)c->stop_timeout_ms * 1000u;
+            if (c->mode == EF_COM_MODE_CSP)
+                fin += (uint64_t)EF_COM_TARGETQ * S->mc.cycle_us;
+            if (!cs_wait_end(S, fin) && !S->io_rc)
+                rc = ef_fail(m, EF_ERR_TIMEOUT,
+                             "stream: %s: the drives did not finish within %.1f s (master "
+                             "state %d)",
+                             c->iface, (double)fin * 1e-6, ef_comaster_state(&S->ms));
+        }
+    }
+out:
+    /* Whatever happened, the drives end stopped under control and disabled (the master's
+     * own error already started that; a stop on request does it otherwise). */
+    ef_comaster_stop(&S->ms);
+    cs_wait_end(S, ((uint64_t)c->stop_timeout_ms + CS_STOP_MARGIN_MS) * 1000u);
+    const ef_com_error_t *e = ef_comaster_error(&S->ms);
+    if (e->code != 0 && (rc == EF_OK || S->cb_master)) {
+        /* The master's error is the cause (a callback only saw its consequence). */
+        char t[400];
+        cs_error_text(S, t, sizeof t);
+        rc = ef_fail(m, e->code, "stream: %s", t);
+    } else if (rc == EF_OK && S->io_rc) {
+        rc = ef_fail(m, S->io_rc, "stream: %s", S->io_msg.text);
+    } else if (rc == EF_OK && ef_comaster_state(&S->ms) != EF_COM_DONE) {
+        rc = ef_fail(m, EF_ERR_TIMEOUT, "stream: %s: master ended in state %d", c->iface,
+                     ef_comaster_state(&S->ms));
+    }
+    cs_result(S);
+    if (S->trace) {
+        fclose(S->trace);
+        S->trace = NULL;
+    }
+    ef_sockcan_close(&S->sk);
+    pthread_cond_destroy(&S->cv);
+    pthread_mutex_destroy(&S->mu);
+    free(S);
+    return rc;
+}

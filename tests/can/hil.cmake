@@ -1,0 +1,66 @@
+# Hardware-in-loop tests: real kernel drivers inside User-Mode Linux (docs: see
+# tests/hil/uml_run.sh and /work/shared/docs/hil.md). Each test boots linux.uml on the host's
+# file system, runs a guest script, and passes only on the guest's PASS verdict; it is
+# skipped (exit 77) where linux.uml is not installed, unless CI / EF_HIL_REQUIRE is set.
+# Test names start with "hil_" (ctest -R hil_).
+#
+# AddressSanitizer cannot run inside UML 6.1 (512 GiB of user address space; ASan's x86-64
+# shadow needs 16 TiB): with EF_SANITIZE, binaries run in the guest are built by
+# ef_hil_executable() without -fsanitize=address (UBSan kept), from sources, not ef_host.
+set(EF_HIL_RUN ${CMAKE_CURRENT_SOURCE_DIR}/hil/uml_run.sh)
+
+# add_executable for a binary that runs inside the guest: NAME SOURCES... ; links ef_host
+# normally, or compiles the listed sources itself without ASan under EF_SANITIZE.
+function(ef_hil_executable name)
+  add_executable(${name} ${ARGN})
+  target_include_directories(${name} PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}
+    ${PROJECT_SOURCE_DIR}/host/include ${PROJECT_SOURCE_DIR}/firmware/include)
+  target_compile_definitions(${name} PRIVATE _DEFAULT_SOURCE _GNU_SOURCE)
+  if(EF_SANITIZE)
+    target_compile_options(${name} PRIVATE -fno-sanitize=address)
+    target_link_options(${name} PRIVATE -fno-sanitize=address)
+  endif()
+endfunction()
+
+# SocketCAN transport (host/lib/can/ef_sockcan.c). test_sockcan (ef_host, sanitized like the
+# rest) runs the parts that need no CAN on the build host; the guest runs the whole test.
+add_executable(test_sockcan ${CMAKE_CURRENT_SOURCE_DIR}/can/test_sockcan.c)
+target_include_directories(test_sockcan PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
+target_link_libraries(test_sockcan PRIVATE ef_host)
+add_test(NAME sockcan_offline
+         COMMAND test_sockcan offline ${CMAKE_CURRENT_BINARY_DIR})
+set_tests_properties(sockcan_offline PROPERTIES TIMEOUT 30)
+
+if(EF_SANITIZE)
+  ef_hil_executable(test_sockcan_uml ${CMAKE_CURRENT_SOURCE_DIR}/can/test_sockcan.c
+    ${PROJECT_SOURCE_DIR}/host/lib/can/ef_sockcan.c ${PROJECT_SOURCE_DIR}/host/lib/core/ef_host.c
+    ${PROJECT_SOURCE_DIR}/firmware/src/hal/ef_can.c ${PROJECT_SOURCE_DIR}/firmware/src/core/ef_err.c)
+  set(EF_SOCKCAN_GUEST_BIN $<TARGET_FILE:test_sockcan_uml>)
+  set(EF_SOCKCAN_DEPS test_sockcan_uml)
+else()
+  set(EF_SOCKCAN_GUEST_BIN $<TARGET_FILE:test_sockcan>)
+endif()
+add_test(NAME hil_sockcan
+         COMMAND bash ${EF_HIL_RUN} ${CMAKE_CURRENT_SOURCE_DIR}/hil/sockcan.sh
+                 ${CMAKE_CURRENT_BINARY_DIR}/hil_sockcan/verdict 120
+                 ${EF_SOCKCAN_GUEST_BIN} ${CMAKE_CURRENT_BINARY_DIR}/hil_sockcan)
+set_tests_properties(hil_sockcan PROPERTIES TIMEOUT 150 SKIP_RETURN_CODE 77 RUN_SERIAL ON)
+
+# CAN streaming end to end (docs/can.md): three `evenfeed sim-drive can` drives and
+# `evenfeed stream --can` on vcan0 in the guest, checked by test_can_hil (run in the guest).
+# Not in sanitized builds: the evenfeed binary links ef_host with ASan, which cannot run in
+# UML; the release build (also run by ./dev test and CI) runs them.
+if(NOT EF_SANITIZE AND TARGET ef_tables_default)
+  add_executable(test_can_hil ${CMAKE_CURRENT_SOURCE_DIR}/can/test_can_hil.c)
+  target_include_directories(test_can_hil PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
+  target_link_libraries(test_can_hil PRIVATE ef_host ef_tables_default m)
+  foreach(part csp segment drop emcy heartbeat busoff boot start masterdeath)
+    add_test(NAME hil_can_${part}
+             COMMAND bash ${EF_HIL_RUN} ${CMAKE_CURRENT_SOURCE_DIR}/hil/can.sh
+                     ${CMAKE_CURRENT_BINARY_DIR}/hil_can_${part}/verdict 240
+                     $<TARGET_FILE:test_can_hil> $<TARGET_FILE:evenfeed> ${PROJECT_SOURCE_DIR}
+                     ${CMAKE_CURRENT_BINARY_DIR}/hil_can_${part}/out ${part})
+    # One guest at a time: two emulated kernels on a 2-core machine starve each other.
+    set_tests_properties(hil_can_${part} PROPERTIES TIMEOUT 280 SKIP_RETURN_CODE 77 RUN_SERIAL ON)
+  endforeach()
+endif()

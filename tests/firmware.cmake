@@ -1,4 +1,0 @@
-# Firmware unit tests (synthetic tables; no optimizer needed).
-add_executable(test_fw test_fw.c)
-target_link_libraries(test_fw PRIVATE ef_fw m)
-add_test(NAME fw_unit COMMAND test_fw)

@@ -1,0 +1,657 @@
+/*
+ * The streaming smoother (ef_smooth): primitives pushed, planned moves pulled, with the
+ * default tables. Every run is checked for the invariants a drive relies on (a continuous
+ * chain of moves, speeds within limits and continuous, stops where they must be, no NaN),
+ * and the deviation of every move from the programmed path is measured independently in
+ * double precision by dense sampling. Then the vertex rules one by one (blends, reversal
+ * stops, collinear collapse, smooth sections through micro-segments, arcs) and every
+ * bad-input case of the issue.
+ */
+#include <float.h>
+#include <string.h>
+#include "ef_test.h"
+#include "evenfeed/geom/ef_bezier.h"
+#include "evenfeed/core/ef_err.h"
+#include "evenfeed/motion/ef_interp.h"
+#include "evenfeed/motion/ef_smooth.h"
+
+extern const ef_table_t ef_tbl_g1_default;
+extern const ef_table_t ef_tbl_g2_default;
+
+#define MAXM 200000
+
+static ef_smooth_t S; /* large: static, as a firmware would keep it */
+static ef_move_t *M;  /* moves of the last run */
+static int NM;
+
+/* ---- programmed path, for the independent deviation measure ---- */
+typedef struct {
+    ef_prim_t pr;
+    double a[3]; /* start */
+} prog_t;
+static prog_t P[20000];
+static int NP;
+
+static double d3norm(const double *v)
+{
+    return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+}
+
+/* Distance from x to a line segment a-b. */
+static double dist_line(const double *x, const double *a, const double *b)
+{
+    double ab[3], ax[3], l2 = 0, t = 0;
+    for (int i = 0; i < 3; i++) {
+        ab[i] = b[i] - a[i];
+        ax[i] = x[i] - a[i];
+        l2 += ab[i] * ab[i];
+        t += ax[i] * ab[i];
+    }
+    t = l2 > 0 ? t / l2 : 0;
+    t = t < 0 ? 0 : t > 1 ? 1 : t;
+    double d[3];
+    for (int i = 0; i < 3; i++)
+        d[i] = ax[i] - t * ab[i];
+    return d3norm(d);
+}
+
+/* Distance from x to a planar arc (no helix in these tests), exactly: the foot point on
+ * the circle when its angle lies within the swept range, else the nearer end. */
+static double dist_arc(const double *x, const prog_t *g)
+{
+    const ef_prim_t *p = &g->pr;
+    double c[3] = {p->centre.x, p->centre.y, p->centre.z},
+           ax[3] = {p->axis.x, p->axis.y, p->axis.z};
+    double r0[3] = {g->a[0] - c[0], g->a[1] - c[1], g->a[2] - c[2]};
+    double r = d3norm(r0);
+    double e1[3] = {r0[0] / r, r0[1] / r, r0[2] / r};
+    double e2[3] = {ax[1] * e1[2] - ax[2] * e1[1], ax[2] * e1[0] - ax[0] * e1[2],
+                    ax[0] * e1[1] - ax[1] * e1[0]};
+    double q[3] = {x[0] - c[0], x[1] - c[1], x[2] - c[2]};
+    double u = q[0] * e1[0] + q[1] * e1[1] + q[2] * e1[2];
+    double v = q[0] * e2[0] + q[1] * e2[1] + q[2] * e2[2];
+    double h = q[0] * ax[0] + q[1] * ax[1] + q[2] * ax[2];
+    double rho = sqrt(u * u + v * v), ang = atan2(v, u);
+    double sw = p->sweep;
+    /* the angle measured in the sweep's direction, in [0, 2 pi) */
+    double a = sw >= 0 ? ang : -ang;
+    if (a < 0)
+        a += 2 * M_PI;
+    if (fabs(sw) >= 2 * M_PI || a <= fabs(sw))
+        return sqrt((rho - r) * (rho - r) + h * h);
+    double b[3] = {p->end.x, p->end.y, p->end.z};
+    double d0 = sqrt((x[0] - g->a[0]) * (x[0] - g->a[0]) + (x[1] - g->a[1]) * (x[1] - g->a[1]) +
+                     (x[2] - g->a[2]) * (x[2] - g->a[2]));
+    double d1 = sqrt((x[0] - b[0]) * (x[0] - b[0]) + (x[1] - b[1]) * (x[1] - b[1]) +
+                     (x[2] - b[2]) * (x[2] - b[2]));
+    return d0 < d1 ? d0 : d1;
+}
+
+/* Distance to the programmed path near primitive k (moves carry their primitive's index
+ * as tag; a blend carries the outgoing one's): its neighbours are enough, and far cheaper
+ * than the whole program on long runs. */
+static double dist_prog(const double *x, int k)
+{
+    double best = 1e300;
+    int lo = k - 3 < 0 ? 0 : k - 3, hi = k + 36 > NP ? NP : k + 36; /* merged lines */
+    for (int i = lo; i < hi; i++) {
+        double b[3] = {P[i].pr.end.x, P[i].pr.end.y, P[i].pr.end.z};
+        double d = P[i].pr.kind == EF_PRIM_LINE ? dist_line(x, P[i].a, b) : dist_arc(x, &P[i]);
+        if (d < best)
+            best = d;
+    }
+    return best;
+}
+
+/* ---- running the smoother ---- */
+static ef_smooth_cfg_t cfg_default(void)
+{
+    ef_smooth_cfg_t c;
+    memset(&c, 0, sizeof c);
+    c.g2 = &ef_tbl_g2_default;
+    c.g1 = &ef_tbl_g1_default;
+    for (int i = 0; i < 3; i++) {
+        c.lim.v_axis[i] = 200.0f;
+        c.lim.a_axis[i] = 2000.0f;
+    }
+    c.lim.a_normal_frac = 0.5f;
+    c.micro_len = 1.0f;
+    c.micro_turn = 0.35f;
+    c.smooth_degree = 5;
+    return c;
+}
+
+/* Pull everything available into M. */
+static int drain(void)
+{
+    int rc;
+    while ((rc = ef_smooth_pull(&S, &M[NM])) == EF_OK)
+        if (NM < MAXM - 1)
+            NM++;
+    return rc;
+}
+
+/* Push a whole program (FULL handled by draining) and finish. Returns the first refusal. */
+static int run_prims(const ef_smooth_cfg_t *c, ef_vec3_t start, const ef_prim_t *pr, int n)
+{
+    NM = 0;
+    NP = 0;
+    EF_CHECK_EQ(ef_smooth_init(&S, c, start), EF_OK);
+    double a[3] = {start.x, start.y, start.z};
+    int first_err = 0;
+    for (int i = 0; i < n; i++) {
+        ef_prim_t q = pr[i];
+        q.tag = (uint32_t)NP; /* index among the accepted ones, for dist_prog() */
+        int rc = ef_smooth_push(&S, &q);
+        for (int guard = 0; rc == EF_ERR_FULL && guard < 1000; guard++) {
+            EF_CHECK_EQ(drain(), EF_ERR_AGAIN);
+            rc = ef_smooth_push(&S, &q);
+        }
+        if (rc != EF_OK) {
+            if (!first_err)
+                first_err = rc;
+            continue;
+        }
+        P[NP].pr = pr[i];
+        memcpy(P[NP].a, a, sizeof a);
+        a[0] = pr[i].end.x;
+        a[1] = pr[i].end.y;
+        a[2] = pr[i].end.z;
+        NP++;
+    }
+    EF_CHECK_EQ(ef_smooth_finish(&S), EF_OK);
+    EF_CHECK_EQ(drain(), EF_ERR_AGAIN);
+    return first_err;
+}
+
+static ef_prim_t line_to(float x, float y, float z, float feed, float tol)
+{
+    ef_prim_t p;
+    memset(&p, 0, sizeof p);
+    p.kind = EF_PRIM_LINE;
+    p.end = ef_v3(x, y, z);
+    p.feed = feed;
+    p.tol = tol;
+    return p;
+}
+
+/* XY arc about +Z from `from` around centre c by sweep. */
+static ef_prim_t arc_to(ef_vec3_t from, float cx, float cy, float sweep, float feed, float tol)
+{
+    ef_prim_t p;
+    memset(&p, 0, sizeof p);
+    p.kind = EF_PRIM_ARC;
+    p.centre = ef_v3(cx, cy, from.z);
+    p.axis = ef_v3(0, 0, 1);
+    p.sweep = sweep;
+    double rx = from.x - cx, ry = from.y - cy;
+    double c = cos(sweep), s = sin(sweep);
+    p.end = ef_v3((float)(cx + c * rx - s * ry), (float)(cy + s * rx + c * ry), from.z);
+    p.feed = feed;
+    p.tol = tol;
+    return p;
+}
+
+typedef struct {
+    double dev_over; /* max over moves of measured deviation / tolerance */
+    int kinds[5];
+    int stops;
+} runinfo_t;
+
+/* Invariants of every run; returns measured figures. `tol` is the tolerance in force. */
+static runinfo_t check_run(ef_vec3_t start, ef_vec3_t end, double tol, const ef_limits_t *lim)
+{
+    runinfo_t ri;
+    memset(&ri, 0, sizeof ri);
+    EF_CHECK(NM > 0);
+    if (NM == 0)
+        return ri;
+    int ok_chain = 1, ok_speed = 1, ok_num = 1, ok_stop = 1, ok_seq = 1;
+    ef_vec3_t prev = start;
+    float vprev = 0;
+    for (int i = 0; i < NM; i++) {
+        const ef_move_t *m = &M[i];
+        if (m->degree != 1 && m->degree != 3 && m->degree != 5)
+            ok_num = 0;
+        for (int k = 0; k <= m->degree; k++)
+            if (!isfinite(m->b[k].x) || !isfinite(m->b[k].y) || !isfinite(m->b[k].z))
+                ok_num = 0;
+        if (!isfinite(m->duration) || !(m->duration > 0) || !isfinite(m->v_entry))
+            ok_num = 0;
+        ef_vec3_t d = ef_v3_sub(m->b[0], prev);
+        if (ef_v3_norm(d) > 1e-6f)
+            ok_chain = 0;
+        if (fabsf(m->v_entry - vprev) > 1e-3f * (1 + vprev))
+            ok_speed = 0;
+        if (m->v_entry > m->v_max * 1.0001f + 1e-4f || m->v_exit > m->v_max * 1.0001f + 1e-4f)
+            ok_speed = 0;
+        if ((m->flags & EF_MOVE_STOP_END) && m->v_exit != 0.0f)
+            ok_stop = 0;
+        if (i > 0 && m->seq != M[i - 1].seq + 1)
+            ok_seq = 0;
+        if (m->kind >= 1 && m->kind <= 4)
+            ri.kinds[m->kind]++;
+        ri.stops += (m->flags & EF_MOVE_STOP_END) != 0;
+        /* centripetal limit respected by the speed limit */
+        if (lim && m->v_max * m->v_max * m->kappa_max > lim->a_axis[0] * 1.001f + 1e-3f)
+            ok_speed = 0;
+        /* deviation from the programmed path, dense */
+        int ns = m->degree == 1 ? 2 : 200;
+        for (int k = 0; k <= ns; k++) {
+            ef_vec3_t q;
+            ef_bezier_eval(m->b, m->degree, (float)k / ns, 0, &q);
+            double x[3] = {q.x, q.y, q.z};
+            double dv = dist_prog(x, (int)m->tag) / tol;
+            if (dv > ri.dev_over)
+                ri.dev_over = dv;
+            if (dv > 1.0)
+                fprintf(stderr,
+                        "  over: move %d kind %d deg %d flags %u tag %u dev %.4g/P "
+                        "(own estimate %.4g/P) len %.4g\n",
+                        i, m->kind, m->degree, (unsigned)m->flags, (unsigned)m->tag, dv,
+                        m->dev / tol, m->length),
+                    fprintf(stderr, "    prim kind %d, sweep %g, tol %g\n", P[m->tag].pr.kind,
+                            P[m->tag].pr.sweep, tol);
+        }
+        prev = m->b[m->degree];
+        vprev = m->v_exit;
+    }
+    EF_CHECK(ok_num);
+    EF_CHECK(ok_chain);
+    EF_CHECK(ok_speed);
+    EF_CHECK(ok_stop);
+    EF_CHECK(ok_seq);
+    EF_CHECK(M[NM - 1].flags & EF_MOVE_STOP_END);
+    EF_CHECK_EQ(M[NM - 1].v_exit, 0);
+    EF_CHECK_EQ(M[0].v_entry, 0);
+    EF_CHECK(ef_v3_norm(ef_v3_sub(prev, end)) <= 1e-6f);
+    return ri;
+}
+
+/* A square with 3 corners inside: blends within P, stops only at the ends. */
+static void test_square(void)
+{
+    ef_smooth_cfg_t c = cfg_default();
+    ef_prim_t pr[4] = {line_to(50, 0, 0, 50, 0.01f), line_to(50, 50, 0, 50, 0.01f),
+                       line_to(0, 50, 0, 50, 0.01f), line_to(0, 0, 0, 50, 0.01f)};
+    EF_CHECK_EQ(run_prims(&c, ef_v3(0, 0, 0), pr, 4), 0);
+    runinfo_t ri = check_run(ef_v3(0, 0, 0), ef_v3(0, 0, 0), 0.01, &c.lim);
+    ef_smooth_stats_t st = ef_smooth_stats(&S);
+    EF_CHECK_EQ(st.blends, 3);
+    EF_CHECK_EQ(ri.kinds[EF_MOVE_BLEND], 3);
+    EF_CHECK_EQ(ri.kinds[EF_MOVE_LINE], 4);
+    EF_CHECK_EQ(ri.stops, 1);
+    EF_CHECK(ri.dev_over <= 1.0);
+    /* The blends use the tolerance: P from the corner is P sin(45 deg) from the lines. */
+    EF_CHECK(ri.dev_over > 0.70);
+    printf("square: %d moves, max deviation / P = %.4f\n", NM, ri.dev_over);
+}
+
+/* An exact 180-degree reversal and a 179.5-degree near reversal: both stop at the vertex,
+ * no NaN, no jump. */
+static void test_reversal(void)
+{
+    ef_smooth_cfg_t c = cfg_default();
+    ef_prim_t pr[2] = {line_to(10, 0, 0, 50, 0.01f), line_to(0, 0, 0, 50, 0.01f)};
+    run_prims(&c, ef_v3(0, 0, 0), pr, 2);
+    runinfo_t ri = check_run(ef_v3(0, 0, 0), ef_v3(0, 0, 0), 0.01, &c.lim);
+    EF_CHECK_EQ(ef_smooth_stats(&S).reversals, 1);
+    EF_CHECK_EQ(NM, 2);
+    EF_CHECK(M[0].flags & EF_MOVE_STOP_END);
+    EF_CHECK_EQ(M[0].v_exit, 0);
+    EF_CHECK_EQ(ri.stops, 2);
+    float a = (float)(179.5 * M_PI / 180);
+    ef_prim_t q[2] = {line_to(10, 0, 0, 50, 0.01f),
+                      line_to(10 + 5 * cosf(a), 5 * sinf(a), 0, 50, 0.01f)};
+    run_prims(&c, ef_v3(0, 0, 0), q, 2);
+    check_run(ef_v3(0, 0, 0), q[1].end, 0.01, &c.lim);
+    EF_CHECK_EQ(ef_smooth_stats(&S).reversals, 1);
+}
+
+/* G64 Q: collinear splits within Q collapse into one line; beyond Q they do not. */
+static void test_collinear(void)
+{
+    ef_smooth_cfg_t c = cfg_default();
+    c.micro_len = 0;
+    ef_prim_t pr[10];
+    for (int i = 0; i < 10; i++) {
+        pr[i] = line_to(10.0f * (i + 1), (i % 2) ? 0.002f : 0.0f, 0, 50, 0.01f);
+        pr[i].qtol = 0.005f;
+    }
+    run_prims(&c, ef_v3(0, 0, 0), pr, 10);
+    runinfo_t ri = check_run(ef_v3(0, 0, 0), pr[9].end, 0.01, &c.lim);
+    EF_CHECK_EQ(ef_smooth_stats(&S).merged, 9);
+    EF_CHECK_EQ(NM, 1);
+    EF_CHECK_EQ(ri.kinds[EF_MOVE_LINE], 1);
+    for (int i = 0; i < 10; i++)
+        pr[i].qtol = 0.0005f;
+    run_prims(&c, ef_v3(0, 0, 0), pr, 10);
+    check_run(ef_v3(0, 0, 0), pr[9].end, 0.01, &c.lim);
+    EF_CHECK_EQ(ef_smooth_stats(&S).merged, 0);
+    EF_CHECK_EQ(ef_smooth_stats(&S).blends, 9);
+    /* a reversal is never merged, whatever Q says */
+    ef_prim_t r[2] = {line_to(10, 0, 0, 50, 0.01f), line_to(5, 0, 0, 50, 0.01f)};
+    r[1].qtol = 1.0f;
+    run_prims(&c, ef_v3(0, 0, 0), r, 2);
+    EF_CHECK_EQ(ef_smooth_stats(&S).merged, 0);
+    EF_CHECK_EQ(ef_smooth_stats(&S).reversals, 1);
+}
+
+/* Curvature vector of move m at parameter t. */
+static ef_vec3_t curv(const ef_move_t *m, float t)
+{
+    ef_vec3_t d[3];
+    ef_bezier_eval(m->b, m->degree, t, m->degree >= 2 ? 2 : 1, d);
+    if (m->degree < 2)
+        return ef_v3(0, 0, 0);
+    float s2 = ef_v3_dot(d[1], d[1]);
+    ef_vec3_t a = ef_v3_axpy(d[2], -ef_v3_dot(d[1], d[2]) / s2, d[1]);
+    return ef_v3_scale(a, 1.0f / s2);
+}
+
+/* A circle from 200 micro-segments: smooth vertices, G2 moves, deviation within P. */
+static void test_micro_circle(int degree)
+{
+    ef_smooth_cfg_t c = cfg_default();
+    c.smooth_degree = (uint8_t)degree;
+    enum { N = 200 };
+    static ef_prim_t pr[N];
+    double r = 10;
+    for (int i = 0; i < N; i++) {
+        double a = 2 * M_PI * (i + 1) / N;
+        pr[i] = line_to((float)(r * cos(a)), (float)(r * sin(a)), 0, 50, 0.01f);
+    }
+    run_prims(&c, ef_v3(10, 0, 0), pr, N);
+    runinfo_t ri = check_run(ef_v3(10, 0, 0), pr[N - 1].end, 0.01, &c.lim);
+    ef_smooth_stats_t st = ef_smooth_stats(&S);
+    EF_CHECK_EQ(st.smooth, N - 1);
+    EF_CHECK_EQ(ri.kinds[EF_MOVE_SMOOTH], N);
+    EF_CHECK(ri.dev_over <= 1.0);
+    /* G2 (quintic) or G1 (cubic) at every inner junction: curvature vectors agree. */
+    double jump = 0;
+    for (int i = 0; i + 1 < NM; i++) {
+        ef_vec3_t k0 = curv(&M[i], 1), k1 = curv(&M[i + 1], 0);
+        double j = ef_v3_norm(ef_v3_sub(k0, k1)) * r;
+        if (j > jump)
+            jump = j;
+    }
+    if (degree == 5)
+        EF_CHECK(jump < 1e-2);
+    /* The planned speed stays at the feed through the whole circle (no stops, no corner
+     * slow-downs): the middle move cruises at the commanded feed. */
+    EF_CHECK_NEAR(M[NM / 2].v_entry, 50, 1e-2);
+    printf("micro-circle (%s): %d moves, max dev / P %.4f, max curvature jump x r %.2e\n",
+           degree == 5 ? "G2 quintic" : "G1 cubic", NM, ri.dev_over, jump);
+}
+
+/* Lines and arcs meeting at corners: blends at arc ends, within P. */
+static void test_arcs(void)
+{
+    ef_smooth_cfg_t c = cfg_default();
+    ef_prim_t pr[6];
+    pr[0] = line_to(20, 0, 0, 40, 0.02f);
+    /* arc turning left, not tangent to the line (centre off the normal) */
+    pr[1] = arc_to(pr[0].end, 20, 10, 1.2f, 40, 0.02f);
+    pr[2] = line_to(pr[1].end.x - 10, pr[1].end.y + 15, 0, 40, 0.02f);
+    pr[3] = arc_to(pr[2].end, pr[2].end.x - 3, pr[2].end.y - 4, -2.0f, 40, 0.02f);
+    pr[4] = arc_to(pr[3].end, pr[3].end.x + 2, pr[3].end.y, 3.0f, 40, 0.02f);
+    pr[5] = line_to(0, 0, 0, 40, 0.02f);
+    int rc = run_prims(&c, ef_v3(0, 0, 0), pr, 6);
+    EF_CHECK_EQ(rc, 0);
+    runinfo_t ri = check_run(ef_v3(0, 0, 0), pr[5].end, 0.02, &c.lim);
+    ef_smooth_stats_t st = ef_smooth_stats(&S);
+    EF_CHECK(ri.dev_over <= 1.0);
+    EF_CHECK(st.arc_pieces >= 3);
+    EF_CHECK(st.blends + st.straight + st.stops >= 5);
+    printf("lines+arcs: %d moves (%d arc pieces, %u blends, %u stops), max dev / P %.4f\n", NM,
+           ri.kinds[EF_MOVE_ARC], st.blends, st.stops, ri.dev_over);
+}
+
+static uint64_t rng = 88172645463325252ull;
+static double urand(void)
+{
+    rng ^= rng << 13;
+    rng ^= rng >> 7;
+    rng ^= rng << 17;
+    return (double)(rng >> 11) * (1.0 / 9007199254740992.0);
+}
+
+/* Random paths: random corners (2-D and 3-D, near reversals, short and long segments,
+ * random tolerances) with some micro-segment stretches and arcs. Every run keeps the
+ * invariants and the deviation bound. */
+static void test_random(int runs)
+{
+    ef_smooth_cfg_t c = cfg_default();
+    double worst = 0;
+    long moves = 0, blends = 0, smooth = 0, rev = 0;
+    static ef_prim_t pr[400];
+    for (int run = 0; run < runs; run++) {
+        int n = 20 + (int)(urand() * 180);
+        int is3d = run % 3 == 0;
+        float tol = (float)(0.001 + 0.05 * urand());
+        ef_vec3_t p = ef_v3(0, 0, 0);
+        double dir = 0;
+        for (int i = 0; i < n; i++) {
+            int micro = urand() < 0.5;
+            double len = micro ? 0.1 + 0.5 * urand() : 0.05 + 30 * urand() * urand();
+            double turn = micro ? (urand() - 0.5) * 0.3 : (urand() - 0.5) * 2 * M_PI;
+            if (urand() < 0.03)
+                turn = M_PI * (urand() < 0.5 ? 1 : -1) * (1 - 1e-3 * urand());
+            dir += turn;
+            double dz = is3d ? (urand() - 0.5) * len : 0;
+            if (!micro && urand() < 0.2) {
+                /* an arc of random radius and sweep starting here */
+                double rr = 0.5 + 20 * urand(), sw = (urand() - 0.5) * 4;
+                double side = sw > 0 ? 1 : -1;
+                float cx = (float)(p.x - side * rr * sin(dir)),
+                      cy = (float)(p.y + side * rr * cos(dir));
+                pr[i] = arc_to(p, cx, cy, (float)sw, 30, tol);
+                pr[i].centre.z = p.z;
+                dir += sw;
+            } else {
+                pr[i] = line_to((float)(p.x + len * cos(dir)), (float)(p.y + len * sin(dir)),
+                                (float)(p.z + dz), 30, tol);
+            }
+            if (urand() < 0.1)
+                pr[i].qtol = tol * 0.5f;
+            p = pr[i].end;
+        }
+        int rc = run_prims(&c, ef_v3(0, 0, 0), pr, n);
+        (void)rc; /* a degenerate random primitive is refused; the rest must still hold */
+        ef_vec3_t endp = P[NP - 1].pr.end;
+        runinfo_t ri = check_run(ef_v3(0, 0, 0), endp, tol, &c.lim);
+        if (ri.dev_over > worst)
+            worst = ri.dev_over;
+        ef_smooth_stats_t st = ef_smooth_stats(&S);
+        moves += NM;
+        blends += st.blends;
+        smooth += st.smooth;
+        rev += st.reversals;
+    }
+    EF_CHECK(worst <= 1.0);
+    printf("random: %d paths, %ld moves, %ld blends, %ld smooth vertices, %ld reversal stops; "
+           "max deviation / P = %.4f\n",
+           runs, moves, blends, smooth, rev, worst);
+}
+
+/* Bad input: each refused with its code, state unchanged, the stream goes on. */
+static void test_bad_input(void)
+{
+    ef_smooth_cfg_t c = cfg_default();
+    EF_CHECK_EQ(ef_smooth_init(&S, &c, ef_v3(0, 0, 0)), EF_OK);
+    ef_prim_t ok = line_to(10, 0, 0, 50, 0.01f);
+    EF_CHECK_EQ(ef_smooth_push(&S, &ok), EF_OK);
+    ef_prim_t bad = line_to(NAN, 0, 0, 50, 0.01f);
+    EF_CHECK_EQ(ef_smooth_push(&S, &bad), EF_ERR_NONFINITE);
+    bad = line_to(INFINITY, 0, 0, 50, 0.01f);
+    EF_CHECK_EQ(ef_smooth_push(&S, &bad), EF_ERR_NONFINITE);
+    bad = line_to(2e7f, 0, 0, 50, 0.01f); /* huge coordinate */
+    EF_CHECK_EQ(ef_smooth_push(&S, &bad), EF_ERR_NONFINITE);
+    bad = line_to(10, 0, 0, 50, 0.01f); /* zero length */
+    EF_CHECK_EQ(ef_smooth_push(&S, &bad), EF_ERR_DEGENERATE);
+    bad = line_to(10, 10, 0, 0, 0.01f); /* feed 0 */
+    EF_CHECK_EQ(ef_smooth_push(&S, &bad), EF_ERR_FEED);
+    bad = line_to(10, 10, 0, -5, 0.01f);
+    EF_CHECK_EQ(ef_smooth_push(&S, &bad), EF_ERR_FEED);
+    bad = arc_to(ef_v3(10, 0, 0), 10, 5, 1.0f, 50, 0.01f);
+    bad.end.x += 0.5f; /* end radius differs from the start radius */
+    EF_CHECK_EQ(ef_smooth_push(&S, &bad), EF_ERR_ARC);
+    /* an arc whose ends and centre are within EF_MAX_COORD but whose circle reaches beyond */
+    bad = arc_to(ef_v3(10, 0, 0), 9.9e5f, 0, 3.0f, 50, 0.01f);
+    EF_CHECK_EQ(ef_smooth_push(&S, &bad), EF_ERR_NONFINITE);
+    bad = line_to(10, 10, 0, 50, NAN);
+    EF_CHECK(ef_smooth_push(&S, &bad) < 0);
+    EF_CHECK_EQ(ef_smooth_push(NULL, &ok), EF_ERR_ARG);
+    EF_CHECK_EQ(ef_smooth_push(&S, NULL), EF_ERR_ARG);
+    /* after the refusals, the stream continues from the last accepted end */
+    ef_prim_t next = line_to(10, 10, 0, 50, 0.01f);
+    next.tag = 1;
+    EF_CHECK_EQ(ef_smooth_push(&S, &next), EF_OK);
+    EF_CHECK_EQ(ef_smooth_stats(&S).prims, 2);
+    EF_CHECK_EQ(ef_smooth_finish(&S), EF_OK);
+    NM = 0;
+    EF_CHECK_EQ(drain(), EF_ERR_AGAIN);
+    EF_CHECK_EQ(NM, 3); /* line, blend, line */
+    NP = 2;
+    P[0].pr = ok;
+    memset(P[0].a, 0, sizeof P[0].a);
+    P[1].pr = next;
+    P[1].a[0] = 10;
+    P[1].a[1] = P[1].a[2] = 0;
+    check_run(ef_v3(0, 0, 0), ef_v3(10, 10, 0), 0.01, &c.lim);
+
+    /* bad configurations */
+    ef_smooth_cfg_t b = c;
+    b.g2 = NULL;
+    EF_CHECK_EQ(ef_smooth_init(&S, &b, ef_v3(0, 0, 0)), EF_ERR_ARG);
+    b = c;
+    b.g2 = &ef_tbl_g1_default;
+    EF_CHECK_EQ(ef_smooth_init(&S, &b, ef_v3(0, 0, 0)), EF_ERR_KIND);
+    b = c;
+    b.lim.a_axis[1] = 0;
+    EF_CHECK_EQ(ef_smooth_init(&S, &b, ef_v3(0, 0, 0)), EF_ERR_FEED);
+    b = c;
+    b.micro_len = NAN;
+    EF_CHECK_EQ(ef_smooth_init(&S, &b, ef_v3(0, 0, 0)), EF_ERR_NONFINITE);
+    EF_CHECK_EQ(ef_smooth_init(&S, &c, ef_v3(NAN, 0, 0)), EF_ERR_NONFINITE);
+}
+
+/* A full look-ahead: pushing without pulling ends in EF_ERR_FULL (nothing lost); pulling
+ * makes room and the same primitive is then accepted; the path comes out whole. */
+static void test_full(void)
+{
+    ef_smooth_cfg_t c = cfg_default();
+    c.micro_len = 0;
+    EF_CHECK_EQ(ef_smooth_init(&S, &c, ef_v3(0, 0, 0)), EF_OK);
+    static ef_prim_t pr[1000];
+    int pushed = 0, rc = EF_OK;
+    for (int i = 0; i < 1000 && rc == EF_OK; i++) {
+        pr[i] = line_to((float)(i + 1), (float)(i % 2), 0, 50, 0.01f);
+        pr[i].tag = (uint32_t)i;
+        rc = ef_smooth_push(&S, &pr[i]);
+        if (rc == EF_OK)
+            pushed++;
+    }
+    EF_CHECK_EQ(rc, EF_ERR_FULL);
+    EF_CHECK(pushed >= 8 && pushed < 1000);
+    printf("look-ahead: full after %d primitives without pulling\n", pushed);
+    NM = 0;
+    EF_CHECK_EQ(drain(), EF_ERR_AGAIN);
+    EF_CHECK(NM > 0);
+    EF_CHECK_EQ(ef_smooth_push(&S, &pr[pushed]), EF_OK);
+    EF_CHECK_EQ(ef_smooth_finish(&S), EF_OK);
+    EF_CHECK_EQ(drain(), EF_ERR_AGAIN);
+    NP = pushed + 1;
+    for (int i = 0; i < NP; i++) {
+        P[i].pr = pr[i];
+        P[i].a[0] = i ? pr[i - 1].end.x : 0;
+        P[i].a[1] = i ? pr[i - 1].end.y : 0;
+        P[i].a[2] = 0;
+    }
+    runinfo_t ri = check_run(ef_v3(0, 0, 0), pr[pushed].end, 0.01, &c.lim);
+    EF_CHECK(ri.dev_over <= 1.0);
+}
+
+/* The smoother feeding the interpolator in a periodic loop (1 ms): positions move by no
+ * more than v_max dt per period, never NaN, and end exactly at the program end. */
+static void test_with_interp(void)
+{
+    ef_smooth_cfg_t c = cfg_default();
+    enum { N = 300 };
+    static ef_prim_t pr[N];
+    for (int i = 0; i < N; i++) {
+        double a = 4 * M_PI * (i + 1) / N;
+        double r = 5 + 0.02 * i;
+        pr[i] = line_to((float)(r * cos(a)), (float)(r * sin(a)), 0, 60, 0.01f);
+    }
+    static ef_interp_t ip;
+    EF_CHECK_EQ(ef_smooth_init(&S, &c, ef_v3(5, 0, 0)), EF_OK);
+    EF_CHECK_EQ(ef_interp_init(&ip, ef_v3(5, 0, 0), 1000, EF_STEP_CORRECTED), EF_OK);
+    int next = 0, finished = 0, bad = 0, underrun = 0;
+    ef_vec3_t last = ef_v3(5, 0, 0);
+    ef_move_t pending;
+    int have_pending = 0;
+    for (int tick = 0; tick < 200000; tick++) {
+        /* feed the pipeline a little each tick, as a periodic task would */
+        for (int k = 0; k < 4 && next < N; k++) {
+            int rc = ef_smooth_push(&S, &pr[next]);
+            if (rc == EF_OK)
+                next++;
+            else
+                break;
+        }
+        if (next == N && !finished) {
+            ef_smooth_finish(&S);
+            finished = 1;
+        }
+        for (;;) {
+            if (!have_pending) {
+                if (ef_smooth_pull(&S, &pending) != EF_OK)
+                    break;
+                have_pending = 1;
+            }
+            if (ef_interp_space(&ip) == 0)
+                break;
+            EF_CHECK_EQ(ef_interp_push(&ip, &pending), EF_OK);
+            have_pending = 0;
+        }
+        ef_setpoint_t sp;
+        uint32_t nx;
+        int rc = ef_interp_process(&ip, 1000, &nx, &sp);
+        if (rc == EF_ERR_UNDERRUN)
+            underrun++;
+        if (!isfinite(sp.p.x) || !isfinite(sp.p.y) ||
+            ef_v3_norm(ef_v3_sub(sp.p, last)) > 60e-3f * 1.01f)
+            bad++;
+        last = sp.p;
+        if (finished && !have_pending && !sp.moving && ef_interp_space(&ip) == EF_INTERP_QUEUE &&
+            tick > 10)
+            break;
+    }
+    EF_CHECK_EQ(bad, 0);
+    EF_CHECK_EQ(underrun, 0);
+    EF_CHECK(ef_v3_norm(ef_v3_sub(last, pr[N - 1].end)) < 1e-5f);
+}
+
+int main(int argc, char **argv)
+{
+    setvbuf(stdout, NULL, _IOLBF, 0);
+    M = calloc(MAXM, sizeof *M);
+    if (!M)
+        return 2;
+    const char *only = argc > 1 ? argv[1] : "";
+#define RUN(name, call)                                                                            \
+    if (!*only || !strcmp(only, name))                                                             \
+        call;
+    RUN("square", test_square());
+    RUN("reversal", test_reversal());
+    RUN("collinear", test_collinear());
+    RUN("circle", (test_micro_circle(5), test_micro_circle(3)));
+    RUN("arcs", test_arcs());
+    RUN("bad", test_bad_input());
+    RUN("full", test_full());
+    RUN("interp", test_with_interp());
+    RUN("random", test_random(argc > 2 ? atoi(argv[2]) : 300));
+    free(M);
+    return ef_test_summary();
+}

@@ -1,0 +1,48 @@
+# G-code reader: unit tests, the sample program, the CLI, and the fuzz corpus replay
+# (docs/gcode.md). Test names start with "gcode" (ctest -R gcode).
+set(EF_GCODE_DIR ${CMAKE_CURRENT_SOURCE_DIR})
+
+add_executable(test_gcode ${CMAKE_CURRENT_SOURCE_DIR}/program/test_gcode.c)
+target_include_directories(test_gcode PRIVATE ${EF_GCODE_DIR})
+target_compile_definitions(test_gcode PRIVATE EF_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
+target_link_libraries(test_gcode PRIVATE ef_host m)
+add_test(NAME gcode_unit COMMAND test_gcode)
+
+# The sample part program must read cleanly through the CLI, in both output forms.
+add_test(NAME gcode_cli_sample COMMAND evenfeed gcode ${PROJECT_SOURCE_DIR}/samples/bracket.ngc)
+add_test(NAME gcode_cli_sample_json
+         COMMAND evenfeed gcode ${PROJECT_SOURCE_DIR}/samples/bracket.ngc --json)
+set_tests_properties(gcode_cli_sample PROPERTIES PASS_REGULAR_EXPRESSION "62:6 end +M30")
+set_tests_properties(gcode_cli_sample_json PROPERTIES
+                     PASS_REGULAR_EXPRESSION "\"kind\": \"end\", \"line\": 62, .*\"text\": \"M30\"")
+add_test(NAME gcode_cli_missing COMMAND evenfeed gcode ${CMAKE_CURRENT_BINARY_DIR}/no-such.ngc)
+set_tests_properties(gcode_cli_missing PROPERTIES WILL_FAIL TRUE)
+# A bad program: the message names file, line and column; exit status 11 (EF_ERR_GCODE).
+add_test(NAME gcode_cli_error
+         COMMAND sh -c "$<TARGET_FILE:evenfeed> gcode \"$1\"; echo \"exit $?\"" sh
+                 ${EF_GCODE_DIR}/fuzz/corpus_gcode/bad-radius.ngc)
+set_tests_properties(gcode_cli_error PROPERTIES
+                     PASS_REGULAR_EXPRESSION "bad-radius.ngc:2:1: G2 arc radius mismatch: start 5.000 end 4.000 .tolerance 0.005.*exit 11")
+
+# Seed corpus replay through the fuzz entry point, without libFuzzer: "ok-*" seeds must
+# read to the end, "bad-*" seeds must be rejected.
+add_executable(gcode_fuzz_replay ${EF_GCODE_DIR}/fuzz/fuzz_gcode.c)
+target_compile_definitions(gcode_fuzz_replay PRIVATE EF_FUZZ_REPLAY_MAIN)
+target_link_libraries(gcode_fuzz_replay PRIVATE ef_host m)
+add_test(NAME gcode_fuzz_replay COMMAND gcode_fuzz_replay ${EF_GCODE_DIR}/fuzz/corpus_gcode)
+
+# libFuzzer target (tests/fuzz/run.sh gcode). The host library is rebuilt from its own
+# sources with coverage and sanitizer instrumentation, as the table fuzzer does for ef_fw.
+if(EF_FUZZ)
+  set(EF_GCODE_FUZZ_SAN -fsanitize=address,undefined -fno-sanitize-recover=all
+      -fno-omit-frame-pointer)
+  get_target_property(EF_GCODE_HOST_DIR ef_host SOURCE_DIR)
+  add_executable(fuzz_gcode ${EF_GCODE_DIR}/fuzz/fuzz_gcode.c
+                            ${EF_GCODE_HOST_DIR}/lib/program/ef_gcode.c ${EF_GCODE_HOST_DIR}/lib/core/ef_host.c)
+  target_include_directories(fuzz_gcode PRIVATE ${EF_GCODE_HOST_DIR}/include
+                             ${PROJECT_SOURCE_DIR}/firmware/include)
+  target_compile_definitions(fuzz_gcode PRIVATE _DEFAULT_SOURCE _GNU_SOURCE)
+  target_compile_options(fuzz_gcode PRIVATE -fsanitize=fuzzer ${EF_GCODE_FUZZ_SAN})
+  target_link_options(fuzz_gcode PRIVATE -fsanitize=fuzzer ${EF_GCODE_FUZZ_SAN})
+  target_link_libraries(fuzz_gcode PRIVATE m)
+endif()

@@ -1,0 +1,478 @@
+/* Tests of the G-code reader (host/lib/program/ef_gcode.c, docs/gcode.md). */
+#include <string.h>
+#include "ef_test.h"
+#include "evenfeed/host/program/ef_gcode.h"
+
+#define MAXI 256
+
+static ef_gcode_t R; /* about 50 kB: not on the stack */
+static ef_gcode_item_t I[MAXI];
+static ef_msg_t M;
+
+/* Read src to its end item; the item count, or the error code (message in M). */
+static int rd(const char *src)
+{
+    ef_gcode_item_t it;
+    int n = 0;
+    memset(&M, 0, sizeof M);
+    ef_gcode_init(&R, src, strlen(src), "t.ngc");
+    for (;;) {
+        int rc = ef_gcode_next(&R, &it, &M);
+        if (rc)
+            return rc;
+        if (n < MAXI)
+            I[n++] = it;
+        if (it.kind == EF_GC_END)
+            return n;
+    }
+}
+
+/* Expect an error whose message is exactly want. */
+#define EXPECT_ERR(src, want)                                                                  \
+    do {                                                                                       \
+        int rc_ = rd(src);                                                                     \
+        EF_CHECK_EQ(rc_, EF_ERR_GCODE);                                                        \
+        if (strcmp(M.text, want)) {                                                            \
+            ef_t_fail++;                                                                       \
+            fprintf(stderr, "%s:%d: message '%s', want '%s'\n", __FILE__, __LINE__, M.text,   \
+                    want);                                                                     \
+        } else {                                                                               \
+            ef_t_pass++;                                                                       \
+        }                                                                                      \
+    } while (0)
+
+/* Expect an error at a position, with a substring in the message. */
+#define EXPECT_ERR_AT(src, pos, part)                                                          \
+    do {                                                                                       \
+        int rc_ = rd(src);                                                                     \
+        EF_CHECK_EQ(rc_, EF_ERR_GCODE);                                                        \
+        if (strncmp(M.text, "t.ngc:" pos ": ", strlen("t.ngc:" pos ": ")) ||                   \
+            !strstr(M.text, part)) {                                                           \
+            ef_t_fail++;                                                                       \
+            fprintf(stderr, "%s:%d: message '%s', want t.ngc:%s: ...%s...\n", __FILE__,        \
+                    __LINE__, M.text, pos, part);                                              \
+        } else {                                                                               \
+            ef_t_pass++;                                                                       \
+        }                                                                                      \
+    } while (0)
+
+/* Value of X after "G0 X<expr>": evaluates one expression through the reader. */
+static double xval(const char *expr)
+{
+    char src[512];
+    snprintf(src, sizeof src, "G0 X%s\n", expr);
+    int n = rd(src);
+    if (n < 2 || I[0].kind != EF_GC_RAPID) {
+        fprintf(stderr, "expression %s failed: %s\n", expr, M.text);
+        return NAN;
+    }
+    return I[0].end[0];
+}
+
+/* Lines, rapids, modal carry-over, feeds, the origin start, end items. */
+static void test_basic(void)
+{
+    int n = rd("G0 X10 Y5\nG1 Z-1 F300\nX20\nY15 F600\nG0 Z5\nM2\nG0 X99\n");
+    EF_CHECK_EQ(n, 6);
+    EF_CHECK_EQ(I[0].kind, EF_GC_RAPID);
+    EF_CHECK_NEAR(I[0].start[0], 0, 0);
+    EF_CHECK_NEAR(I[0].end[0], 10, 0);
+    EF_CHECK_NEAR(I[0].end[1], 5, 0);
+    EF_CHECK_EQ(I[0].line, 1);
+    EF_CHECK_EQ(I[0].col, 1);
+    EF_CHECK_EQ(I[1].kind, EF_GC_LINE);
+    EF_CHECK_NEAR(I[1].feed, 300, 0);
+    EF_CHECK_EQ(I[2].kind, EF_GC_LINE); /* G1 carried over */
+    EF_CHECK_NEAR(I[2].start[2], -1, 0);
+    EF_CHECK_NEAR(I[2].end[0], 20, 0);
+    EF_CHECK_NEAR(I[2].feed, 300, 0); /* F carried over */
+    EF_CHECK_EQ(I[2].col, 1);
+    EF_CHECK_NEAR(I[3].feed, 600, 0);
+    EF_CHECK_EQ(I[4].kind, EF_GC_RAPID);
+    EF_CHECK_EQ(I[5].kind, EF_GC_END);
+    EF_CHECK(!strcmp(I[5].text, "M2"));
+    EF_CHECK_EQ(I[5].line, 6);
+    /* after the end, END again; text after M2 is never read */
+    ef_gcode_item_t it;
+    EF_CHECK_EQ(ef_gcode_next(&R, &it, &M), EF_OK);
+    EF_CHECK_EQ(it.kind, EF_GC_END);
+    n = rd("G0 X1");
+    EF_CHECK_EQ(n, 2);
+    EF_CHECK(!strcmp(I[1].text, "end of text"));
+    EF_CHECK_EQ(rd(""), 1);
+    n = rd("%\nG0 X1\n%\nG0 X2\n");
+    EF_CHECK_EQ(n, 2);
+    EF_CHECK(!strcmp(I[1].text, "%"));
+    EF_CHECK_EQ(I[1].line, 3);
+    n = rd("G0 X1\nM30\n");
+    EF_CHECK(!strcmp(I[n - 1].text, "M30"));
+}
+
+/* Comments, line numbers, case, spaces inside numbers, block delete. */
+static void test_lexical(void)
+{
+    int n = rd("(header) ; more\nn10 g0 x 1 0 (mid) y2 ;tail\n/G0 X3\n\r\n  \t\nN20 G0 X4\n");
+    EF_CHECK_EQ(n, 5);
+    EF_CHECK_NEAR(I[0].end[0], 10, 0);
+    EF_CHECK_NEAR(I[0].end[1], 2, 0);
+    EF_CHECK_EQ(I[0].line, 2);
+    EF_CHECK_EQ(I[0].col, 5);
+    EF_CHECK_EQ(I[1].kind, EF_GC_IGNORED); /* '/' reported once, the line is still read */
+    EF_CHECK_EQ(I[2].kind, EF_GC_RAPID);
+    EF_CHECK_NEAR(I[2].end[0], 3, 0);
+    EF_CHECK_NEAR(I[3].end[0], 4, 0);
+    EF_CHECK_EQ(I[3].line, 6);
+}
+
+/* Zero-length moves are a defined item, not dropped. */
+static void test_zero(void)
+{
+    int n = rd("G1 X1 F100\nX1\nG0 X1 Y0\nX2\n");
+    EF_CHECK_EQ(n, 5);
+    EF_CHECK_EQ(I[1].kind, EF_GC_ZERO_MOVE);
+    EF_CHECK(!strcmp(I[1].text, "G1"));
+    EF_CHECK_EQ(I[2].kind, EF_GC_ZERO_MOVE);
+    EF_CHECK(!strcmp(I[2].text, "G0"));
+    EF_CHECK_NEAR(I[3].start[0], 1, 0);
+}
+
+/* G20 inches converted to mm, units recorded, feed converted; G91 incremental. */
+static void test_units_incremental(void)
+{
+    int n = rd("G20 G0 X1 Y2\nG1 X2 F10\nG21 X3\nG91 X1 Y-1\nG20 X1\nG90 G21 G0 X0 Y0 Z0\n");
+    EF_CHECK_EQ(n, 7);
+    EF_CHECK_NEAR(I[0].end[0], 25.4, 1e-12);
+    EF_CHECK_NEAR(I[0].end[1], 50.8, 1e-12);
+    EF_CHECK_EQ(I[0].units, 20);
+    EF_CHECK_NEAR(I[1].feed, 254, 1e-9);
+    EF_CHECK_NEAR(I[2].end[0], 3, 0);
+    EF_CHECK_EQ(I[2].units, 21);
+    EF_CHECK_NEAR(I[2].feed, 254, 1e-9); /* the feed keeps its physical value */
+    EF_CHECK_NEAR(I[3].end[0], 4, 1e-12);
+    EF_CHECK_NEAR(I[3].end[1], 50.8 - 1, 1e-12);
+    EF_CHECK_NEAR(I[4].end[0], 4 + 25.4, 1e-12);
+    EF_CHECK_NEAR(I[5].end[0], 0, 0);
+}
+
+/* IJK arcs in the three planes, G90.1 centres, full circles, turns, helix. */
+static void test_arcs(void)
+{
+    int n = rd("G0 X10 Y0\nG3 X0 Y10 I-10 J0 F100\nG2 X10 Y0 I0 J-10\n");
+    EF_CHECK_EQ(n, 4);
+    EF_CHECK_EQ(I[1].kind, EF_GC_ARC);
+    EF_CHECK_EQ(I[1].dir, 1);
+    EF_CHECK_EQ(I[1].plane, 17);
+    EF_CHECK_NEAR(I[1].centre[0], 0, 0);
+    EF_CHECK_NEAR(I[1].radius, 10, 1e-12);
+    EF_CHECK_NEAR(I[1].sweep, M_PI / 2, 1e-12);
+    EF_CHECK_NEAR(I[1].feed, 100, 0);
+    EF_CHECK_EQ(I[2].dir, -1);
+    EF_CHECK_NEAR(I[2].sweep, -M_PI / 2, 1e-12);
+    /* G18: ZX plane, offsets K (Z) and I (X), normal +Y */
+    n = rd("G18 G0 X0 Z10\nG3 X10 Z0 I0 K-10 F100\n");
+    EF_CHECK_EQ(I[1].plane, 18);
+    EF_CHECK_NEAR(I[1].centre[0], 0, 0);
+    EF_CHECK_NEAR(I[1].centre[2], 0, 0);
+    EF_CHECK_NEAR(I[1].sweep, M_PI / 2, 1e-12); /* Z axis to X axis is CCW about +Y */
+    /* G19: YZ plane, offsets J (Y) and K (Z), normal +X */
+    n = rd("G19 G0 Y10 Z0\nG3 Y0 Z10 J-10 K0 F100\n");
+    EF_CHECK_EQ(I[1].plane, 19);
+    EF_CHECK_NEAR(I[1].sweep, M_PI / 2, 1e-12);
+    EF_CHECK_NEAR(I[1].centre[1], 0, 0);
+    /* G90.1: absolute centres */
+    n = rd("G0 X10 Y10\nG90.1 G2 X20 Y20 I20 J10 F50\n");
+    EF_CHECK_NEAR(I[1].centre[0], 20, 0);
+    EF_CHECK_NEAR(I[1].centre[1], 10, 0);
+    EF_CHECK_NEAR(I[1].sweep, -M_PI / 2, 1e-12);
+    /* full circle, three turns as a helix */
+    n = rd("G0 X5\nG2 X5 Y0 Z-3 I-5 J0 P3 F100\nG3 X5 I-5\n");
+    EF_CHECK_EQ(n, 4);
+    EF_CHECK_NEAR(I[1].sweep, -6 * M_PI, 1e-12);
+    EF_CHECK_EQ(I[1].turns, 3);
+    EF_CHECK_NEAR(I[1].end[2], -3, 0);
+    EF_CHECK_NEAR(I[1].centre[2], 0, 0);
+    EF_CHECK_NEAR(I[2].sweep, 2 * M_PI, 1e-12);
+    /* radius within tolerance: accepted as given */
+    n = rd("G0 X10\nG3 X-10.0015 I-10 F100\n");
+    EF_CHECK_EQ(n, 3);
+    EF_CHECK_NEAR(I[1].sweep, M_PI, 1e-3);
+    /* relative tolerance for big arcs: 0.1% of 1000 mm = 1 mm */
+    n = rd("G0 X1000\nG3 X-1000.9 I-1000 F100\n");
+    EF_CHECK_EQ(n, 3);
+}
+
+/* R-form arcs: both directions, both signs (R < 0 takes the long way). */
+static void test_r_form(void)
+{
+    rd("G0 X0 Y10\nG2 X10 Y0 R10 F100\n");
+    EF_CHECK_NEAR(I[1].centre[0], 0, 1e-12);
+    EF_CHECK_NEAR(I[1].centre[1], 0, 1e-12);
+    EF_CHECK_NEAR(I[1].sweep, -M_PI / 2, 1e-12);
+    rd("G0 X0 Y10\nG2 X10 Y0 R-10 F100\n");
+    EF_CHECK_NEAR(I[1].centre[0], 10, 1e-12);
+    EF_CHECK_NEAR(I[1].centre[1], 10, 1e-12);
+    EF_CHECK_NEAR(I[1].sweep, -1.5 * M_PI, 1e-12);
+    rd("G0 X10 Y0\nG3 X0 Y10 R10 F100\n");
+    EF_CHECK_NEAR(I[1].centre[0], 0, 1e-12);
+    EF_CHECK_NEAR(I[1].centre[1], 0, 1e-12);
+    EF_CHECK_NEAR(I[1].sweep, M_PI / 2, 1e-12);
+    rd("G0 X10 Y0\nG3 X0 Y10 R-10 F100\n");
+    EF_CHECK_NEAR(I[1].centre[0], 10, 1e-12);
+    EF_CHECK_NEAR(I[1].centre[1], 10, 1e-12);
+    EF_CHECK_NEAR(I[1].sweep, 1.5 * M_PI, 1e-12);
+    EF_CHECK_NEAR(I[1].radius, 10, 1e-12);
+    /* half circle: R equal to half the chord (within tolerance) */
+    int n = rd("G2 X10 R5.001 F100\n");
+    EF_CHECK_EQ(n, 2);
+    EF_CHECK_NEAR(fabs(I[0].sweep), M_PI, 0.05); /* h = 0.1: 0.04 rad short of pi */
+}
+
+/* Parameters and expressions. */
+static void test_expressions(void)
+{
+    EF_CHECK_NEAR(xval("[1+2*3]"), 7, 1e-12);
+    EF_CHECK_NEAR(xval("[[1+2]*3]"), 9, 1e-12);
+    EF_CHECK_NEAR(xval("[2**3**2]"), 64, 1e-12); /* left-associative */
+    EF_CHECK_NEAR(xval("[2*3**2]"), 18, 1e-12);
+    EF_CHECK_NEAR(xval("[10-4-3]"), 3, 1e-12);
+    EF_CHECK_NEAR(xval("[12/3/2]"), 2, 1e-12);
+    EF_CHECK_NEAR(xval("[-2**2]"), 4, 1e-12); /* the sign belongs to the operand */
+    EF_CHECK_NEAR(xval("-[2+3]"), -5, 1e-12);
+    EF_CHECK_NEAR(xval("[7 MOD 3]"), 1, 1e-12);
+    EF_CHECK_NEAR(xval("[-7 MOD 3]"), 2, 1e-12);
+    EF_CHECK_NEAR(xval("[1+7 MOD 3]"), 2, 1e-12);
+    EF_CHECK_NEAR(xval("SIN[30]"), 0.5, 1e-12);
+    EF_CHECK_NEAR(xval("COS[60]"), 0.5, 1e-12);
+    EF_CHECK_NEAR(xval("TAN[45]"), 1, 1e-12);
+    EF_CHECK_NEAR(xval("ASIN[1]"), 90, 1e-12);
+    EF_CHECK_NEAR(xval("ACOS[0]"), 90, 1e-12);
+    EF_CHECK_NEAR(xval("ATAN[1]/[-1]"), 135, 1e-12);
+    EF_CHECK_NEAR(xval("SQRT[16]"), 4, 1e-12);
+    EF_CHECK_NEAR(xval("ABS[-3]"), 3, 1e-12);
+    EF_CHECK_NEAR(xval("EXP[1]"), exp(1), 1e-12);
+    EF_CHECK_NEAR(xval("LN[EXP[2]]"), 2, 1e-12);
+    EF_CHECK_NEAR(xval("ROUND[2.5]"), 3, 0);
+    EF_CHECK_NEAR(xval("FIX[-1.5]"), -2, 0);
+    EF_CHECK_NEAR(xval("FUP[1.2]"), 2, 0);
+    EF_CHECK_NEAR(xval("[2 GT 1]"), 1, 0);
+    EF_CHECK_NEAR(xval("[1 EQ 2 OR 3 LE 3]"), 1, 0);
+    EF_CHECK_NEAR(xval("[1+1 EQ 2]"), 1, 0);
+    EF_CHECK_NEAR(xval("[[1 AND 0]+5]"), 5, 0);
+    EF_CHECK_NEAR(xval("[1 XOR 0]"), 1, 0);
+    EF_CHECK_NEAR(xval("[.5]"), 0.5, 0);
+    /* numbered and named parameters; assignments take effect after their line */
+    int n = rd("#1 = .5\nG0 X[#1*53.]\n#2=3 #1=#2 G0 Y#1\nY#1 Z##2\n#<Depth> = -2\nG0 Z#<depth>\n");
+    EF_CHECK_EQ(n, 5);
+    EF_CHECK_NEAR(I[0].end[0], 26.5, 1e-12);
+    EF_CHECK_NEAR(I[1].end[1], 0.5, 0);
+    EF_CHECK_NEAR(I[2].end[1], 0, 0); /* #1=#2 read the old #2 (0) */
+    EF_CHECK_NEAR(I[2].end[2], 0, 0); /* ##2 is #3, never set: 0 */
+    EF_CHECK_NEAR(I[3].end[2], -2, 0);
+    n = rd("#5399 = 1\nG0 X#5399\n");
+    EF_CHECK_NEAR(I[0].end[0], 1, 0);
+}
+
+/* Events, ignored words, tolerance items. */
+static void test_events(void)
+{
+    int n = rd("G21 G90 G17 G40 G49 G80 G94\nG64 P0.01 Q0.005\nN5 T1 M6\nS12000 M3\nG54\nM8\n"
+               "G4 P0.5\nG43 H1 G0 Z10\nG40\nG61\nG20 G64 P0.001\nM0 G0 X1\nM5 M9\nG53 G0 Z0\nM30\n");
+    EF_CHECK(n > 0);
+    int k = 0;
+    EF_CHECK_EQ(I[k].kind, EF_GC_EVENT);
+    EF_CHECK(!strcmp(I[k].text, "G49"));
+    EF_CHECK_EQ(I[k].col, 17);
+    k++;
+    EF_CHECK_EQ(I[k].kind, EF_GC_IGNORED);
+    EF_CHECK(!strcmp(I[k].text, "G40"));
+    EF_CHECK_EQ(I[k].col, 13);
+    k++;
+    EF_CHECK(!strcmp(I[k].text, "G80"));
+    k++;
+    EF_CHECK(!strcmp(I[k].text, "G94"));
+    k++;
+    EF_CHECK_EQ(I[k].kind, EF_GC_TOLERANCE);
+    EF_CHECK_EQ(I[k].path_mode, EF_GC_PATH_BLEND);
+    EF_CHECK_NEAR(I[k].p_tol, 0.01, 1e-15);
+    EF_CHECK_NEAR(I[k].q_tol, 0.005, 1e-15);
+    k++;
+    EF_CHECK(!strcmp(I[k].text, "T1 M6"));
+    EF_CHECK_EQ(I[k].col, 4);
+    k++;
+    EF_CHECK(!strcmp(I[k++].text, "S12000 M3"));
+    EF_CHECK(!strcmp(I[k++].text, "G54"));
+    EF_CHECK(!strcmp(I[k++].text, "M8"));
+    EF_CHECK(!strcmp(I[k++].text, "G4 P0.5"));
+    EF_CHECK(!strcmp(I[k++].text, "G43 H1"));
+    EF_CHECK_EQ(I[k++].kind, EF_GC_RAPID);
+    /* the second G40 gives no note */
+    EF_CHECK_EQ(I[k].kind, EF_GC_TOLERANCE);
+    EF_CHECK_EQ(I[k++].path_mode, EF_GC_PATH_EXACT);
+    EF_CHECK_EQ(I[k].kind, EF_GC_TOLERANCE);
+    EF_CHECK_NEAR(I[k].p_tol, 0.0254, 1e-12);
+    EF_CHECK_EQ(I[k++].q_tol, 0);
+    EF_CHECK_EQ(I[k++].kind, EF_GC_RAPID); /* M0 comes after the line's motion */
+    EF_CHECK(!strcmp(I[k++].text, "M0"));
+    EF_CHECK(!strcmp(I[k++].text, "M5 M9"));
+    EF_CHECK(!strcmp(I[k++].text, "G53 G0 Z0"));
+    EF_CHECK_EQ(I[k++].kind, EF_GC_END);
+    EF_CHECK_EQ(k, n);
+    EF_CHECK_NEAR(R.cur[2], 10, 0); /* G53 moves are passed on; the position is kept */
+    /* G64 with no P: blend, no tolerance given */
+    n = rd("G64\n");
+    EF_CHECK_EQ(I[0].kind, EF_GC_TOLERANCE);
+    EF_CHECK_EQ(I[0].p_tol, 0);
+    /* M7 and M8 together are allowed */
+    n = rd("M7 M8\n");
+    EF_CHECK(!strcmp(I[0].text, "M7 M8"));
+}
+
+/* Every error, with its exact position. */
+static void test_errors(void)
+{
+    EXPECT_ERR("G0 X10\nG2 X20 Y0.3 I5 F100\n",
+               "t.ngc:2:1: G2 arc radius mismatch: start 5.000 end 5.009 (tolerance 0.005)");
+    EXPECT_ERR("G0 X10\nN12 G2 X10.3 Y0 I-10 J0 F100\n",
+               "t.ngc:2:5: G2 arc radius mismatch: start 10.000 end 10.300 (tolerance 0.010)");
+    EXPECT_ERR_AT("G0 X[SQRT[-1]]\n", "1:6", "SQRT of negative");
+    EXPECT_ERR_AT("G0 X[1/0]\n", "1:7", "division by zero");
+    EXPECT_ERR_AT("G0 X[1 MOD 0]\n", "1:8", "MOD by zero");
+    EXPECT_ERR_AT("G0 X[EXP[1000]]\n", "1:6", "not finite");
+    EXPECT_ERR_AT("G0 X[10**400]\n", "1:8", "not finite");
+    EXPECT_ERR_AT("G0 X[LN[0]]\n", "1:6", "LN argument");
+    EXPECT_ERR_AT("G0 X[ACOS[2]]\n", "1:6", "outside [-1, 1]");
+    EXPECT_ERR_AT("G0 X2000000\n", "1:4", "outside +-1e+06 mm");
+    EXPECT_ERR_AT("G20 G0 X50000\n", "1:8", "outside +-1e+06 mm");
+    EXPECT_ERR_AT("G91 G0 X900000\nX900000\n", "2:1", "outside");
+    EXPECT_ERR_AT("G1 X1\n", "1:1", "feed move with no feed rate");
+    EXPECT_ERR_AT("F0\nG1 X1\n", "2:1", "feed move with no feed rate");
+    EXPECT_ERR_AT("G1 X1 F-5\n", "1:7", "feed F-5 outside");
+    EXPECT_ERR_AT("G0 X1\nG2 X2 Y1 F0 I1\n", "2:1", "no feed rate");
+    EXPECT_ERR_AT("G1 F1e9\n", "1:6", "unsupported word 'E'"); /* no exponents */
+    EXPECT_ERR_AT("G1 X1 F100000000\n", "1:7", "feed F1e+08 outside");
+    EXPECT_ERR_AT("G0 X0\nG0 X1\nG0 G1 X2\n", "3:4", "G0 and G1 on one line are in the same modal group");
+    EXPECT_ERR_AT("G20 G21\n", "1:5", "same modal group");
+    EXPECT_ERR_AT("M3 M5\n", "1:4", "M3 and M5 on one line");
+    EXPECT_ERR_AT("G0 X[1+2\n", "1:5", "unbalanced brackets");
+    EXPECT_ERR_AT("G0 X[1+2]]\n", "1:10", "expected a word letter");
+    EXPECT_ERR_AT("G0 X[1 #2]\n", "1:8", "expected an operator or ']'");
+    EXPECT_ERR_AT("G0 X#5400\n", "1:5", "parameter number 5400 out of range");
+    EXPECT_ERR_AT("G0 X#0\n", "1:5", "out of range");
+    EXPECT_ERR_AT("#1.5 = 2\n", "1:1", "out of range");
+    EXPECT_ERR_AT("G0 X#<nope>\n", "1:5", "#<NOPE> is not defined");
+    EXPECT_ERR_AT("#1 X2\n", "1:4", "expected '='");
+    EXPECT_ERR_AT("G81 X1 Y1 Z-1 R1\n", "1:1", "unsupported G81 (canned cycle)");
+    EXPECT_ERR_AT("G0 X1\nG41 D1 X2\n", "2:1", "unsupported G41 (cutter radius compensation)");
+    EXPECT_ERR_AT("G28 G91 Z0\n", "1:1", "unsupported G28");
+    EXPECT_ERR_AT("G33 Z-1 K1\n", "1:1", "unsupported G33 (threading)");
+    EXPECT_ERR_AT("G38.2 Z-10 F10\n", "1:1", "unsupported G38.2 (probing)");
+    EXPECT_ERR_AT("G5.1 X1 I1 J1\n", "1:1", "unsupported G5.1 (spline)");
+    EXPECT_ERR_AT("G92 X0\n", "1:1", "unsupported G92 (coordinate system change)");
+    EXPECT_ERR_AT("G93 G1 X1 F1\n", "1:1", "inverse-time");
+    EXPECT_ERR_AT("G1.5 X1\n", "1:1", "unsupported G1.5");
+    EXPECT_ERR_AT("G1.55 X1\n", "1:1", "malformed G code");
+    EXPECT_ERR_AT("M98 P100\n", "1:1", "unsupported M98");
+    EXPECT_ERR_AT("G0 A10\n", "1:4", "axis word 'A' not supported");
+    EXPECT_ERR_AT("O100 sub\n", "1:1", "O-word");
+    EXPECT_ERR_AT("G0 E1\n", "1:4", "unsupported word 'E'");
+    EXPECT_ERR_AT("X10\n", "1:1", "axis word with no motion mode");
+    EXPECT_ERR_AT("G0 X1\nG80\nX2\n", "3:1", "axis word with no motion mode");
+    EXPECT_ERR_AT("G0 X1 (open\n", "1:7", "comment not closed");
+    EXPECT_ERR_AT("G0 X1 X2\n", "1:7", "second X word");
+    EXPECT_ERR_AT("G0 X1 Y\n", "1:7", "has no value");
+    EXPECT_ERR_AT("G0 X1 $\n", "1:7", "expected a word letter");
+    EXPECT_ERR_AT("G0 X1\x01\n", "1:6", "unexpected byte 0x01");
+    EXPECT_ERR_AT("G0 X1\nG2 X0 Y1 I-1 K1 F1\n", "2:14", "K word on a G17-plane arc");
+    EXPECT_ERR_AT("G0 X1\nG2 X1 R5 F1\n", "2:7", "R form with end equal to start");
+    EXPECT_ERR_AT("G2 X10 R4 F1\n", "1:8", "radius 4.0000 smaller than half the chord 5.0000");
+    EXPECT_ERR_AT("G2 X10 F1\n", "1:1", "G2 needs IJ offsets or R");
+    EXPECT_ERR_AT("G2 X10 I5 R5 F1\n", "1:11", "both R and IJ");
+    EXPECT_ERR_AT("G3 X0 Y0 I0 J0 F1\n", "1:1", "radius is zero");
+    EXPECT_ERR_AT("G2 X0 I1 P1.5 F1\n", "1:10", "P (turns) must be a whole number");
+    EXPECT_ERR_AT("G2 I1 F10\n", "1:4", "G2 with no X, Y or Z word");
+    EXPECT_ERR_AT("G1 X1 I1 F10\n", "1:7", "I word with no G2/G3 arc");
+    EXPECT_ERR_AT("G1 X1 P1 F10\n", "1:7", "P word with no G4");
+    EXPECT_ERR_AT("G0 X1 Q1\n", "1:7", "Q word with no G64");
+    EXPECT_ERR_AT("G64 Q1\n", "1:5", "G64 Q needs a P");
+    EXPECT_ERR_AT("G64 P-1\n", "1:5", "must not be negative");
+    EXPECT_ERR_AT("G4\n", "1:1", "G4 needs a dwell time");
+    EXPECT_ERR_AT("G53 G2 X1 I1 F1\n", "1:1", "G53 needs G0 or G1");
+    EXPECT_ERR_AT("G0 X[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[1]]]]]]]]]]]]]]]]]]]]"
+                  "]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]\n", "1:69", "nested too deeply");
+    EXPECT_ERR_AT("G0 X1\nG0 X1.2.3\n", "2:8", "expected a word letter");
+    EXPECT_ERR_AT("G0 X1\n\nG0 X2 G1\n", "3:7", "G0 and G1");
+    /* line too long */
+    {
+        static char big[EF_GCODE_LINE_MAX + 16];
+        memset(big, ' ', sizeof big - 1);
+        big[sizeof big - 1] = 0;
+        EXPECT_ERR_AT(big, "1:4097", "line longer");
+    }
+    /* errors are sticky, and nothing of a bad line is emitted */
+    int rc = rd("G0 X1\nG1 X2 Y1 G0\nG0 X3\n");
+    EF_CHECK_EQ(rc, EF_ERR_GCODE);
+    ef_gcode_item_t it;
+    ef_msg_t m2;
+    EF_CHECK_EQ(ef_gcode_next(&R, &it, &m2), EF_ERR_GCODE);
+    EF_CHECK(!strcmp(m2.text, M.text));
+    EF_CHECK_EQ(ef_gcode_next(NULL, &it, &m2), EF_ERR_ARG);
+    EF_CHECK_EQ(ef_gcode_init(NULL, "", 0, NULL), EF_ERR_ARG);
+}
+
+/* Errors that come with a name and the file loader. */
+static void test_file(void)
+{
+    ef_msg_t m = {{0}};
+    EF_CHECK_EQ(ef_gcode_open(&R, "/nonexistent/part.ngc", &m), EF_ERR_IO);
+    EF_CHECK(strstr(m.text, "/nonexistent/part.ngc") != NULL);
+    int rc = ef_gcode_open(&R, EF_SOURCE_DIR "/samples/bracket.ngc", &m);
+    EF_CHECK_EQ(rc, EF_OK);
+    if (rc)
+        return;
+    int n = 0, kinds[9] = {0};
+    ef_gcode_item_t it;
+    double len = 0;
+    do {
+        rc = ef_gcode_next(&R, &it, &m);
+        if (rc) {
+            fprintf(stderr, "%s\n", m.text);
+            break;
+        }
+        n++;
+        kinds[it.kind]++;
+        if (it.kind == EF_GC_ARC)
+            len += fabs(it.sweep) * it.radius;
+    } while (it.kind != EF_GC_END);
+    ef_gcode_free(&R);
+    EF_CHECK_EQ(rc, EF_OK);
+    EF_CHECK_EQ(n, 47);
+    EF_CHECK_EQ(kinds[EF_GC_RAPID], 9);
+    EF_CHECK_EQ(kinds[EF_GC_LINE], 13);
+    EF_CHECK_EQ(kinds[EF_GC_ARC], 12);
+    EF_CHECK_EQ(kinds[EF_GC_ZERO_MOVE], 0);
+    EF_CHECK_EQ(kinds[EF_GC_EVENT], 8);
+    EF_CHECK_EQ(kinds[EF_GC_IGNORED], 3);
+    EF_CHECK_EQ(kinds[EF_GC_TOLERANCE], 1);
+    EF_CHECK_EQ(kinds[EF_GC_END], 1);
+    EF_CHECK(!strcmp(it.text, "M30"));
+    /* 8 quarter circles r 5, 3 + 1 turns r 4, a quarter r 3, three quarters r 5 */
+    EF_CHECK_NEAR(len, 8 * M_PI / 2 * 5 + 4 * 2 * M_PI * 4 + M_PI / 2 * 3 + 1.5 * M_PI * 5, 1e-9);
+    /* named errors carry the file name */
+    rd("G1 X1\n");
+    EF_CHECK(!strncmp(M.text, "t.ngc:1:1: ", 11));
+}
+
+int main(void)
+{
+    test_basic();
+    test_lexical();
+    test_zero();
+    test_units_incremental();
+    test_arcs();
+    test_r_form();
+    test_expressions();
+    test_events();
+    test_errors();
+    test_file();
+    return ef_test_summary();
+}

@@ -1,0 +1,492 @@
+/* Tests of the host pipeline (host/lib/program/ef_pipeline.c, docs/smoothing-cli.md): item
+ * conversion, tolerance modes, rapids and events as exact stops in order, notes, refused
+ * primitives, and the sample program end to end through the interpolator. */
+#include <string.h>
+#include "ef_test.h"
+#include "evenfeed/host/program/ef_pipeline.h"
+
+extern const ef_table_t ef_tbl_g1_default;
+extern const ef_table_t ef_tbl_g2_default;
+
+#define MAXM   4096
+#define MAXLOG 8192
+
+static ef_gcode_t R; /* about 50 kB: not on the stack */
+
+/* What a run produced, in callback order. */
+typedef struct {
+    ef_move_t mv[MAXM];
+    ef_pipe_move_info_t mi[MAXM];
+    int nm;
+    char log[MAXLOG]; /* 'm' move, 'e' event, 'n' note, in order */
+    uint32_t logline[MAXLOG];
+    int nlog;
+    char notes[16][256];
+    int nnotes;
+    /* setpoints */
+    uint64_t nsp;
+    ef_setpoint_t last;
+    double last_t;
+    double max_step;        /* largest |dp| between consecutive setpoints */
+    double max_step_excess; /* largest |dp| - v_max dt (should be <= 0 + eps) */
+    int sp_time_ok;
+} ef_run_t;
+
+static ef_run_t RUN;
+
+static void logit(ef_run_t *r, char c, uint32_t line)
+{
+    if (r->nlog < MAXLOG) {
+        r->log[r->nlog] = c;
+        r->logline[r->nlog++] = line;
+    }
+}
+
+static int cb_move(void *u, const ef_move_t *m, const ef_pipe_move_info_t *mi)
+{
+    ef_run_t *r = u;
+    if (r->nm < MAXM) {
+        r->mv[r->nm] = *m;
+        r->mi[r->nm++] = *mi;
+    }
+    logit(r, 'm', m->tag);
+    return 0;
+}
+
+static int cb_event(void *u, const ef_gcode_item_t *it)
+{
+    logit(u, 'e', it->line);
+    return 0;
+}
+
+static int cb_note(void *u, const ef_gcode_item_t *it, const char *text)
+{
+    ef_run_t *r = u;
+    if (r->nnotes < 16)
+        snprintf(r->notes[r->nnotes++], 256, "%s", text);
+    logit(r, 'n', it->line);
+    return 0;
+}
+
+static double PERIOD = 1e-3;
+
+static int cb_sp(void *u, double t, const ef_setpoint_t *sp, const ef_pipe_move_info_t *mi)
+{
+    ef_run_t *r = u;
+    (void)mi;
+    if (r->nsp) {
+        double dx = (double)sp->p.x - r->last.p.x, dy = (double)sp->p.y - r->last.p.y,
+               dz = (double)sp->p.z - r->last.p.z;
+        double d = sqrt(dx * dx + dy * dy + dz * dz);
+        if (d > r->max_step)
+            r->max_step = d;
+        if (fabs(t - r->last_t - PERIOD) > 1e-9)
+            r->sp_time_ok = 0;
+    }
+    r->last = *sp;
+    r->last_t = t;
+    r->nsp++;
+    return 0;
+}
+
+static ef_pipe_cb_t CB = {NULL, cb_move, NULL, cb_event, cb_note, &RUN};
+
+static void cfg_init(ef_pipe_cfg_t *c)
+{
+    ef_pipe_cfg_default(c);
+    c->g2 = &ef_tbl_g2_default;
+    c->g1 = &ef_tbl_g1_default;
+}
+
+static ef_pipe_stats_t ST;
+static ef_msg_t MSG;
+
+/* Run a program text; the pipeline's result. */
+static int run_cfg(const char *src, const ef_pipe_cfg_t *cfg, const ef_pipe_cb_t *cb)
+{
+    memset(&RUN, 0, sizeof RUN);
+    RUN.sp_time_ok = 1;
+    memset(&MSG, 0, sizeof MSG);
+    ef_gcode_init(&R, src, strlen(src), "t.ngc");
+    return ef_pipe_run(&R, cfg, cb, &ST, &MSG);
+}
+
+static int run(const char *src)
+{
+    ef_pipe_cfg_t c;
+    cfg_init(&c);
+    return run_cfg(src, &c, &CB);
+}
+
+static ef_vec3_t mend(const ef_move_t *m)
+{
+    return m->b[m->degree];
+}
+
+static double dist(ef_vec3_t a, ef_vec3_t b)
+{
+    double dx = (double)a.x - b.x, dy = (double)a.y - b.y, dz = (double)a.z - b.z;
+    return sqrt(dx * dx + dy * dy + dz * dz);
+}
+
+/* Every move starts where the previous one ended (the first at start). */
+static int joined(ef_vec3_t start, double tol)
+{
+    ef_vec3_t p = start;
+    for (int k = 0; k < RUN.nm; k++) {
+        if (dist(RUN.mv[k].b[0], p) > tol) {
+            fprintf(stderr, "move %d (line %u) starts %.3g from the previous end\n", k,
+                    (unsigned)RUN.mv[k].tag, dist(RUN.mv[k].b[0], p));
+            return 0;
+        }
+        p = mend(&RUN.mv[k]);
+    }
+    return 1;
+}
+
+/* Item -> primitive: lines, rapids, arcs in the three planes, helix. */
+static void test_item_prim(void)
+{
+    ef_gcode_item_t it;
+    ef_prim_t pr;
+    memset(&it, 0, sizeof it);
+    it.kind = EF_GC_LINE;
+    it.end[0] = 1;
+    it.end[1] = 2;
+    it.end[2] = 3;
+    it.feed = 600;
+    EF_CHECK_EQ(ef_pipe_item_prim(&it, 50, &pr), EF_OK);
+    EF_CHECK_EQ(pr.kind, EF_PRIM_LINE);
+    EF_CHECK_NEAR(pr.feed, 10, 1e-6);
+    EF_CHECK_NEAR(pr.end.z, 3, 0);
+    it.kind = EF_GC_RAPID;
+    EF_CHECK_EQ(ef_pipe_item_prim(&it, 50, &pr), EF_OK);
+    EF_CHECK_NEAR(pr.feed, 50, 0);
+    EF_CHECK_EQ(ef_pipe_item_prim(NULL, 50, &pr), EF_ERR_ARG);
+    it.kind = EF_GC_EVENT;
+    EF_CHECK_EQ(ef_pipe_item_prim(&it, 50, &pr), EF_ERR_ARG);
+
+    /* Through the reader: G17/G18/G19 arcs, axis and sweep sign, helix end. */
+    int n = run("G1 X10 F600\nG3 X0 Y10 I-10 J0\n" /* G17 quarter ccw */
+                "G18 G2 X-10 Z10 I0 K10\n"         /* ZX plane */
+                "G19 G3 Y0 Z0 J-10 K0\n"           /* YZ plane */
+                "G17 G2 X-10 Y0 Z-5 I5 J0 P2\n");  /* helix, two turns */
+    EF_CHECK_EQ(n, EF_OK);
+    ef_gcode_item_t its[8];
+    int ni = 0;
+    ef_gcode_init(&R,
+                  "G1 X10 F600\nG3 X0 Y10 I-10 J0\nG18 G2 X-10 Z10 I0 K10\n"
+                  "G19 G3 Y0 Z0 J-10 K0\nG17 G2 X-10 Y0 Z-5 I5 J0 P2\n",
+                  strlen("G1 X10 F600\nG3 X0 Y10 I-10 J0\nG18 G2 X-10 Z10 I0 K10\n"
+                         "G19 G3 Y0 Z0 J-10 K0\nG17 G2 X-10 Y0 Z-5 I5 J0 P2\n"),
+                  "t.ngc");
+    while (ni < 8 && ef_gcode_next(&R, &its[ni], NULL) == EF_OK && its[ni].kind != EF_GC_END)
+        ni++;
+    EF_CHECK_EQ(ni, 5);
+    static const float axes[5][3] = {{0}, {0, 0, 1}, {0, 1, 0}, {1, 0, 0}, {0, 0, 1}};
+    for (int k = 1; k < 5 && k < ni; k++) {
+        EF_CHECK_EQ(ef_pipe_item_prim(&its[k], 50, &pr), EF_OK);
+        EF_CHECK_EQ(pr.kind, EF_PRIM_ARC);
+        EF_CHECK_NEAR(pr.axis.x, axes[k][0], 0);
+        EF_CHECK_NEAR(pr.axis.y, axes[k][1], 0);
+        EF_CHECK_NEAR(pr.axis.z, axes[k][2], 0);
+        EF_CHECK_NEAR(pr.sweep, its[k].sweep, 1e-6);
+        EF_CHECK_NEAR(pr.centre.x, its[k].centre[0], 1e-6);
+        EF_CHECK_NEAR(pr.end.z, its[k].end[2], 1e-6);
+        float len;
+        ef_vec3_t st =
+            ef_v3((float)its[k].start[0], (float)its[k].start[1], (float)its[k].start[2]);
+        EF_CHECK_EQ(ef_prim_check(st, &pr, &len), EF_OK);
+    }
+    EF_CHECK_NEAR(its[1].sweep, M_PI / 2, 1e-9);
+    EF_CHECK(its[2].sweep < 0);
+    EF_CHECK_NEAR(its[4].sweep, -4 * M_PI, 1e-9);
+    EF_CHECK_NEAR(pr.end.z, -5, 0);
+    /* The whole run joined up and ends at the helix end. */
+    EF_CHECK(joined(ef_v3(0, 0, 0), 1e-3));
+    EF_CHECK_EQ(ST.arcs, 4);
+    EF_CHECK_NEAR(ST.end[0], -10, 1e-3);
+    EF_CHECK_NEAR(ST.end[2], -5, 1e-3);
+}
+
+/* G20: positions stay in mm inside; the stats record the program's units. */
+static void test_units(void)
+{
+    EF_CHECK_EQ(run("G20 G1 X1 F10\nY1\nM2\n"), EF_OK);
+    EF_CHECK_EQ(ST.units, 20);
+    EF_CHECK(RUN.nm >= 2);
+    EF_CHECK_NEAR(ST.end[0], 25.4, 1e-4);
+    EF_CHECK_NEAR(ST.end[1], 25.4, 1e-4);
+    EF_CHECK_EQ(RUN.mi[0].units, 20);
+    EF_CHECK_NEAR(RUN.mv[0].feed, 254.0 / 60.0, 1e-4); /* 10 in/min */
+    EF_CHECK_EQ(run("G1 X1 F10\nM2\n"), EF_OK);
+    EF_CHECK_EQ(ST.units, 21);
+}
+
+static int count_kind(int kind)
+{
+    int n = 0;
+    for (int k = 0; k < RUN.nm; k++)
+        n += RUN.mv[k].kind == kind;
+    return n;
+}
+
+/* G61 stops at every vertex; G64 P blends within P; P absent takes the default. */
+static void test_tolerance_modes(void)
+{
+    const char *square = "G1 X10 F600\nY10\nX0\nY0\nM2\n";
+    char src[256];
+    snprintf(src, sizeof src, "G61\n%s", square);
+    EF_CHECK_EQ(run(src), EF_OK);
+    EF_CHECK_EQ(count_kind(EF_MOVE_BLEND), 0);
+    for (int k = 0; k < RUN.nm; k++)
+        EF_CHECK(RUN.mv[k].flags & EF_MOVE_STOP_END);
+    EF_CHECK_EQ(ST.sm.blends, 0);
+
+    snprintf(src, sizeof src, "G64 P0.05\n%s", square);
+    EF_CHECK_EQ(run(src), EF_OK);
+    EF_CHECK_EQ(count_kind(EF_MOVE_BLEND), 3);
+    double dmax = 0;
+    for (int k = 0; k < RUN.nm; k++) {
+        if (RUN.mv[k].kind == EF_MOVE_BLEND)
+            EF_CHECK_NEAR(RUN.mi[k].tol, 0.05, 1e-12);
+        dmax = fmax(dmax, RUN.mv[k].dev);
+    }
+    EF_CHECK(dmax <= 0.05 + 1e-6);
+    EF_CHECK(dmax > 0.03); /* the blend uses the tolerance it is given */
+    EF_CHECK_EQ(ST.dev_over, 0);
+    EF_CHECK(joined(ef_v3(0, 0, 0), 1e-4));
+
+    /* G64 without P: the configured default (0.02 mm); program start is G64 too. */
+    snprintf(src, sizeof src, "G64\n%s", square);
+    EF_CHECK_EQ(run(src), EF_OK);
+    EF_CHECK_EQ(count_kind(EF_MOVE_BLEND), 3);
+    EF_CHECK(ST.dev_max <= 0.02 + 1e-6 && ST.dev_max > 0.01);
+    EF_CHECK_EQ(run(square), EF_OK);
+    EF_CHECK_EQ(count_kind(EF_MOVE_BLEND), 3);
+    EF_CHECK(ST.dev_max <= 0.02 + 1e-6);
+
+    /* Back from G61 to G64 P within one program. */
+    EF_CHECK_EQ(run("G61 G1 X10 F600\nY10\nG64 P0.05 X0\nY0\nM2\n"), EF_OK);
+    EF_CHECK_EQ(count_kind(EF_MOVE_BLEND), 2);
+}
+
+/* Rapids are exact stops at both ends; events drain first and keep their order. */
+static void test_rapids_events(void)
+{
+    EF_CHECK_EQ(run("G1 X10 F600\nY10\nG0 X20 Y20\nG1 X30\nY30\nM2\n"), EF_OK);
+    EF_CHECK_EQ(ST.rapids, 1);
+    int rapid = -1;
+    for (int k = 0; k < RUN.nm; k++)
+        if (RUN.mi[k].rapid)
+            rapid = k;
+    EF_CHECK(rapid > 0 && rapid < RUN.nm - 1);
+    if (rapid > 0 && rapid < RUN.nm - 1) {
+        EF_CHECK(RUN.mv[rapid - 1].flags & EF_MOVE_STOP_END); /* stop before the rapid */
+        EF_CHECK(RUN.mv[rapid].flags & EF_MOVE_STOP_END);     /* and after it */
+        EF_CHECK_NEAR(RUN.mv[rapid].feed, 100, 1e-4);         /* rapid speed */
+        EF_CHECK_EQ(RUN.mv[rapid].kind, EF_MOVE_LINE);
+    }
+    EF_CHECK_EQ(count_kind(EF_MOVE_BLEND), 2); /* Y10 and X30 corners only */
+
+    /* Events: moves of earlier lines, then the event, then later moves; stop before it. */
+    EF_CHECK_EQ(run("G1 X10 F600\nY10\nM8\nX0\nG4 P0.5\nY0\nT2 M6\nX5\nM2\n"), EF_OK);
+    EF_CHECK_EQ(ST.events, 3);
+    int events = 0, ok = 1;
+    for (int k = 0; k < RUN.nlog; k++) {
+        if (RUN.log[k] != 'e')
+            continue;
+        events++;
+        for (int j = 0; j < RUN.nlog; j++)
+            if (RUN.log[j] == 'm' && (j < k) != (RUN.logline[j] < RUN.logline[k]))
+                ok = 0;
+    }
+    EF_CHECK_EQ(events, 3);
+    EF_CHECK(ok);
+    for (int k = 0; k + 1 < RUN.nm; k++)
+        if (RUN.mv[k + 1].tag == 4 || RUN.mv[k + 1].tag == 6 || RUN.mv[k + 1].tag == 8)
+            EF_CHECK(RUN.mv[k].flags & EF_MOVE_STOP_END);
+    EF_CHECK(RUN.nm > 0 && (RUN.mv[RUN.nm - 1].flags & EF_MOVE_STOP_END));
+    EF_CHECK(joined(ef_v3(0, 0, 0), 1e-4));
+    EF_CHECK_NEAR(ST.end[0], 5, 1e-5);
+}
+
+/* Zero-length moves and ignored words reach the note callback with line:col. */
+static void test_notes(void)
+{
+    EF_CHECK_EQ(run("G1 X1 F100\nG40 X1\nG1 X1.0000001\nX2\nM2\n"), EF_OK);
+    EF_CHECK_EQ(ST.zero_moves, 1);
+    EF_CHECK_EQ(RUN.nnotes, 3);
+    EF_CHECK(RUN.nnotes >= 1 && !strcmp(RUN.notes[0], "t.ngc:2:1: G40 ignored"));
+    EF_CHECK(RUN.nnotes >= 2 && !strncmp(RUN.notes[1], "t.ngc:2:5: zero-length", 22));
+    EF_CHECK(RUN.nnotes >= 3 && !strncmp(RUN.notes[2], "t.ngc:3:1: G1 move of 1e-07 mm", 30));
+    EF_CHECK_EQ(ST.notes, 3);
+    EF_CHECK_NEAR(ST.end[0], 2, 1e-6);
+    EF_CHECK(joined(ef_v3(0, 0, 0), 1e-5));
+    /* Notes come in program order with the moves around them. */
+    EF_CHECK(RUN.nlog >= 4 && RUN.log[0] == 'n');
+}
+
+/* Refused primitives: controlled stop after what was accepted, "name:line: error". */
+static void test_refused(void)
+{
+    /* More than EF_ARC_MAX_SWEEP: the firmware's arc rule refuses it. */
+    int rc = run("G1 X10 F600\nY10\nG2 X10 Y10 I-1 P2000\nG1 X20\nM2\n");
+    EF_CHECK_EQ(rc, EF_ERR_ARC);
+    EF_CHECK(!strcmp(MSG.text, "t.ngc:3: inconsistent arc (radius, centre or axis)") ||
+             !strncmp(MSG.text, "t.ngc:3: ", 9));
+    EF_CHECK(RUN.nm >= 2);
+    EF_CHECK(RUN.nm > 0 && (RUN.mv[RUN.nm - 1].flags & EF_MOVE_STOP_END));
+    EF_CHECK_NEAR(ST.end[0], 10, 1e-5);
+    EF_CHECK_NEAR(ST.end[1], 10, 1e-5);
+    EF_CHECK(joined(ef_v3(0, 0, 0), 1e-4));
+    /* An arc too small for the firmware. */
+    rc = run("G1 X1 F100\nG2 X1 Y0 I0.0000001\nG1 X2\n");
+    EF_CHECK_EQ(rc, EF_ERR_DEGENERATE);
+    EF_CHECK(!strncmp(MSG.text, "t.ngc:2: ", 9));
+    EF_CHECK_NEAR(ST.end[0], 1, 1e-6);
+    /* Reader errors also stop in a controlled way and keep the reader's message. */
+    rc = run("G1 X10 F600\nY10\n#1=[0/0]\nX0\n");
+    EF_CHECK_EQ(rc, EF_ERR_GCODE);
+    EF_CHECK(!strcmp(MSG.text, "t.ngc:3:6: division by zero"));
+    EF_CHECK(RUN.nm > 0 && (RUN.mv[RUN.nm - 1].flags & EF_MOVE_STOP_END));
+    EF_CHECK_NEAR(ST.end[1], 10, 1e-5);
+    rc = run("G1 X1 F0\n");
+    EF_CHECK_EQ(rc, EF_ERR_GCODE);
+    /* Bad configuration. */
+    ef_pipe_cfg_t c;
+    cfg_init(&c);
+    c.rapid_speed = 0;
+    EF_CHECK_EQ(run_cfg("G1 X1 F100\n", &c, &CB), EF_ERR_FEED);
+    cfg_init(&c);
+    c.g2 = NULL;
+    EF_CHECK_EQ(run_cfg("G1 X1 F100\n", &c, &CB), EF_ERR_ARG);
+    cfg_init(&c);
+    c.lim.v_axis[1] = -1;
+    EF_CHECK(run_cfg("G1 X1 F100\n", &c, &CB) < 0);
+    ef_pipe_cb_t cb = CB;
+    cb.on_setpoint = cb_sp;
+    cfg_init(&c); /* setpoints asked for without interpolating */
+    EF_CHECK_EQ(run_cfg("G1 X1 F100\n", &c, &cb), EF_ERR_ARG);
+    EF_CHECK_EQ(ef_pipe_run(NULL, &c, &cb, &ST, &MSG), EF_ERR_ARG);
+}
+
+#define slurp ef_t_slurp
+
+/* The sample program end to end, both step modes. */
+static void test_bracket(int degree)
+{
+    size_t len;
+    char *src = slurp(EF_SOURCE_DIR "/samples/bracket.ngc", &len);
+    EF_CHECK(src != NULL);
+    if (!src)
+        return;
+    ef_pipe_cfg_t c;
+    cfg_init(&c);
+    c.smooth_degree = degree;
+    c.interp_modes = EF_PIPE_INTERP_UNIFORM | EF_PIPE_INTERP_CORRECTED;
+    ef_pipe_cb_t cb = CB;
+    cb.on_setpoint = cb_sp;
+    int rc = run_cfg(src, &c, &cb);
+    EF_CHECK_EQ(rc, EF_OK);
+    if (rc)
+        fprintf(stderr, "bracket: %s\n", MSG.text);
+    EF_CHECK(joined(ef_v3(0, 0, 0), 1e-3));
+    /* Program end: X75 Y40 Z25 (the G53 move is an event and does not move the path). */
+    EF_CHECK_NEAR(ST.end[0], 75, 1e-4);
+    EF_CHECK_NEAR(ST.end[1], 40, 1e-4);
+    EF_CHECK_NEAR(ST.end[2], 25, 1e-4);
+    EF_CHECK_EQ(ST.units, 21);
+    EF_CHECK_EQ(ST.events, 8);
+    EF_CHECK_EQ(ST.rapids, 9);
+    EF_CHECK_EQ(ST.arcs, 12);
+    EF_CHECK_EQ(ST.dev_over, 0);
+    EF_CHECK(ST.dev_max <= 0.01 + 1e-6);
+    EF_CHECK(ST.sm.blends > 0);
+    double cyc = 0;
+    for (int k = 0; k < RUN.nm; k++) {
+        const ef_move_t *m = &RUN.mv[k];
+        EF_CHECK(m->dev <= RUN.mi[k].tol + 1e-6);
+        EF_CHECK(m->duration > 0 && isfinite(m->duration));
+        EF_CHECK(m->v_entry <= m->v_max * 1.0001f + 1e-4f &&
+                 m->v_exit <= m->v_max * 1.0001f + 1e-4f);
+        cyc += m->duration;
+        /* Exact stops around rapids, and at the end of the program. */
+        if (RUN.mi[k].rapid) {
+            EF_CHECK(m->flags & EF_MOVE_STOP_END);
+            if (k > 0)
+                EF_CHECK(RUN.mv[k - 1].flags & EF_MOVE_STOP_END);
+        }
+        if (k + 1 < RUN.nm && RUN.mv[k + 1].seq != m->seq + 1)
+            EF_CHECK(0);
+    }
+    EF_CHECK_NEAR(cyc, ST.cycle_time, 1e-6 * cyc);
+    EF_CHECK(RUN.nm > 0 && (RUN.mv[RUN.nm - 1].flags & EF_MOVE_STOP_END));
+    /* Each event comes after a move that ends at rest. */
+    for (int k = 1; k < RUN.nlog; k++)
+        if (RUN.log[k] == 'e') {
+            int j = k - 1;
+            while (j >= 0 && RUN.log[j] != 'm')
+                j--;
+            if (j >= 0) {
+                int mi = 0;
+                for (int q = 0; q < j; q++)
+                    mi += RUN.log[q] == 'm';
+                EF_CHECK(RUN.mv[mi].flags & EF_MOVE_STOP_END);
+            }
+        }
+    /* Setpoints: regular times, no jump beyond the fastest move's step, end at rest at the
+     * program end, no underrun, fluctuation small in both modes. */
+    EF_CHECK(RUN.nsp > 1000);
+    EF_CHECK(RUN.sp_time_ok);
+    EF_CHECK(RUN.max_step <= 100 * PERIOD * 1.05);
+    EF_CHECK_EQ(RUN.last.moving, 0);
+    EF_CHECK_NEAR(RUN.last.p.x, 75, 1e-3);
+    EF_CHECK_NEAR(RUN.last.p.y, 40, 1e-3);
+    EF_CHECK_NEAR(RUN.last.p.z, 25, 1e-3);
+    for (int k = 0; k < 2; k++) {
+        EF_CHECK_EQ(ST.fl[k].underruns, 0);
+        EF_CHECK(ST.fl[k].samples > 1000);
+        EF_CHECK(ST.fl[k].max_rel < 0.1); /* float32 steps on slow ramps */
+        EF_CHECK(ST.fl[k].rms_rel < 0.005);
+        EF_CHECK(ST.fl[k].end_time >= ST.cycle_time * 0.99);
+    }
+    printf("bracket (degree %d): %u moves, %u blends, %u stops, cycle %.3f s, dev %.4g mm, "
+           "fluct uniform %.3e/%.3e corrected %.3e/%.3e (max/rms)\n",
+           degree, (unsigned)ST.moves, (unsigned)ST.sm.blends, (unsigned)ST.sm.stops, ST.cycle_time,
+           ST.dev_max, ST.fl[0].max_rel, ST.fl[0].rms_rel, ST.fl[1].max_rel, ST.fl[1].rms_rel);
+    free(src);
+}
+
+/* CAM-style micro-segments: smooth sections, continuity, deviation within P. */
+static void test_micro(void)
+{
+    char src[16384];
+    size_t n = (size_t)snprintf(src, sizeof src, "G64 P0.01\nG1 X20 Y0 F1200\n");
+    for (int k = 1; k <= 60; k++) {
+        double a = k * (M_PI / 60);
+        n += (size_t)snprintf(src + n, sizeof src - n, "X%.4f Y%.4f\n", 10 + 10 * cos(a),
+                              10 * sin(a));
+    }
+    snprintf(src + n, sizeof src - n, "M2\n");
+    EF_CHECK_EQ(run(src), EF_OK);
+    EF_CHECK(ST.sm.smooth > 0);
+    EF_CHECK(count_kind(EF_MOVE_SMOOTH) > 0);
+    EF_CHECK(ST.dev_max <= 0.01 + 1e-6);
+    EF_CHECK(joined(ef_v3(0, 0, 0), 1e-3));
+    EF_CHECK_NEAR(ST.end[0], 0, 1e-3);
+}
+
+int main(void)
+{
+    test_item_prim();
+    test_units();
+    test_tolerance_modes();
+    test_rapids_events();
+    test_notes();
+    test_refused();
+    test_micro();
+    test_bracket(5);
+    test_bracket(3);
+    return ef_test_summary();
+}
