@@ -1,7 +1,7 @@
 /*
  * Generator for the numeric constants in firmware/src/core/ef_math.c (atan polynomial) and
- * firmware/src/geom/ef_bezier.c (Gauss–Legendre nodes). Run: cc -O2 gen_fw_constants.c -lm && ./a.out
- * The firmware's tests recompute both and compare, so a hand edit is caught.
+ * firmware/src/geom/ef_bezier.c (Gauss–Legendre nodes). Run: cc -O2 gen_fw_constants.c -lm &&
+ * ./a.out The firmware's tests recompute both and compare, so a hand edit is caught.
  */
 #include <math.h>
 #include <stdio.h>
@@ -14,7 +14,8 @@ static void fit_atan(void)
     long double A[NT][NT] = {{0}}, r[NT] = {0};
     const int M = 4000;
     for (int i = 0; i < M; i++) {
-        long double a = 0.5L + 0.5L * cosl((2.0L * i + 1) * 3.14159265358979323846264L / (2.0L * M));
+        long double a =
+            0.5L + 0.5L * cosl((2.0L * i + 1) * 3.14159265358979323846264L / (2.0L * M));
         long double s = a * a, y = atanl(a), basis[NT], p = a;
         for (int k = 0; k < NT; k++) {
             basis[k] = p;
@@ -33,9 +34,13 @@ static void fit_atan(void)
             if (fabsl(A[i][c]) > fabsl(A[piv][c]))
                 piv = i;
         for (int k = 0; k < NT; k++) {
-            long double t = A[c][k]; A[c][k] = A[piv][k]; A[piv][k] = t;
+            long double t = A[c][k];
+            A[c][k] = A[piv][k];
+            A[piv][k] = t;
         }
-        long double t = r[c]; r[c] = r[piv]; r[piv] = t;
+        long double t = r[c];
+        r[c] = r[piv];
+        r[piv] = t;
         for (int i = c + 1; i < NT; i++) {
             long double f = A[i][c] / A[c][c];
             for (int k = c; k < NT; k++)

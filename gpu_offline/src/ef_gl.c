@@ -19,8 +19,8 @@ struct ef_gl {
     EGLContext ctx;
     const char *platform;
     char renderer[256];
-    GLuint prog[3];     /* per kind (1, 2), compiled on first use */
-    GLuint buf[2];      /* configurations, results */
+    GLuint prog[3]; /* per kind (1, 2), compiled on first use */
+    GLuint buf[2];  /* configurations, results */
     uint32_t local_size;
     double timeout_s;
     int robust;         /* the context reports resets */
@@ -31,17 +31,28 @@ struct ef_gl {
 static const char *ef_egl_err(void)
 {
     switch (eglGetError()) {
-    case EGL_SUCCESS: return "EGL_SUCCESS";
-    case EGL_NOT_INITIALIZED: return "EGL_NOT_INITIALIZED";
-    case EGL_BAD_ACCESS: return "EGL_BAD_ACCESS";
-    case EGL_BAD_ALLOC: return "EGL_BAD_ALLOC";
-    case EGL_BAD_ATTRIBUTE: return "EGL_BAD_ATTRIBUTE";
-    case EGL_BAD_CONFIG: return "EGL_BAD_CONFIG";
-    case EGL_BAD_CONTEXT: return "EGL_BAD_CONTEXT";
-    case EGL_BAD_DISPLAY: return "EGL_BAD_DISPLAY";
-    case EGL_BAD_MATCH: return "EGL_BAD_MATCH";
-    case EGL_BAD_PARAMETER: return "EGL_BAD_PARAMETER";
-    default: return "EGL error";
+    case EGL_SUCCESS:
+        return "EGL_SUCCESS";
+    case EGL_NOT_INITIALIZED:
+        return "EGL_NOT_INITIALIZED";
+    case EGL_BAD_ACCESS:
+        return "EGL_BAD_ACCESS";
+    case EGL_BAD_ALLOC:
+        return "EGL_BAD_ALLOC";
+    case EGL_BAD_ATTRIBUTE:
+        return "EGL_BAD_ATTRIBUTE";
+    case EGL_BAD_CONFIG:
+        return "EGL_BAD_CONFIG";
+    case EGL_BAD_CONTEXT:
+        return "EGL_BAD_CONTEXT";
+    case EGL_BAD_DISPLAY:
+        return "EGL_BAD_DISPLAY";
+    case EGL_BAD_MATCH:
+        return "EGL_BAD_MATCH";
+    case EGL_BAD_PARAMETER:
+        return "EGL_BAD_PARAMETER";
+    default:
+        return "EGL error";
     }
 }
 
@@ -88,8 +99,10 @@ static int ef_gl_context(ef_gl_t *gl, EGLDisplay dpy, ef_msg_t *m)
 {
     EGLint maj = 0, min = 0;
     if (dpy == EGL_NO_DISPLAY || !eglInitialize(dpy, &maj, &min))
-        return ef_fail(m, EF_ERR_IO, "gl: cannot initialize the %s EGL display (%s)%s", gl->platform,
-                       ef_egl_err(), strcmp(gl->platform, "surfaceless") ? "" : "; is libgl1-mesa-dri installed?");
+        return ef_fail(m, EF_ERR_IO, "gl: cannot initialize the %s EGL display (%s)%s",
+                       gl->platform, ef_egl_err(),
+                       strcmp(gl->platform, "surfaceless") ? ""
+                                                           : "; is libgl1-mesa-dri installed?");
     gl->dpy = dpy;
     const char *dext = eglQueryString(dpy, EGL_EXTENSIONS);
     if (!ef_has_ext(dext, "EGL_KHR_surfaceless_context"))
@@ -126,7 +139,8 @@ static int ef_gl_context(ef_gl_t *gl, EGLDisplay dpy, ef_msg_t *m)
         gl->ctx = eglCreateContext(dpy, cfg, EGL_NO_CONTEXT, attr);
     }
     if (gl->ctx == EGL_NO_CONTEXT)
-        return ef_fail(m, EF_ERR_IO, "gl: no OpenGL 4.3 core context (%s); compute shaders need GL 4.3",
+        return ef_fail(m, EF_ERR_IO,
+                       "gl: no OpenGL 4.3 core context (%s); compute shaders need GL 4.3",
                        ef_egl_err());
     if (!eglMakeCurrent(dpy, EGL_NO_SURFACE, EGL_NO_SURFACE, gl->ctx))
         return ef_fail(m, EF_ERR_IO, "gl: cannot make the context current (%s)", ef_egl_err());
@@ -199,12 +213,16 @@ int ef_gl_open(ef_gl_t **out, const ef_gl_opts_t *opts, ef_msg_t *m)
     if (rc != EF_OK && (want_sl || is_auto)) {
         const char *cext = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
         if (!ef_has_ext(cext, "EGL_MESA_platform_surfaceless"))
-            rc = ef_fail(m, EF_ERR_IO, "gl: no headless EGL platform: %s%sand no Mesa surfaceless "
-                         "platform (install libegl-mesa0 and libgl1-mesa-dri)", why, *why ? "; " : "");
+            rc = ef_fail(m, EF_ERR_IO,
+                         "gl: no headless EGL platform: %s%sand no Mesa surfaceless "
+                         "platform (install libegl-mesa0 and libgl1-mesa-dri)",
+                         why, *why ? "; " : "");
         else {
             gl->platform = "surfaceless";
             rc = ef_gl_context(
-                gl, eglGetPlatformDisplayEXT(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, NULL), m);
+                gl,
+                eglGetPlatformDisplayEXT(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, NULL),
+                m);
         }
     }
     if (rc != EF_OK) {
@@ -265,7 +283,8 @@ static int ef_gl_program(ef_gl_t *gl, int kind, ef_msg_t *m)
     if (!ok) {
         glGetShaderInfoLog(sh, sizeof log, NULL, log);
         glDeleteShader(sh);
-        return ef_fail(m, EF_ERR_IO, "gl: compute shader (kind %d) does not compile: %s", kind, log);
+        return ef_fail(m, EF_ERR_IO, "gl: compute shader (kind %d) does not compile: %s", kind,
+                       log);
     }
     GLuint p = glCreateProgram();
     glAttachShader(p, sh);
@@ -354,8 +373,8 @@ int ef_gl_solve(ef_gl_t *gl, int kind, const double *cfg, uint32_t n, const ef_r
                  GL_STREAM_DRAW);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, gl->buf[0]);
     glBindBuffer(GL_SHADER_STORAGE_BUFFER, gl->buf[1]);
-    glBufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)(sizeof(double) * EF_GL_RES_STRIDE * n), NULL,
-                 GL_STREAM_READ);
+    glBufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)(sizeof(double) * EF_GL_RES_STRIDE * n),
+                 NULL, GL_STREAM_READ);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, gl->buf[1]);
     free(in);
     glUniform1ui(glGetUniformLocation(p, "ef_count"), n);
@@ -369,12 +388,13 @@ int ef_gl_solve(ef_gl_t *gl, int kind, const double *cfg, uint32_t n, const ef_r
     glDispatchCompute((n + gl->local_size - 1) / gl->local_size, 1, 1);
     glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
     GLsync fence = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
-    GLenum w = glClientWaitSync(fence, GL_SYNC_FLUSH_COMMANDS_BIT,
-                                (GLuint64)(gl->timeout_s * 1e9));
+    GLenum w = glClientWaitSync(fence, GL_SYNC_FLUSH_COMMANDS_BIT, (GLuint64)(gl->timeout_s * 1e9));
     glDeleteSync(fence);
     if (w == GL_TIMEOUT_EXPIRED)
-        return ef_fail(m, EF_ERR_IO, "gl: a dispatch of %u configurations did not finish in %.0f s "
-                       "(GPU hung or lost); use smaller chunks", n, gl->timeout_s);
+        return ef_fail(m, EF_ERR_IO,
+                       "gl: a dispatch of %u configurations did not finish in %.0f s "
+                       "(GPU hung or lost); use smaller chunks",
+                       n, gl->timeout_s);
     if (w == GL_WAIT_FAILED)
         return ef_fail(m, EF_ERR_IO, "gl: waiting for the dispatch failed (context lost?)");
     if ((rc = ef_gl_check(gl, "dispatch", m)) != EF_OK)
@@ -394,8 +414,10 @@ int ef_gl_solve(ef_gl_t *gl, int kind, const double *cfg, uint32_t n, const ef_r
         }
         for (int k = 0; k < 5; k++)
             if (!isfinite(r[k]))
-                return ef_fail(m, EF_ERR_NOCONV, "gl: configuration (%.6g, %.6g, %.6g, %.6g) gave a "
-                               "non-finite result", c[0], c[1], c[2], c[3]);
+                return ef_fail(m, EF_ERR_NOCONV,
+                               "gl: configuration (%.6g, %.6g, %.6g, %.6g) gave a "
+                               "non-finite result",
+                               c[0], c[1], c[2], c[3]);
     }
     return EF_OK;
 }
@@ -412,7 +434,8 @@ static int ef_gl_solve_rows(void *ctx, ef_tfile_t *t, uint32_t row_begin, uint32
     ef_gl_t *gl = ctx;
     const uint32_t n0 = t->view.axis[0].nodes, first = row_begin * n0;
     const uint32_t n = (row_end - row_begin) * n0;
-    double *cfg = malloc(sizeof(double) * 4 * n), *res = malloc(sizeof(double) * EF_GL_RES_STRIDE * n);
+    double *cfg = malloc(sizeof(double) * 4 * n),
+           *res = malloc(sizeof(double) * EF_GL_RES_STRIDE * n);
     if (!cfg || !res) {
         free(cfg);
         free(res);
@@ -448,7 +471,10 @@ int ef_gl_backend_open(ef_build_backend_t *b, ef_msg_t *m)
     int rc = ef_gl_open(&gl, NULL, m);
     if (rc != EF_OK)
         return rc;
-    *b = (ef_build_backend_t){.name = "gl", .solve_rows = ef_gl_solve_rows,
-                              .close = ef_gl_backend_close, .ctx = gl, .chunk_nodes = 2048};
+    *b = (ef_build_backend_t){.name = "gl",
+                              .solve_rows = ef_gl_solve_rows,
+                              .close = ef_gl_backend_close,
+                              .ctx = gl,
+                              .chunk_nodes = 2048};
     return EF_OK;
 }

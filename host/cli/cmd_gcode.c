@@ -40,8 +40,9 @@ static void ef_json_vec(FILE *f, const char *key, const double *v)
 /* One item as a JSON object on one line. */
 static void ef_print_json(const ef_gcode_item_t *it)
 {
-    printf("{\"kind\": \"%s\", \"line\": %u, \"col\": %u, \"units\": \"%s\"", ef_gcode_kind_name(it->kind),
-           (unsigned)it->line, (unsigned)it->col, it->units == 20 ? "inch" : "mm");
+    printf("{\"kind\": \"%s\", \"line\": %u, \"col\": %u, \"units\": \"%s\"",
+           ef_gcode_kind_name(it->kind), (unsigned)it->line, (unsigned)it->col,
+           it->units == 20 ? "inch" : "mm");
     switch (it->kind) {
     case EF_GC_RAPID:
     case EF_GC_LINE:
@@ -57,7 +58,8 @@ static void ef_print_json(const ef_gcode_item_t *it)
         ef_json_vec(stdout, "start", it->start);
         ef_json_vec(stdout, "end", it->end);
         ef_json_vec(stdout, "centre", it->centre);
-        printf(", \"dir\": %d, \"plane\": %d, \"turns\": %d, \"radius\": ", it->dir, it->plane, it->turns);
+        printf(", \"dir\": %d, \"plane\": %d, \"turns\": %d, \"radius\": ", it->dir, it->plane,
+               it->turns);
         ef_cli_json_num(stdout, it->radius);
         fputs(", \"sweep\": ", stdout);
         ef_cli_json_num(stdout, it->sweep);
@@ -65,12 +67,14 @@ static void ef_print_json(const ef_gcode_item_t *it)
         ef_cli_json_num(stdout, it->feed);
         break;
     case EF_GC_TOLERANCE:
-        printf(", \"mode\": \"%s\", \"p\": ", it->path_mode == EF_GC_PATH_EXACT ? "exact" : "blend");
+        printf(", \"mode\": \"%s\", \"p\": ",
+               it->path_mode == EF_GC_PATH_EXACT ? "exact" : "blend");
         ef_cli_json_num(stdout, it->p_tol);
         fputs(", \"q\": ", stdout);
         ef_cli_json_num(stdout, it->q_tol);
         break;
-    default: break;
+    default:
+        break;
     }
     if (it->text[0]) {
         fputs(", \"text\": ", stdout);
@@ -87,17 +91,18 @@ static void ef_print_text(const ef_gcode_item_t *it)
     case EF_GC_RAPID:
     case EF_GC_LINE:
     case EF_GC_ZERO_MOVE:
-        printf(" %.4f %.4f %.4f -> %.4f %.4f %.4f", it->start[0], it->start[1], it->start[2], it->end[0],
-               it->end[1], it->end[2]);
+        printf(" %.4f %.4f %.4f -> %.4f %.4f %.4f", it->start[0], it->start[1], it->start[2],
+               it->end[0], it->end[1], it->end[2]);
         if (it->kind == EF_GC_LINE)
             printf(" F%.6g", it->feed);
         break;
     case EF_GC_ARC:
-        printf(" %.4f %.4f %.4f -> %.4f %.4f %.4f centre %.4f %.4f %.4f %s G%d r %.4f sweep %.2f deg turns %d"
+        printf(" %.4f %.4f %.4f -> %.4f %.4f %.4f centre %.4f %.4f %.4f %s G%d r %.4f sweep %.2f "
+               "deg turns %d"
                " F%.6g",
-               it->start[0], it->start[1], it->start[2], it->end[0], it->end[1], it->end[2], it->centre[0],
-               it->centre[1], it->centre[2], it->dir > 0 ? "ccw" : "cw", it->plane, it->radius,
-               it->sweep * 57.29577951308232, it->turns, it->feed);
+               it->start[0], it->start[1], it->start[2], it->end[0], it->end[1], it->end[2],
+               it->centre[0], it->centre[1], it->centre[2], it->dir > 0 ? "ccw" : "cw", it->plane,
+               it->radius, it->sweep * 57.29577951308232, it->turns, it->feed);
         break;
     case EF_GC_TOLERANCE:
         if (it->path_mode == EF_GC_PATH_EXACT)
@@ -105,7 +110,8 @@ static void ef_print_text(const ef_gcode_item_t *it)
         else
             printf(" blend P%.6g Q%.6g", it->p_tol, it->q_tol);
         break;
-    default: break;
+    default:
+        break;
     }
     if (it->text[0])
         printf(" %s", it->text);

@@ -10,7 +10,8 @@
 #include "evenfeed/host/tables/ef_tfile.h"
 
 static const char usage[] =
-    "usage: evenfeed segment (--g1 | --g2 | --quartic) END-DATA [--optimize] [--table FILE] [--json]\n"
+    "usage: evenfeed segment (--g1 | --g2 | --quartic) END-DATA [--optimize] [--table FILE] "
+    "[--json]\n"
     "\n"
     "END-DATA is either the normalized configuration from (0,0) to (1,0):\n"
     "  --alpha A --beta B            tangent angles to the chord (radians)\n"
@@ -26,11 +27,11 @@ static const char usage[] =
     "  --json        one JSON object: kind, source, dim, config, dofs, control_points, C\n";
 
 typedef struct {
-    int kind;        /* EF_REF_* */
-    int normalized;  /* --alpha/--beta form */
-    int dim;         /* 2 or 3 */
+    int kind;       /* EF_REF_* */
+    int normalized; /* --alpha/--beta form */
+    int dim;        /* 2 or 3 */
     ef_dend_t e0, e1;
-    double cfg[4];   /* alpha, beta, k0, k1 as given (normalized form) */
+    double cfg[4]; /* alpha, beta, k0, k1 as given (normalized form) */
 } ef_seg_args_t;
 
 /* Parse "x,y" or "x,y,z" into v; returns the component count, or 0 after reporting. */
@@ -67,18 +68,43 @@ bad:
 static int ef_segment_parse(int argc, char **argv, ef_seg_args_t *a, int *optimize, int *json,
                             const char **table_path)
 {
-    enum { O_G1 = 256, O_G2, O_QUARTIC, O_ALPHA, O_BETA, O_K0, O_K1, O_P0, O_T0, O_N0, O_P1,
-           O_T1, O_N1, O_OPT, O_TABLE, O_JSON, O_HELP };
-    static const struct option opts[] = {
-        {"g1", no_argument, 0, O_G1},       {"g2", no_argument, 0, O_G2},
-        {"quartic", no_argument, 0, O_QUARTIC}, {"alpha", required_argument, 0, O_ALPHA},
-        {"beta", required_argument, 0, O_BETA}, {"k0", required_argument, 0, O_K0},
-        {"k1", required_argument, 0, O_K1}, {"p0", required_argument, 0, O_P0},
-        {"t0", required_argument, 0, O_T0}, {"n0", required_argument, 0, O_N0},
-        {"p1", required_argument, 0, O_P1}, {"t1", required_argument, 0, O_T1},
-        {"n1", required_argument, 0, O_N1}, {"optimize", no_argument, 0, O_OPT},
-        {"table", required_argument, 0, O_TABLE}, {"json", no_argument, 0, O_JSON},
-        {"help", no_argument, 0, O_HELP},   {0, 0, 0, 0}};
+    enum {
+        O_G1 = 256,
+        O_G2,
+        O_QUARTIC,
+        O_ALPHA,
+        O_BETA,
+        O_K0,
+        O_K1,
+        O_P0,
+        O_T0,
+        O_N0,
+        O_P1,
+        O_T1,
+        O_N1,
+        O_OPT,
+        O_TABLE,
+        O_JSON,
+        O_HELP
+    };
+    static const struct option opts[] = {{"g1", no_argument, 0, O_G1},
+                                         {"g2", no_argument, 0, O_G2},
+                                         {"quartic", no_argument, 0, O_QUARTIC},
+                                         {"alpha", required_argument, 0, O_ALPHA},
+                                         {"beta", required_argument, 0, O_BETA},
+                                         {"k0", required_argument, 0, O_K0},
+                                         {"k1", required_argument, 0, O_K1},
+                                         {"p0", required_argument, 0, O_P0},
+                                         {"t0", required_argument, 0, O_T0},
+                                         {"n0", required_argument, 0, O_N0},
+                                         {"p1", required_argument, 0, O_P1},
+                                         {"t1", required_argument, 0, O_T1},
+                                         {"n1", required_argument, 0, O_N1},
+                                         {"optimize", no_argument, 0, O_OPT},
+                                         {"table", required_argument, 0, O_TABLE},
+                                         {"json", no_argument, 0, O_JSON},
+                                         {"help", no_argument, 0, O_HELP},
+                                         {0, 0, 0, 0}};
     unsigned seen = 0; /* bit per option id - O_G1 */
     int dims[6] = {0}, c;
     memset(a, 0, sizeof *a);
@@ -97,22 +123,54 @@ static int ef_segment_parse(int argc, char **argv, ef_seg_args_t *a, int *optimi
         seen |= 1u << (c - O_G1);
         int rc = EF_OK;
         switch (c) {
-        case O_G1: a->kind = a->kind ? -1 : EF_REF_G1_CUBIC; break;
-        case O_G2: a->kind = a->kind ? -1 : EF_REF_G2_QUINTIC; break;
-        case O_QUARTIC: a->kind = a->kind ? -1 : EF_REF_G1_QUARTIC; break;
-        case O_ALPHA: rc = ef_cli_double("--alpha", optarg, &a->cfg[0]); break;
-        case O_BETA: rc = ef_cli_double("--beta", optarg, &a->cfg[1]); break;
-        case O_K0: rc = ef_cli_double("--k0", optarg, &a->cfg[2]); break;
-        case O_K1: rc = ef_cli_double("--k1", optarg, &a->cfg[3]); break;
-        case O_P0: rc = (dims[0] = ef_parse_vec("--p0", optarg, &a->e0.p)) ? EF_OK : EF_ERR_ARG; break;
-        case O_T0: rc = (dims[1] = ef_parse_vec("--t0", optarg, &a->e0.t)) ? EF_OK : EF_ERR_ARG; break;
-        case O_N0: rc = (dims[2] = ef_parse_vec("--n0", optarg, &a->e0.n)) ? EF_OK : EF_ERR_ARG; break;
-        case O_P1: rc = (dims[3] = ef_parse_vec("--p1", optarg, &a->e1.p)) ? EF_OK : EF_ERR_ARG; break;
-        case O_T1: rc = (dims[4] = ef_parse_vec("--t1", optarg, &a->e1.t)) ? EF_OK : EF_ERR_ARG; break;
-        case O_N1: rc = (dims[5] = ef_parse_vec("--n1", optarg, &a->e1.n)) ? EF_OK : EF_ERR_ARG; break;
-        case O_OPT: *optimize = 1; break;
-        case O_TABLE: *table_path = optarg; break;
-        case O_JSON: *json = 1; break;
+        case O_G1:
+            a->kind = a->kind ? -1 : EF_REF_G1_CUBIC;
+            break;
+        case O_G2:
+            a->kind = a->kind ? -1 : EF_REF_G2_QUINTIC;
+            break;
+        case O_QUARTIC:
+            a->kind = a->kind ? -1 : EF_REF_G1_QUARTIC;
+            break;
+        case O_ALPHA:
+            rc = ef_cli_double("--alpha", optarg, &a->cfg[0]);
+            break;
+        case O_BETA:
+            rc = ef_cli_double("--beta", optarg, &a->cfg[1]);
+            break;
+        case O_K0:
+            rc = ef_cli_double("--k0", optarg, &a->cfg[2]);
+            break;
+        case O_K1:
+            rc = ef_cli_double("--k1", optarg, &a->cfg[3]);
+            break;
+        case O_P0:
+            rc = (dims[0] = ef_parse_vec("--p0", optarg, &a->e0.p)) ? EF_OK : EF_ERR_ARG;
+            break;
+        case O_T0:
+            rc = (dims[1] = ef_parse_vec("--t0", optarg, &a->e0.t)) ? EF_OK : EF_ERR_ARG;
+            break;
+        case O_N0:
+            rc = (dims[2] = ef_parse_vec("--n0", optarg, &a->e0.n)) ? EF_OK : EF_ERR_ARG;
+            break;
+        case O_P1:
+            rc = (dims[3] = ef_parse_vec("--p1", optarg, &a->e1.p)) ? EF_OK : EF_ERR_ARG;
+            break;
+        case O_T1:
+            rc = (dims[4] = ef_parse_vec("--t1", optarg, &a->e1.t)) ? EF_OK : EF_ERR_ARG;
+            break;
+        case O_N1:
+            rc = (dims[5] = ef_parse_vec("--n1", optarg, &a->e1.n)) ? EF_OK : EF_ERR_ARG;
+            break;
+        case O_OPT:
+            *optimize = 1;
+            break;
+        case O_TABLE:
+            *table_path = optarg;
+            break;
+        case O_JSON:
+            *json = 1;
+            break;
         }
         if (rc != EF_OK)
             return ef_cli_exit(rc);
@@ -124,7 +182,8 @@ static int ef_segment_parse(int argc, char **argv, ef_seg_args_t *a, int *optimi
         return ef_cli_error(EF_ERR_ARG, "segment: give exactly one of --g1, --g2, --quartic");
     int g2 = a->kind == EF_REF_G2_QUINTIC;
     if (!g2 && (HAS(O_K0) || HAS(O_K1) || HAS(O_N0) || HAS(O_N1)))
-        return ef_cli_error(EF_ERR_ARG, "segment: curvature and normals (--k0 --k1 --n0 --n1) need --g2");
+        return ef_cli_error(EF_ERR_ARG,
+                            "segment: curvature and normals (--k0 --k1 --n0 --n1) need --g2");
     if (a->kind == EF_REF_G1_QUARTIC && !*optimize)
         return ef_cli_error(EF_ERR_ARG, "segment: --quartic has no table; add --optimize");
     if (*optimize && *table_path)
@@ -132,17 +191,20 @@ static int ef_segment_parse(int argc, char **argv, ef_seg_args_t *a, int *optimi
     int norm_form = HAS(O_ALPHA) || HAS(O_BETA);
     int expl_form = HAS(O_P0) || HAS(O_T0) || HAS(O_P1) || HAS(O_T1) || HAS(O_N0) || HAS(O_N1);
     if (norm_form && expl_form)
-        return ef_cli_error(EF_ERR_ARG, "segment: give either --alpha/--beta or --p0/--t0/--p1/--t1, not both");
+        return ef_cli_error(EF_ERR_ARG,
+                            "segment: give either --alpha/--beta or --p0/--t0/--p1/--t1, not both");
     if (norm_form) {
         if (!HAS(O_ALPHA) || !HAS(O_BETA))
-            return ef_cli_error(EF_ERR_ARG, "segment: the normalized form needs both --alpha and --beta");
+            return ef_cli_error(EF_ERR_ARG,
+                                "segment: the normalized form needs both --alpha and --beta");
         a->normalized = 1;
         a->dim = 2;
         ef_ref_config(a->cfg[0], a->cfg[1], a->cfg[2], a->cfg[3], &a->e0, &a->e1);
         return EF_OK;
     }
     if (!HAS(O_P0) || !HAS(O_T0) || !HAS(O_P1) || !HAS(O_T1))
-        return ef_cli_error(EF_ERR_ARG, "segment: give --alpha/--beta, or all of --p0 --t0 --p1 --t1");
+        return ef_cli_error(EF_ERR_ARG,
+                            "segment: give --alpha/--beta, or all of --p0 --t0 --p1 --t1");
     a->dim = dims[0];
     for (int i = 0; i < 6; i++)
         if (dims[i] && dims[i] != a->dim)
@@ -162,18 +224,20 @@ static int ef_segment_parse(int argc, char **argv, ef_seg_args_t *a, int *optimi
 
 /* Print the result in the chosen format. */
 static void ef_segment_print(const ef_seg_args_t *a, const char *source, const double *dof,
-                             int ndof, const ef_dvec3_t *b, int degree, double C,
-                             uint32_t clamp, const ef_norm_t *nm, int json)
+                             int ndof, const ef_dvec3_t *b, int degree, double C, uint32_t clamp,
+                             const ef_norm_t *nm, int json)
 {
     ef_endpoint_t f0 = ef_ref_end_to_fw(&a->e0), f1 = ef_ref_end_to_fw(&a->e1);
     float twist = ef_norm_twist(nm, &f0, &f1);
     static const char *names_g1[] = {"x1_0", "x1_1"};
     static const char *names_g2[] = {"x1_0", "x2_0", "x1_1", "x2_1"};
     static const char *names_q[] = {"x1_0", "x1_1", "b2_x", "b2_y", "b2_z"};
-    const char **names = a->kind == EF_REF_G2_QUINTIC ? names_g2
-                         : a->kind == EF_REF_G1_QUARTIC ? names_q : names_g1;
-    const char *kname = a->kind == EF_REF_G2_QUINTIC ? "g2_quintic"
-                        : a->kind == EF_REF_G1_QUARTIC ? "g1_quartic" : "g1_cubic";
+    const char **names = a->kind == EF_REF_G2_QUINTIC   ? names_g2
+                         : a->kind == EF_REF_G1_QUARTIC ? names_q
+                                                        : names_g1;
+    const char *kname = a->kind == EF_REF_G2_QUINTIC   ? "g2_quintic"
+                        : a->kind == EF_REF_G1_QUARTIC ? "g1_quartic"
+                                                       : "g1_cubic";
     static const char *cl_names[] = {"alpha", "beta", "k0", "k1"};
     if (json) {
         printf("{\"kind\": \"%s\", \"source\": \"%s\", \"dim\": %d, \"degree\": %d,\n", kname,
@@ -273,8 +337,8 @@ int ef_cmd_segment(int argc, char **argv)
             return ef_cli_error(rc, "segment: %s", m.text);
         ef_ref_ctrl((ef_ref_kind_t)a.kind, &a.e0, &a.e1, r.dof, b);
         int degree = ef_ref_degree((ef_ref_kind_t)a.kind);
-        ef_segment_print(&a, "optimize", r.dof, r.ndof, b, degree, ef_ref_functional(b, degree),
-                         0, &nm, json);
+        ef_segment_print(&a, "optimize", r.dof, r.ndof, b, degree, ef_ref_functional(b, degree), 0,
+                         &nm, json);
         return 0;
     }
     int tkind = g2 ? EF_TABLE_G2_QUINTIC : EF_TABLE_G1_CUBIC;
@@ -289,7 +353,9 @@ int ef_cmd_segment(int argc, char **argv)
         tbl = &tf.view;
     }
     if (!tbl)
-        return ef_cli_error(EF_ERR_ARG, "segment: this build has no built-in table; use --table FILE or --optimize");
+        return ef_cli_error(
+            EF_ERR_ARG,
+            "segment: this build has no built-in table; use --table FILE or --optimize");
     ef_seg_t seg;
     rc = g2 ? ef_seg_g2_quintic(tbl, &f0, &f1, &seg) : ef_seg_g1_cubic(tbl, &f0, &f1, &seg);
     if (rc != EF_OK) {
@@ -302,8 +368,8 @@ int ef_cmd_segment(int argc, char **argv)
         dof[k] = seg.dof[k];
     for (int i = 0; i <= seg.degree; i++)
         b[i] = (ef_dvec3_t){seg.b[i].x, seg.b[i].y, seg.b[i].z};
-    ef_segment_print(&a, table_path ? "table file" : "built-in table", dof, seg.ndof, b,
-                     seg.degree, ef_ref_functional(b, seg.degree), seg.clamp, &seg.norm, json);
+    ef_segment_print(&a, table_path ? "table file" : "built-in table", dof, seg.ndof, b, seg.degree,
+                     ef_ref_functional(b, seg.degree), seg.clamp, &seg.norm, json);
     ef_tfile_free(&tf);
     return 0;
 }

@@ -51,7 +51,8 @@ static int ef_cli_load(const char *path, ef_cli_table_t *t)
     t->name = path;
     if (path[0] == '@') {
         if (strcmp(path, "@g1") && strcmp(path, "@g2"))
-            return ef_cli_error(EF_ERR_ARG, "unknown built-in table '%s' (there are @g1 and @g2)", path);
+            return ef_cli_error(EF_ERR_ARG, "unknown built-in table '%s' (there are @g1 and @g2)",
+                                path);
         t->view = ef_cli_default_table(path[2] == '1' ? EF_TABLE_G1_CUBIC : EF_TABLE_G2_QUINTIC);
         if (!t->view)
             return ef_cli_error(EF_ERR_ARG, "this build has no built-in table %s", path);
@@ -67,11 +68,16 @@ static int ef_cli_load(const char *path, ef_cli_table_t *t)
 
 static const char *ef_kind_name(int kind)
 {
-    return kind == EF_TABLE_G1_CUBIC ? "G1 cubic" : kind == EF_TABLE_G2_QUINTIC ? "G2 quintic" : "?";
+    return kind == EF_TABLE_G1_CUBIC     ? "G1 cubic"
+           : kind == EF_TABLE_G2_QUINTIC ? "G2 quintic"
+                                         : "?";
 }
 static const char *ef_sym_name(int sym)
 {
-    return sym == EF_SYM_NONE ? "none" : sym == EF_SYM_G1_FOLD ? "fold (u,v)" : sym == EF_SYM_G2_MIRROR ? "mirror (alpha >= 0)" : "?";
+    return sym == EF_SYM_NONE        ? "none"
+           : sym == EF_SYM_G1_FOLD   ? "fold (u,v)"
+           : sym == EF_SYM_G2_MIRROR ? "mirror (alpha >= 0)"
+                                     : "?";
 }
 
 /* Bytes of the file image a view corresponds to. */
@@ -91,23 +97,29 @@ static int ef_table_info(int argc, char **argv)
     if (rc != EF_OK)
         return rc;
     const ef_table_t *v = t.view;
-    static const char *g1_axes[] = {"alpha", "beta"}, *fold_axes[] = {"u=(alpha+beta)/2", "v=(alpha-beta)/2"},
+    static const char *g1_axes[] = {"alpha", "beta"},
+                      *fold_axes[] = {"u=(alpha+beta)/2", "v=(alpha-beta)/2"},
                       *g2_axes[] = {"alpha", "beta", "k0", "k1"};
-    const char **axes = v->kind == EF_TABLE_G2_QUINTIC ? g2_axes : v->symmetry == EF_SYM_G1_FOLD ? fold_axes : g1_axes;
+    const char **axes = v->kind == EF_TABLE_G2_QUINTIC  ? g2_axes
+                        : v->symmetry == EF_SYM_G1_FOLD ? fold_axes
+                                                        : g1_axes;
     printf("table:      %s\n", t.name);
-    printf("kind:       %s (%u axes, %u DOFs per node)\n", ef_kind_name(v->kind), v->naxes, v->ndof);
+    printf("kind:       %s (%u axes, %u DOFs per node)\n", ef_kind_name(v->kind), v->naxes,
+           v->ndof);
     printf("symmetry:   %s\n", ef_sym_name(v->symmetry));
     printf("nodes:      %u (", v->nodes);
     for (int a = 0; a < v->naxes; a++)
         printf("%s%u", a ? " x " : "", v->axis[a].nodes);
     printf(")\nbytes:      %lu (values: %lu)\n", ef_table_bytes(v), 4ul * v->nodes * v->ndof);
     for (int a = 0; a < v->naxes; a++)
-        printf("axis %d:     %-18s [%.9g, %.9g]%s step %.6g\n", a, axes[a], v->axis[a].lo, v->axis[a].hi,
-               (v->axis[a].flags & EF_AXIS_PERIODIC) ? " periodic" : "", 1.0 / v->axis[a].inv_step);
+        printf("axis %d:     %-18s [%.9g, %.9g]%s step %.6g\n", a, axes[a], v->axis[a].lo,
+               v->axis[a].hi, (v->axis[a].flags & EF_AXIS_PERIODIC) ? " periodic" : "",
+               1.0 / v->axis[a].inv_step);
     printf("bounds:     x1 in [%g, %g]", v->x1_min, v->x1_max);
     if (v->kind == EF_TABLE_G2_QUINTIC)
         printf(", |x2| <= %g", v->x2_max);
-    printf(" per unit chord\nfunctional: constant-speed C, Gauss-Legendre %u nodes\n", v->quad_nodes);
+    printf(" per unit chord\nfunctional: constant-speed C, Gauss-Legendre %u nodes\n",
+           v->quad_nodes);
     printf("provenance: %.*s\n", (int)v->provenance_len, v->provenance ? v->provenance : "");
     ef_tfile_free(&t.file);
     return 0;
@@ -123,19 +135,18 @@ static void ef_print_stat(const char *name, const ef_stat_t *s)
 /* Print a statistic as a JSON object member. */
 static void ef_json_stat(const char *name, const ef_stat_t *s, int last)
 {
-    printf("  \"%s\": {\"min\": %.6g, \"mean\": %.6g, \"median\": %.6g, \"p99\": %.6g, \"max\": %.6g}%s\n",
+    printf("  \"%s\": {\"min\": %.6g, \"mean\": %.6g, \"median\": %.6g, \"p99\": %.6g, \"max\": "
+           "%.6g}%s\n",
            name, s->min, s->mean, s->median, s->p99, s->max, last ? "" : ",");
 }
 
 /* table verify FILE --random N ... */
 static int ef_table_verify(int argc, char **argv)
 {
-    static const struct option opts[] = {{"random", required_argument, 0, 'n'},
-                                         {"seed", required_argument, 0, 's'},
-                                         {"3d", no_argument, 0, '3'},
-                                         {"threads", required_argument, 0, 't'},
-                                         {"json", no_argument, 0, 'j'},
-                                         {0, 0, 0, 0}};
+    static const struct option opts[] = {
+        {"random", required_argument, 0, 'n'}, {"seed", required_argument, 0, 's'},
+        {"3d", no_argument, 0, '3'},           {"threads", required_argument, 0, 't'},
+        {"json", no_argument, 0, 'j'},         {0, 0, 0, 0}};
     ef_verify_opts_t o = {.count = 0, .seed = 1, .three_d = 0, .threads = 2};
     int json = 0, c;
     double v;
@@ -153,18 +164,24 @@ static int ef_table_verify(int argc, char **argv)
                 return ef_cli_error(EF_ERR_ARG, "--seed: need a whole number >= 0");
             o.seed = (uint64_t)v;
             break;
-        case '3': o.three_d = 1; break;
+        case '3':
+            o.three_d = 1;
+            break;
         case 't':
             if (ef_cli_double("--threads", optarg, &v) || v < 1 || v > 64 || v != floor(v))
                 return ef_cli_error(EF_ERR_ARG, "--threads: need 1..64");
             o.threads = (int)v;
             break;
-        case 'j': json = 1; break;
-        default: return ef_cli_error(EF_ERR_ARG, "table verify: unknown option '%s'", argv[optind - 1]);
+        case 'j':
+            json = 1;
+            break;
+        default:
+            return ef_cli_error(EF_ERR_ARG, "table verify: unknown option '%s'", argv[optind - 1]);
         }
     }
     if (optind != argc - 1 || o.count == 0)
-        return ef_cli_error(EF_ERR_ARG, "usage: evenfeed table verify FILE --random N [--seed S] [--3d] [--threads T] [--json]");
+        return ef_cli_error(EF_ERR_ARG, "usage: evenfeed table verify FILE --random N [--seed S] "
+                                        "[--3d] [--threads T] [--json]");
     ef_cli_table_t t;
     int rc = ef_cli_load(argv[optind], &t);
     if (rc != EF_OK)
@@ -179,19 +196,24 @@ static int ef_table_verify(int argc, char **argv)
     const ef_table_t *tv = t.view;
     if (json) {
         printf("{\n  \"table\": \"%s\", \"kind\": \"%s\", \"nodes\": %u, \"bytes\": %lu,\n", t.name,
-               tv->kind == EF_TABLE_G1_CUBIC ? "g1_cubic" : "g2_quintic", tv->nodes, ef_table_bytes(tv));
-        printf("  \"configurations\": %u, \"seed\": %llu, \"three_d\": %s, \"clamped\": %u, \"optimizer_misses\": %u,\n",
-               r.count, (unsigned long long)o.seed, o.three_d ? "true" : "false", r.clamped, r.opt_misses);
+               tv->kind == EF_TABLE_G1_CUBIC ? "g1_cubic" : "g2_quintic", tv->nodes,
+               ef_table_bytes(tv));
+        printf("  \"configurations\": %u, \"seed\": %llu, \"three_d\": %s, \"clamped\": %u, "
+               "\"optimizer_misses\": %u,\n",
+               r.count, (unsigned long long)o.seed, o.three_d ? "true" : "false", r.clamped,
+               r.opt_misses);
         ef_json_stat("excess", &r.excess, 0);
         ef_json_stat("x1_error", &r.x1_err, 0);
         ef_json_stat("x2_error", &r.x2_err, 0);
         printf("  \"worst\": [%.6g, %.6g, %.6g, %.6g], \"seconds\": %.3f\n}\n", r.worst_cfg[0],
                r.worst_cfg[1], r.worst_cfg[2], r.worst_cfg[3], r.seconds);
     } else {
-        printf("table %s: %s, %u nodes, %lu bytes\n", t.name, ef_kind_name(tv->kind), tv->nodes, ef_table_bytes(tv));
-        printf("%u random %s configurations (seed %llu), %u outside the domain, %u optimizer misses, %.1f s\n",
-               r.count, o.three_d ? "3-D (twisted)" : "planar", (unsigned long long)o.seed, r.clamped,
-               r.opt_misses, r.seconds);
+        printf("table %s: %s, %u nodes, %lu bytes\n", t.name, ef_kind_name(tv->kind), tv->nodes,
+               ef_table_bytes(tv));
+        printf("%u random %s configurations (seed %llu), %u outside the domain, %u optimizer "
+               "misses, %.1f s\n",
+               r.count, o.three_d ? "3-D (twisted)" : "planar", (unsigned long long)o.seed,
+               r.clamped, r.opt_misses, r.seconds);
         ef_print_stat("relative excess of C", &r.excess);
         ef_print_stat("relative error of x1", &r.x1_err);
         if (tv->kind == EF_TABLE_G2_QUINTIC)
@@ -202,7 +224,8 @@ static int ef_table_verify(int argc, char **argv)
         printf("\n  thesis, for comparison: %s\n",
                tv->kind == EF_TABLE_G1_CUBIC
                    ? "G1 20x20 bilinear: excess mean 0.0146, median 0.0031; x1 error mean 0.0658"
-                   : "G2 4-D linear: excess mean 0.1167, median 0.0524; x1 error mean 0.1148, x2 0.6481");
+                   : "G2 4-D linear: excess mean 0.1167, median 0.0524; x1 error mean 0.1148, x2 "
+                     "0.6481");
     }
     ef_tfile_free(&t.file);
     return 0;
@@ -212,7 +235,7 @@ static int ef_table_verify(int argc, char **argv)
  * gives the nodes resumed from a journal: they count as done, not in the rate. */
 typedef struct {
     struct timespec start, last;
-    uint32_t base;   /* nodes done before this run computed anything */
+    uint32_t base; /* nodes done before this run computed anything */
     int started;
     const char *journal;
 } ef_progress_t;
@@ -293,8 +316,10 @@ static void ef_build_provenance(char *prov, size_t size, const char *backend,
     const int g2 = s->kind == EF_TABLE_G2_QUINTIC, naxes = g2 ? 4 : 2;
     const char *sym = s->symmetry == EF_SYM_NONE ? "none" : g2 ? "mirror" : "fold";
     char num[32];
-    int len = snprintf(prov, size, "evenfeed %s table build --backend %s --kind %s --symmetry %s "
-                       "--nodes ", EF_VERSION, backend, g2 ? "g2" : "g1", sym);
+    int len = snprintf(prov, size,
+                       "evenfeed %s table build --backend %s --kind %s --symmetry %s "
+                       "--nodes ",
+                       EF_VERSION, backend, g2 ? "g2" : "g1", sym);
     for (int a = 0; a < naxes && len < (int)size; a++)
         len += snprintf(prov + len, size - (size_t)len, "%s%u", a ? "x" : "", s->nodes[a]);
     if (s->symmetry != EF_SYM_G1_FOLD && len < (int)size) {
@@ -366,7 +391,8 @@ static int ef_open_backend(const char *name, int threads, ef_build_backend_t *b,
 #ifdef EF_HAVE_GL
     return ef_gl_backend_open(b, m);
 #else
-    return ef_fail(m, EF_ERR_ARG, "--backend gl: this evenfeed was built without OpenGL "
+    return ef_fail(m, EF_ERR_ARG,
+                   "--backend gl: this evenfeed was built without OpenGL "
                    "(libepoxy); install libepoxy-dev and rebuild, or use --backend cpu");
 #endif
 }
@@ -375,14 +401,14 @@ static int ef_open_backend(const char *name, int threads, ef_build_backend_t *b,
 static int ef_table_build(int argc, char **argv)
 {
     static const struct option opts[] = {
-        {"backend", required_argument, 0, 'b'}, {"kind", required_argument, 0, 'k'},
+        {"backend", required_argument, 0, 'b'},  {"kind", required_argument, 0, 'k'},
         {"symmetry", required_argument, 0, 'y'}, {"nodes", required_argument, 0, 'n'},
-        {"domain", required_argument, 0, 'd'}, {"x1-min", required_argument, 0, '1'},
-        {"x1-max", required_argument, 0, '2'}, {"x2-max", required_argument, 0, '3'},
-        {"threads", required_argument, 0, 't'}, {"output", required_argument, 0, 'o'},
+        {"domain", required_argument, 0, 'd'},   {"x1-min", required_argument, 0, '1'},
+        {"x1-max", required_argument, 0, '2'},   {"x2-max", required_argument, 0, '3'},
+        {"threads", required_argument, 0, 't'},  {"output", required_argument, 0, 'o'},
         {"c-source", required_argument, 0, 'c'}, {"name", required_argument, 0, 'N'},
-        {"shard", required_argument, 0, 's'}, {"journal", required_argument, 0, 'J'},
-        {"fresh", no_argument, 0, 'F'}, {0, 0, 0, 0}};
+        {"shard", required_argument, 0, 's'},    {"journal", required_argument, 0, 'J'},
+        {"fresh", no_argument, 0, 'F'},          {0, 0, 0, 0}};
     const char *backend = "cpu", *kind = NULL, *sym = NULL, *nodes = NULL, *domain = NULL,
                *out = NULL, *csrc = NULL, *name = NULL, *shard = NULL, *journal = NULL;
     double x1min = 0.1, x1max = 10, x2max = 100, thr = 2;
@@ -392,22 +418,54 @@ static int ef_table_build(int argc, char **argv)
     while ((c = getopt_long(argc, argv, "o:", opts, NULL)) != -1) {
         rc = EF_OK;
         switch (c) {
-        case 'b': backend = optarg; break;
-        case 'k': kind = optarg; break;
-        case 'y': sym = optarg; break;
-        case 'n': nodes = optarg; break;
-        case 'd': domain = optarg; break;
-        case '1': rc = ef_cli_double("--x1-min", optarg, &x1min); break;
-        case '2': rc = ef_cli_double("--x1-max", optarg, &x1max); break;
-        case '3': rc = ef_cli_double("--x2-max", optarg, &x2max); break;
-        case 't': rc = ef_cli_double("--threads", optarg, &thr); break;
-        case 'o': out = optarg; break;
-        case 'c': csrc = optarg; break;
-        case 'N': name = optarg; break;
-        case 's': shard = optarg; break;
-        case 'J': journal = optarg; break;
-        case 'F': fresh = 1; break;
-        default: return ef_cli_error(EF_ERR_ARG, "table build: unknown option or missing value '%s'", argv[optind - 1]);
+        case 'b':
+            backend = optarg;
+            break;
+        case 'k':
+            kind = optarg;
+            break;
+        case 'y':
+            sym = optarg;
+            break;
+        case 'n':
+            nodes = optarg;
+            break;
+        case 'd':
+            domain = optarg;
+            break;
+        case '1':
+            rc = ef_cli_double("--x1-min", optarg, &x1min);
+            break;
+        case '2':
+            rc = ef_cli_double("--x1-max", optarg, &x1max);
+            break;
+        case '3':
+            rc = ef_cli_double("--x2-max", optarg, &x2max);
+            break;
+        case 't':
+            rc = ef_cli_double("--threads", optarg, &thr);
+            break;
+        case 'o':
+            out = optarg;
+            break;
+        case 'c':
+            csrc = optarg;
+            break;
+        case 'N':
+            name = optarg;
+            break;
+        case 's':
+            shard = optarg;
+            break;
+        case 'J':
+            journal = optarg;
+            break;
+        case 'F':
+            fresh = 1;
+            break;
+        default:
+            return ef_cli_error(EF_ERR_ARG, "table build: unknown option or missing value '%s'",
+                                argv[optind - 1]);
         }
         if (rc != EF_OK)
             return ef_cli_exit(rc);
@@ -424,7 +482,7 @@ static int ef_table_build(int argc, char **argv)
         return ef_cli_error(EF_ERR_ARG, "table build: --c-source and --name go together");
     if (csrc && shard)
         return ef_cli_error(EF_ERR_ARG, "table build: --c-source needs the whole table; give it "
-                            "to 'table merge' when building shards");
+                                        "to 'table merge' when building shards");
     if (thr < 1 || thr > 64 || thr != floor(thr))
         return ef_cli_error(EF_ERR_ARG, "--threads: need 1..64");
     ef_msg_t m = {{0}};
@@ -445,7 +503,10 @@ static int ef_table_build(int argc, char **argv)
     else if (!strcmp(sym, "mirror") && g2)
         spec.symmetry = EF_SYM_G2_MIRROR;
     else
-        return ef_cli_error(EF_ERR_ARG, "table build: --symmetry %s does not apply to %s (g1: none|fold, g2: none|mirror)", sym, kind);
+        return ef_cli_error(
+            EF_ERR_ARG,
+            "table build: --symmetry %s does not apply to %s (g1: none|fold, g2: none|mirror)", sym,
+            kind);
     /* Node counts "AxB[xCxD]". */
     const char *p = nodes;
     for (int a = 0; a < naxes; a++) {
@@ -453,7 +514,8 @@ static int ef_table_build(int argc, char **argv)
         unsigned long v = strtoul(p, &end, 10);
         if (end == p || *p < '0' || *p > '9' || v < 2 || v > EF_TABLE_MAX_AXIS_NODES ||
             (a < naxes - 1 ? *end != 'x' : *end != '\0'))
-            return ef_cli_error(EF_ERR_ARG, "--nodes: '%s' is not %d counts of 2..%u joined by 'x'", nodes, naxes, EF_TABLE_MAX_AXIS_NODES);
+            return ef_cli_error(EF_ERR_ARG, "--nodes: '%s' is not %d counts of 2..%u joined by 'x'",
+                                nodes, naxes, EF_TABLE_MAX_AXIS_NODES);
         spec.nodes[a] = (uint32_t)v;
         p = end + 1;
     }
@@ -461,7 +523,9 @@ static int ef_table_build(int argc, char **argv)
     for (int a = 0; a < naxes; a++)
         total *= spec.nodes[a];
     if (total > EF_TABLE_MAX_NODES)
-        return ef_cli_error(EF_ERR_TBL_SIZE, "--nodes %s: %llu nodes, more than the %u a table may hold", nodes, (unsigned long long)total, EF_TABLE_MAX_NODES);
+        return ef_cli_error(EF_ERR_TBL_SIZE,
+                            "--nodes %s: %llu nodes, more than the %u a table may hold", nodes,
+                            (unsigned long long)total, EF_TABLE_MAX_NODES);
     if (!g2 && spec.symmetry == EF_SYM_G1_FOLD) {
         spec.lo[0] = 0, spec.hi[0] = M_PI / 2, spec.lo[1] = 0, spec.hi[1] = M_PI;
     } else if (!g2) {
@@ -474,9 +538,11 @@ static int ef_table_build(int argc, char **argv)
     }
     if (domain) {
         if (!g2 && spec.symmetry == EF_SYM_G1_FOLD)
-            return ef_cli_error(EF_ERR_ARG, "--domain: a fold table always covers its fixed fundamental region");
+            return ef_cli_error(
+                EF_ERR_ARG, "--domain: a fold table always covers its fixed fundamental region");
         if (ef_parse_domain(domain, spec.lo, spec.hi, naxes) != EF_OK)
-            return ef_cli_error(EF_ERR_ARG, "--domain: '%s' is not %d ranges LO:HI joined by ','", domain, naxes);
+            return ef_cli_error(EF_ERR_ARG, "--domain: '%s' is not %d ranges LO:HI joined by ','",
+                                domain, naxes);
         for (int a = 0; a < naxes; a++)
             if (!g2 && fabs(spec.hi[a] - spec.lo[a] - 2 * M_PI) > 1e-9)
                 spec.axis_flags[a] = 0; /* periodic only when the axis spans the circle */
@@ -541,8 +607,10 @@ static int ef_table_build(int argc, char **argv)
         if (rc != EF_OK) {
             char text[sizeof m.text];
             snprintf(text, sizeof text, "%s", m.text);
-            ef_fail(&m, rc, "%.300s (%s is written; 'evenfeed table emit-c %s --name %s -o %s' "
-                    "retries the C source)", text, out, out, name, csrc);
+            ef_fail(&m, rc,
+                    "%.300s (%s is written; 'evenfeed table emit-c %s --name %s -o %s' "
+                    "retries the C source)",
+                    text, out, out, name, csrc);
         }
     }
     ef_tfile_free(&t);
@@ -573,10 +641,13 @@ static int ef_table_merge(int argc, char **argv)
         else if (c == 'N')
             name = optarg;
         else
-            return ef_cli_error(EF_ERR_ARG, "table merge: unknown option or missing value '%s'", argv[optind - 1]);
+            return ef_cli_error(EF_ERR_ARG, "table merge: unknown option or missing value '%s'",
+                                argv[optind - 1]);
     }
     if (!out || optind >= argc)
-        return ef_cli_error(EF_ERR_ARG, "usage: evenfeed table merge -o OUT.eft [--c-source OUT.c --name IDENT] SHARD...");
+        return ef_cli_error(
+            EF_ERR_ARG,
+            "usage: evenfeed table merge -o OUT.eft [--c-source OUT.c --name IDENT] SHARD...");
     if ((csrc == NULL) != (name == NULL))
         return ef_cli_error(EF_ERR_ARG, "table merge: --c-source and --name go together");
     int rc = ef_check_out(out, "-o");
@@ -602,9 +673,8 @@ static int ef_table_merge(int argc, char **argv)
 /* table emit-c FILE --name IDENT -o OUT.c */
 static int ef_table_emit(int argc, char **argv)
 {
-    static const struct option opts[] = {{"name", required_argument, 0, 'N'},
-                                         {"output", required_argument, 0, 'o'},
-                                         {0, 0, 0, 0}};
+    static const struct option opts[] = {
+        {"name", required_argument, 0, 'N'}, {"output", required_argument, 0, 'o'}, {0, 0, 0, 0}};
     const char *name = NULL, *out = NULL;
     int c;
     optind = 1;

@@ -61,8 +61,8 @@ int main(int argc, char **argv)
         printf("no GL backend here: %s\n", m.text);
         return 0;
     }
-    printf("GL: %s, EGL %s platform; CPU reference: %d threads\n",
-           ef_gl_renderer(gl.ctx), ef_gl_platform(gl.ctx), threads);
+    printf("GL: %s, EGL %s platform; CPU reference: %d threads\n", ef_gl_renderer(gl.ctx),
+           ef_gl_platform(gl.ctx), threads);
     static const uint32_t g1[4] = {49, 97, 0, 0}, g2[4] = {5, 9, 7, 7};
     static const struct {
         int kind;
@@ -84,7 +84,8 @@ int main(int argc, char **argv)
         for (size_t i = 0; i < nv; i++)
             diff += a.values[i] != c.values[i];
         printf("%-28s %6u nodes: GL %9.0f nodes/s, CPU %9.0f nodes/s, GL/CPU %.2f; values that "
-               "differ: %zu of %zu\n", grids[g].name, a.view.nodes, r_gl, r_cpu, r_gl / r_cpu, diff, nv);
+               "differ: %zu of %zu\n",
+               grids[g].name, a.view.nodes, r_gl, r_cpu, r_gl / r_cpu, diff, nv);
         ef_tfile_free(&a);
         ef_tfile_free(&c);
     }

@@ -42,8 +42,8 @@ int main(int argc, char **argv)
         }
         printf("%-11s %4d configs: mean %8.3f ms, worst %8.3f ms per optimize; %.1f starts, "
                "%.1f iterations per call; converged %d/%d\n",
-               names[kind], n, 1e3 * total / n, 1e3 * worst, (double)starts / n,
-               (double)iters / n, nconv, n);
+               names[kind], n, 1e3 * total / n, 1e3 * worst, (double)starts / n, (double)iters / n,
+               nconv, n);
     }
     return 0;
 }

@@ -35,7 +35,8 @@ int main(int argc, char **argv)
     unsigned long long s = 2024;
     printf("G1 cubic on 3-D data through the planar default table, %d configurations per bin\n"
            "(tangent angles to the chord with cos uniform in [-1,1]; twist = angle between the\n"
-           "planes (chord,t0) and (chord,t1), folded into [0,90] degrees)\n\n", per_bin);
+           "planes (chord,t0) and (chord,t1), folded into [0,90] degrees)\n\n",
+           per_bin);
     printf("twist (deg)   mean excess   median      p99        max\n");
     for (int bin = 0; bin < 6; bin++) {
         double lo = bin * 15.0, hi = lo + 15.0;
@@ -44,7 +45,8 @@ int main(int argc, char **argv)
             double tw = (lo + (hi - lo) * uni(&s)) * M_PI / 180;
             double phi = uni(&s) < 0.5 ? tw : M_PI - tw; /* both C- and S-like sides */
             ef_dend_t e0 = {{0, 0, 0}, {cos(th0), sin(th0), 0}, {0, 0, 0}, 0};
-            ef_dend_t e1 = {{1, 0, 0}, {cos(th1), sin(th1) * cos(phi), sin(th1) * sin(phi)}, {0, 0, 0}, 0};
+            ef_dend_t e1 = {
+                {1, 0, 0}, {cos(th1), sin(th1) * cos(phi), sin(th1) * sin(phi)}, {0, 0, 0}, 0};
             ef_endpoint_t f0 = {.p = {0, 0, 0}, .t = {(float)e0.t.x, (float)e0.t.y, 0}};
             ef_endpoint_t f1 = {.p = {1, 0, 0}, .t = {(float)e1.t.x, (float)e1.t.y, (float)e1.t.z}};
             ef_seg_t seg;

@@ -95,8 +95,8 @@ static void test_bezier(void)
                 double r[3];
                 ref_eval(b, d, t, k, r);
                 double scale = 1 + fabs(r[0]) + fabs(r[1]) + fabs(r[2]);
-                double e = (fabs(out[k].x - r[0]) + fabs(out[k].y - r[1]) + fabs(out[k].z - r[2])) /
-                           scale;
+                double e =
+                    (fabs(out[k].x - r[0]) + fabs(out[k].y - r[1]) + fabs(out[k].z - r[2])) / scale;
                 if (e > maxerr)
                     maxerr = e;
             }
@@ -177,11 +177,14 @@ static ef_vec3_t rot(ef_vec3_t v, ef_vec3_t k, float th)
 static void test_normalize(void)
 {
     for (int rep = 0; rep < 2000; rep++) {
-        float a = (float)ef_t_uniform(&rng, -M_PI, M_PI), bt = (float)ef_t_uniform(&rng, -M_PI, M_PI);
+        float a = (float)ef_t_uniform(&rng, -M_PI, M_PI),
+              bt = (float)ef_t_uniform(&rng, -M_PI, M_PI);
         float k0 = (float)ef_t_uniform(&rng, -3, 3), k1 = (float)ef_t_uniform(&rng, -3, 3);
-        float s = (float)exp(ef_t_uniform(&rng, -5, 5)), phi = (float)ef_t_uniform(&rng, -M_PI, M_PI);
+        float s = (float)exp(ef_t_uniform(&rng, -5, 5)),
+              phi = (float)ef_t_uniform(&rng, -M_PI, M_PI);
         /* Offsets within 100 chords: float32 resolves the shape to about 1e-5 there. */
-        float ox = s * (float)ef_t_uniform(&rng, -100, 100), oy = s * (float)ef_t_uniform(&rng, -100, 100);
+        float ox = s * (float)ef_t_uniform(&rng, -100, 100),
+              oy = s * (float)ef_t_uniform(&rng, -100, 100);
         /* The normalized configuration rotated by phi, scaled by s, moved to (ox, oy). */
         ef_endpoint_t e0 = ep2(ox, oy, a + phi, k0 / s);
         ef_endpoint_t e1 = ep2(ox + s * cosf(phi), oy + s * sinf(phi), bt + phi, k1 / s);
@@ -237,7 +240,8 @@ static void test_normalize(void)
     EF_CHECK_NEAR(nm.k1, -0.5, 1e-6);
     /* G1 and G2 give the same angles on the same planar data. */
     for (int rep = 0; rep < 1000; rep++) {
-        float a = (float)ef_t_uniform(&rng, -M_PI, M_PI), b = (float)ef_t_uniform(&rng, -M_PI, M_PI);
+        float a = (float)ef_t_uniform(&rng, -M_PI, M_PI),
+              b = (float)ef_t_uniform(&rng, -M_PI, M_PI);
         ef_endpoint_t p0 = ep2(0, 0, a, 0), p1 = ep2(1, 0, b, 0);
         ef_norm_t n1, n2;
         ef_normalize(&p0, &p1, 0, &n1);
@@ -252,7 +256,8 @@ static void test_bad_input(void)
     ef_norm_t nm;
     const float bad[] = {NAN, INFINITY, -INFINITY};
     for (int i = 0; i < 3; i++) {
-        float *fields[] = {&e.p.x, &e.p.y, &e.p.z, &e.t.x, &e.t.y, &e.t.z, &e.n.x, &e.n.y, &e.n.z, &e.kappa};
+        float *fields[] = {&e.p.x, &e.p.y, &e.p.z, &e.t.x, &e.t.y,
+                           &e.t.z, &e.n.x, &e.n.y, &e.n.z, &e.kappa};
         for (unsigned f = 0; f < sizeof fields / sizeof fields[0]; f++) {
             e = g0;
             *fields[f] = bad[i];
@@ -341,10 +346,14 @@ static double g2f(int k, const double *c)
 {
     double a = c[0], b = c[1], k0 = c[2], k1 = c[3];
     switch (k) {
-    case 0: return 2 + cos(a) + 0.1 * k0 * sin(b) + 0.05 * k1 * k0;
-    case 1: return a * b + 0.3 * k0 * a - 0.2 * sin(k1) * sin(a);
-    case 2: return 2 + cos(b) + 0.1 * k1 * sin(a);
-    default: return 0.5 * a * b - 0.2 * b * k1;
+    case 0:
+        return 2 + cos(a) + 0.1 * k0 * sin(b) + 0.05 * k1 * k0;
+    case 1:
+        return a * b + 0.3 * k0 * a - 0.2 * sin(k1) * sin(a);
+    case 2:
+        return 2 + cos(b) + 0.1 * k1 * sin(a);
+    default:
+        return 0.5 * a * b - 0.2 * b * k1;
     }
 }
 
@@ -400,13 +409,15 @@ static void test_lookup(void)
 {
     float plo[2] = {(float)-M_PI, (float)-M_PI}, phi[2] = {(float)M_PI, (float)M_PI};
     uint32_t pn[2] = {97, 97};
-    ef_table_t full = make_table(EF_TABLE_G1_CUBIC, EF_SYM_NONE, 2, plo, phi, pn, EF_AXIS_PERIODIC, g1_full);
+    ef_table_t full =
+        make_table(EF_TABLE_G1_CUBIC, EF_SYM_NONE, 2, plo, phi, pn, EF_AXIS_PERIODIC, g1_full);
     float flo[2] = {0, 0}, fhi[2] = {(float)(M_PI / 2), (float)M_PI};
     uint32_t fn[2] = {49, 97};
     ef_table_t fold = make_table(EF_TABLE_G1_CUBIC, EF_SYM_G1_FOLD, 2, flo, fhi, fn, 0, g1_fold);
     double e_full = 0, e_fold = 0;
     for (int rep = 0; rep < 20000; rep++) {
-        double a = ef_t_uniform(&rng, -4 * M_PI, 4 * M_PI), b = ef_t_uniform(&rng, -4 * M_PI, 4 * M_PI);
+        double a = ef_t_uniform(&rng, -4 * M_PI, 4 * M_PI),
+               b = ef_t_uniform(&rng, -4 * M_PI, 4 * M_PI);
         float d[2], f[2];
         uint32_t fl = 99, fl2 = 99;
         EF_CHECK_EQ(ef_table_lookup_g1(&full, (float)a, (float)b, d, &fl), EF_OK);
@@ -424,7 +435,8 @@ static void test_lookup(void)
     EF_CHECK(e_fold < 2e-3);
     /* At nodes the lookup returns the stored value exactly (up to float). */
     float d[2];
-    ef_table_lookup_g1(&full, (float)(-M_PI + 2 * M_PI * 10 / 96), (float)(-M_PI + 2 * M_PI * 30 / 96), d, NULL);
+    ef_table_lookup_g1(&full, (float)(-M_PI + 2 * M_PI * 10 / 96),
+                       (float)(-M_PI + 2 * M_PI * 30 / 96), d, NULL);
     EF_CHECK_NEAR(d[0], g1_full[2 * (10 + 97 * 30)], 2e-5);
 
     /* A non-periodic G1 table clamps and flags. */
@@ -448,7 +460,8 @@ static void test_lookup(void)
     ef_table_t g2h = make_table(EF_TABLE_G2_QUINTIC, EF_SYM_G2_MIRROR, 4, hlo, ghi, hn, 0, g2_half);
     double emax = 0;
     for (int rep = 0; rep < 5000; rep++) {
-        float c[4] = {(float)ef_t_uniform(&rng, -M_PI / 2, M_PI / 2), (float)ef_t_uniform(&rng, -M_PI / 2, M_PI / 2),
+        float c[4] = {(float)ef_t_uniform(&rng, -M_PI / 2, M_PI / 2),
+                      (float)ef_t_uniform(&rng, -M_PI / 2, M_PI / 2),
                       (float)ef_t_uniform(&rng, -2, 2), (float)ef_t_uniform(&rng, -2, 2)};
         float a[4], b[4];
         uint32_t f1 = 9, f2 = 9;

@@ -48,9 +48,9 @@ static uint8_t fz_u8(fz_in_t *in)
 
 /* The side under test and what its port saw. */
 typedef struct {
-    int master;           /* 1: the master is under test */
-    ef_comaster_t *m;     /* for the ENABLE check */
-    uint32_t again_mask;  /* bit pattern: which sends answer EF_ERR_AGAIN */
+    int master;          /* 1: the master is under test */
+    ef_comaster_t *m;    /* for the ENABLE check */
+    uint32_t again_mask; /* bit pattern: which sends answer EF_ERR_AGAIN */
     uint32_t sends;
 } fz_ctx_t;
 
@@ -86,17 +86,28 @@ static uint32_t fz_id(fz_in_t *in)
 {
     uint8_t sel = fz_u8(in), n = (uint8_t)(1u + (sel & 3u)); /* nodes 1..3, 4 = a stranger */
     switch (sel >> 3) {
-    case 0: return EF_CO_COB_NMT;
-    case 1: return EF_CO_COB_SYNC;
-    case 2: return EF_CO_COB_RPDO1 + n;
-    case 3: return EF_CO_COB_RPDO2 + n;
-    case 4: return EF_CO_LAW_COBID;
-    case 5: return EF_CO_COB_SDO_RX + n;
-    case 6: return EF_CO_COB_TPDO1 + n;
-    case 7: return EF_CO_COB_SDO_TX + n;
-    case 8: return EF_CO_COB_EMCY + n;
-    case 9: return EF_CO_COB_HEARTBEAT + n;
-    case 10: return EF_CO_COB_RPDO3 + n;
+    case 0:
+        return EF_CO_COB_NMT;
+    case 1:
+        return EF_CO_COB_SYNC;
+    case 2:
+        return EF_CO_COB_RPDO1 + n;
+    case 3:
+        return EF_CO_COB_RPDO2 + n;
+    case 4:
+        return EF_CO_LAW_COBID;
+    case 5:
+        return EF_CO_COB_SDO_RX + n;
+    case 6:
+        return EF_CO_COB_TPDO1 + n;
+    case 7:
+        return EF_CO_COB_SDO_TX + n;
+    case 8:
+        return EF_CO_COB_EMCY + n;
+    case 9:
+        return EF_CO_COB_HEARTBEAT + n;
+    case 10:
+        return EF_CO_COB_RPDO3 + n;
     default: {
         uint32_t a = fz_u8(in), b = fz_u8(in);
         return (a | (b << 8)) & 0x7FFu;

@@ -65,10 +65,11 @@ static int ef_fuzz_read(const uint8_t *data, size_t size)
         ef_fuzz_vec(it.start, "start");
         ef_fuzz_vec(it.end, "end");
         ef_fuzz_vec(it.centre, "centre");
-        if ((it.kind == EF_GC_LINE || it.kind == EF_GC_ARC) && !(it.feed > 0 && it.feed <= EF_GCODE_MAX_FEED))
+        if ((it.kind == EF_GC_LINE || it.kind == EF_GC_ARC) &&
+            !(it.feed > 0 && it.feed <= EF_GCODE_MAX_FEED))
             ef_fuzz_fail("feed", it.kind);
-        if (it.kind == EF_GC_ARC &&
-            (!(it.radius > 0) || !isfinite(it.sweep) || it.sweep == 0 || it.turns < 1 || it.dir * it.sweep < 0))
+        if (it.kind == EF_GC_ARC && (!(it.radius > 0) || !isfinite(it.sweep) || it.sweep == 0 ||
+                                     it.turns < 1 || it.dir * it.sweep < 0))
             ef_fuzz_fail("arc", it.turns);
         if (it.kind == EF_GC_END) {
             ef_gcode_item_t again;

@@ -111,10 +111,6 @@ static uint8_t *base_image(int which, size_t *len)
     return b;
 }
 
-
-
-
-
 /* Near misses: one rule broken each, starting from a base table. */
 enum {
     M_NONE,

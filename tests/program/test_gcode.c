@@ -28,32 +28,31 @@ static int rd(const char *src)
 }
 
 /* Expect an error whose message is exactly want. */
-#define EXPECT_ERR(src, want)                                                                  \
-    do {                                                                                       \
-        int rc_ = rd(src);                                                                     \
-        EF_CHECK_EQ(rc_, EF_ERR_GCODE);                                                        \
-        if (strcmp(M.text, want)) {                                                            \
-            ef_t_fail++;                                                                       \
-            fprintf(stderr, "%s:%d: message '%s', want '%s'\n", __FILE__, __LINE__, M.text,   \
-                    want);                                                                     \
-        } else {                                                                               \
-            ef_t_pass++;                                                                       \
-        }                                                                                      \
+#define EXPECT_ERR(src, want)                                                                      \
+    do {                                                                                           \
+        int rc_ = rd(src);                                                                         \
+        EF_CHECK_EQ(rc_, EF_ERR_GCODE);                                                            \
+        if (strcmp(M.text, want)) {                                                                \
+            ef_t_fail++;                                                                           \
+            fprintf(stderr, "%s:%d: message '%s', want '%s'\n", __FILE__, __LINE__, M.text, want); \
+        } else {                                                                                   \
+            ef_t_pass++;                                                                           \
+        }                                                                                          \
     } while (0)
 
 /* Expect an error at a position, with a substring in the message. */
-#define EXPECT_ERR_AT(src, pos, part)                                                          \
-    do {                                                                                       \
-        int rc_ = rd(src);                                                                     \
-        EF_CHECK_EQ(rc_, EF_ERR_GCODE);                                                        \
-        if (strncmp(M.text, "t.ngc:" pos ": ", strlen("t.ngc:" pos ": ")) ||                   \
-            !strstr(M.text, part)) {                                                           \
-            ef_t_fail++;                                                                       \
-            fprintf(stderr, "%s:%d: message '%s', want t.ngc:%s: ...%s...\n", __FILE__,        \
-                    __LINE__, M.text, pos, part);                                              \
-        } else {                                                                               \
-            ef_t_pass++;                                                                       \
-        }                                                                                      \
+#define EXPECT_ERR_AT(src, pos, part)                                                              \
+    do {                                                                                           \
+        int rc_ = rd(src);                                                                         \
+        EF_CHECK_EQ(rc_, EF_ERR_GCODE);                                                            \
+        if (strncmp(M.text, "t.ngc:" pos ": ", strlen("t.ngc:" pos ": ")) ||                       \
+            !strstr(M.text, part)) {                                                               \
+            ef_t_fail++;                                                                           \
+            fprintf(stderr, "%s:%d: message '%s', want t.ngc:%s: ...%s...\n", __FILE__, __LINE__,  \
+                    M.text, pos, part);                                                            \
+        } else {                                                                                   \
+            ef_t_pass++;                                                                           \
+        }                                                                                          \
     } while (0)
 
 /* Value of X after "G0 X<expr>": evaluates one expression through the reader. */
@@ -275,8 +274,9 @@ static void test_expressions(void)
 /* Events, ignored words, tolerance items. */
 static void test_events(void)
 {
-    int n = rd("G21 G90 G17 G40 G49 G80 G94\nG64 P0.01 Q0.005\nN5 T1 M6\nS12000 M3\nG54\nM8\n"
-               "G4 P0.5\nG43 H1 G0 Z10\nG40\nG61\nG20 G64 P0.001\nM0 G0 X1\nM5 M9\nG53 G0 Z0\nM30\n");
+    int n =
+        rd("G21 G90 G17 G40 G49 G80 G94\nG64 P0.01 Q0.005\nN5 T1 M6\nS12000 M3\nG54\nM8\n"
+           "G4 P0.5\nG43 H1 G0 Z10\nG40\nG61\nG20 G64 P0.001\nM0 G0 X1\nM5 M9\nG53 G0 Z0\nM30\n");
     EF_CHECK(n > 0);
     int k = 0;
     EF_CHECK_EQ(I[k].kind, EF_GC_EVENT);
@@ -350,7 +350,8 @@ static void test_errors(void)
     EXPECT_ERR_AT("G0 X1\nG2 X2 Y1 F0 I1\n", "2:1", "no feed rate");
     EXPECT_ERR_AT("G1 F1e9\n", "1:6", "unsupported word 'E'"); /* no exponents */
     EXPECT_ERR_AT("G1 X1 F100000000\n", "1:7", "feed F1e+08 outside");
-    EXPECT_ERR_AT("G0 X0\nG0 X1\nG0 G1 X2\n", "3:4", "G0 and G1 on one line are in the same modal group");
+    EXPECT_ERR_AT("G0 X0\nG0 X1\nG0 G1 X2\n", "3:4",
+                  "G0 and G1 on one line are in the same modal group");
     EXPECT_ERR_AT("G20 G21\n", "1:5", "same modal group");
     EXPECT_ERR_AT("M3 M5\n", "1:4", "M3 and M5 on one line");
     EXPECT_ERR_AT("G0 X[1+2\n", "1:5", "unbalanced brackets");
@@ -397,8 +398,11 @@ static void test_errors(void)
     EXPECT_ERR_AT("G64 P-1\n", "1:5", "must not be negative");
     EXPECT_ERR_AT("G4\n", "1:1", "G4 needs a dwell time");
     EXPECT_ERR_AT("G53 G2 X1 I1 F1\n", "1:1", "G53 needs G0 or G1");
-    EXPECT_ERR_AT("G0 X[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[1]]]]]]]]]]]]]]]]]]]]"
-                  "]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]\n", "1:69", "nested too deeply");
+    EXPECT_ERR_AT(
+        "G0 "
+        "X[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[1]]]]]]]]]]]]]]]]]]]]"
+        "]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]\n",
+        "1:69", "nested too deeply");
     EXPECT_ERR_AT("G0 X1\nG0 X1.2.3\n", "2:8", "expected a word letter");
     EXPECT_ERR_AT("G0 X1\n\nG0 X2 G1\n", "3:7", "G0 and G1");
     /* line too long */

@@ -99,10 +99,10 @@ static int has(const ef_msg_t *m, const char *piece)
 typedef struct {
     int calls;
     uint32_t begin[512], end[512];
-    int fail_at;      /* 1-based call that fails (0: none) */
-    int nan_at;       /* call that stores a NaN */
-    int skip_at;      /* call that leaves its last row unwritten */
-    int rmdir_at;     /* call that removes directory rmdir_path (output write then fails) */
+    int fail_at;  /* 1-based call that fails (0: none) */
+    int nan_at;   /* call that stores a NaN */
+    int skip_at;  /* call that leaves its last row unwritten */
+    int rmdir_at; /* call that removes directory rmdir_path (output write then fails) */
     const char *rmdir_path;
 } fake_t;
 
@@ -138,8 +138,8 @@ static int fake_solve(void *ctx, ef_tfile_t *t, uint32_t rb, uint32_t re, ef_msg
 static ef_build_backend_t fake_backend(fake_t *f, const char *name, uint32_t chunk_nodes)
 {
     memset(f, 0, sizeof *f);
-    return (ef_build_backend_t){.name = name, .solve_rows = fake_solve, .ctx = f,
-                                .chunk_nodes = chunk_nodes};
+    return (ef_build_backend_t){
+        .name = name, .solve_rows = fake_solve, .ctx = f, .chunk_nodes = chunk_nodes};
 }
 
 /* A G1 table spec without symmetry, n0 x n1 nodes. */
@@ -193,8 +193,8 @@ static int fake_build(const ef_tfile_spec_t *s, const char *backend, uint32_t ch
     if (make(&t, s) != EF_OK)
         return EF_ERR_ARG;
     ef_build_backend_t b = fake_backend(f, backend, chunk_nodes);
-    ef_build_opts_t o = {.shard = {index, count}, .journal = journal, .fresh = fresh,
-                         .output = out};
+    ef_build_opts_t o = {
+        .shard = {index, count}, .journal = journal, .fresh = fresh, .output = out};
     int rc = ef_build_run(&t, &b, &o, m);
     ef_tfile_free(&t);
     return rc;
@@ -211,8 +211,9 @@ static void test_shard_arith(void)
     EF_CHECK(s.index == 1 && s.count == 1);
     EF_CHECK_EQ(ef_build_shard_parse("4/4", &s, &m), EF_OK);
     EF_CHECK(s.index == 4 && s.count == 4);
-    static const char *bad[] = {"0/0", "5/4", "1/0", "abc", "", "1/", "/3", " 1/2", "1/2 ",
-                                "+1/2", "1/-2", "0/4", "1/2/3", "99999999999/1", "2/4x"};
+    static const char *bad[] = {"0/0",  "5/4", "1/0",   "abc",           "",
+                                "1/",   "/3",  " 1/2",  "1/2 ",          "+1/2",
+                                "1/-2", "0/4", "1/2/3", "99999999999/1", "2/4x"};
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         int rc = ef_build_shard_parse(bad[i], &s, &m);
         EF_CHECK_EQ(rc, EF_ERR_ARG);
@@ -280,8 +281,8 @@ static void cpu_shards_case(const ef_tfile_spec_t *sp, const char *tag)
             b.chunk_nodes = (i + 1) * n0; /* chunking must not matter either */
             snprintf(name, sizeof name, "%s-%u-of-%u.efs", tag, i, n);
             snprintf(store[i - 1], sizeof store[i - 1], "%s", tpath(name));
-            ef_build_opts_t so = {.shard = {i, n}, .journal = tpath("cpu-s.partial"),
-                                  .output = store[i - 1]};
+            ef_build_opts_t so = {
+                .shard = {i, n}, .journal = tpath("cpu-s.partial"), .output = store[i - 1]};
             rc = ef_build_run(&t, &b, &so, &m);
             EF_CHECK_EQ(rc, EF_OK);
             if (rc != EF_OK)

@@ -245,14 +245,12 @@ static void test_basics(void)
     ef_dvec3_t b[EF_REF_MAX_DEGREE + 1];
     EF_CHECK_EQ(ef_ref_ctrl(EF_REF_G2_QUINTIC, &e0, &e1, d5, b), EF_OK);
     const ef_dvec3_t f1 = vaxpy(v3(0, 0, 0), 5.0, vaxpy(b[1], -1.0, b[0]));
-    const ef_dvec3_t f2 = vaxpy(v3(0, 0, 0), 20.0,
-                                vaxpy(vaxpy(b[2], -2.0, b[1]), 1.0, b[0]));
+    const ef_dvec3_t f2 = vaxpy(v3(0, 0, 0), 20.0, vaxpy(vaxpy(b[2], -2.0, b[1]), 1.0, b[0]));
     EF_CHECK_NEAR(vdot(f1, e0.t), 1.3, 1e-14);
     EF_CHECK_NEAR(vdot(f2, e0.t), 0.7, 1e-14);
     EF_CHECK_NEAR(vdot(f2, e0.n), 0.5 * 1.3 * 1.3, 1e-14);
     const ef_dvec3_t g1 = vaxpy(v3(0, 0, 0), 5.0, vaxpy(b[5], -1.0, b[4]));
-    const ef_dvec3_t g2 = vaxpy(v3(0, 0, 0), 20.0,
-                                vaxpy(vaxpy(b[5], -2.0, b[4]), 1.0, b[3]));
+    const ef_dvec3_t g2 = vaxpy(v3(0, 0, 0), 20.0, vaxpy(vaxpy(b[5], -2.0, b[4]), 1.0, b[3]));
     EF_CHECK_NEAR(vdot(g1, e1.t), 0.9, 1e-14);
     EF_CHECK_NEAR(vdot(g2, e1.t), -0.4, 1e-14);
     EF_CHECK_NEAR(vdot(g2, e1.n), -0.7 * 0.9 * 0.9, 1e-14);
@@ -407,7 +405,7 @@ static void test_published(void)
     EF_CHECK_NEAR(r.C, 1.78828, 1e-4);
     EF_CHECK_NEAR(r.dof[0], 1.28818, 1e-3);
     EF_CHECK_NEAR(r.dof[1], 1.28818, 1e-3);
-    EF_CHECK_NEAR(r.C, 1.788278, 1e-6);      /* the double-precision optimum quoted */
+    EF_CHECK_NEAR(r.C, 1.788278, 1e-6); /* the double-precision optimum quoted */
     EF_CHECK_NEAR(r.dof[0], 1.288176, 1e-6);
     EF_CHECK_NEAR(r.dof[0], r.dof[1], 1e-9); /* symmetric configuration */
     EF_CHECK(r.converged);
@@ -476,9 +474,10 @@ static motion_t rand_motion(unsigned long long *s)
     motion_t m;
     const ef_dvec3_t a = rand_unit(s);
     const double th = ef_t_uniform(s, -PI, PI), c = cos(th), sn = sin(th), C = 1 - c;
-    const double R[3][3] = {{c + a.x * a.x * C, a.x * a.y * C - a.z * sn, a.x * a.z * C + a.y * sn},
-                            {a.y * a.x * C + a.z * sn, c + a.y * a.y * C, a.y * a.z * C - a.x * sn},
-                            {a.z * a.x * C - a.y * sn, a.z * a.y * C + a.x * sn, c + a.z * a.z * C}};
+    const double R[3][3] = {
+        {c + a.x * a.x * C, a.x * a.y * C - a.z * sn, a.x * a.z * C + a.y * sn},
+        {a.y * a.x * C + a.z * sn, c + a.y * a.y * C, a.y * a.z * C - a.x * sn},
+        {a.z * a.x * C - a.y * sn, a.z * a.y * C + a.x * sn, c + a.z * a.z * C}};
     memcpy(m.R, R, sizeof R);
     m.lam = exp(ef_t_uniform(s, log(0.01), log(100.0)));
     m.T = v3(ef_t_uniform(s, -50, 50), ef_t_uniform(s, -50, 50), ef_t_uniform(s, -50, 50));
@@ -572,8 +571,8 @@ static void test_sym_g1(void)
         EF_CHECK_NEAR(rq.C, ro.C, 1e-10 * ro.C);
         const double e = fmax(fmax(fabs(rm.dof[0] - ro.dof[0]), fabs(rm.dof[1] - ro.dof[1])),
                               fmax(fabs(rr.dof[0] - ro.dof[1]), fabs(rr.dof[1] - ro.dof[0])));
-        worst = fmax(worst, fmax(e, fmax(fabs(rq.dof[0] - ro.dof[1]),
-                                         fabs(rq.dof[1] - ro.dof[0]))));
+        worst =
+            fmax(worst, fmax(e, fmax(fabs(rq.dof[0] - ro.dof[1]), fabs(rq.dof[1] - ro.dof[0]))));
         EF_CHECK(e <= 1e-7);
         EF_CHECK(fabs(rq.dof[0] - ro.dof[1]) <= 1e-7 && fabs(rq.dof[1] - ro.dof[0]) <= 1e-7);
     }
@@ -591,8 +590,8 @@ static void test_sym_g2(void)
     for (int k = 0; k < 12; k++) {
         const double a = ef_t_uniform(&s, -PI / 2, PI / 2), b = ef_t_uniform(&s, -PI / 2, PI / 2);
         const double k0 = ef_t_uniform(&s, -2, 2), k1 = ef_t_uniform(&s, -2, 2);
-        double d[4] = {ef_t_uniform(&s, 0.3, 2), ef_t_uniform(&s, -3, 3),
-                       ef_t_uniform(&s, 0.3, 2), ef_t_uniform(&s, -3, 3)};
+        double d[4] = {ef_t_uniform(&s, 0.3, 2), ef_t_uniform(&s, -3, 3), ef_t_uniform(&s, 0.3, 2),
+                       ef_t_uniform(&s, -3, 3)};
         ef_dend_t e0, e1, m0, m1, r0, r1, q0, q1;
         ef_ref_config(a, b, k0, k1, &e0, &e1);
         ef_ref_config(-a, -b, -k0, -k1, &m0, &m1); /* mirror */
@@ -633,7 +632,7 @@ static void test_sym_g2(void)
 
 /* ---------------------------------------------------------------- global-ness */
 
-#define G1_GRID 200
+#define G1_GRID  200
 #define G1_CASES 100
 
 /* Minimum of C over a log-spaced (x1_0, x1_1) grid on the default box [0.1, 10]^2. */
@@ -707,8 +706,8 @@ static void test_reversal_bound(void)
             printf("near reversal a=%.4f b=%.4f: C = %.9f at (%.6f, %.6f), at_bound 0x%x; grid "
                    "min %.9f at (%.4f, %.4f)\n",
                    e0.t.y >= 0 ? acos(e0.t.x) : -acos(e0.t.x),
-                   e1.t.y >= 0 ? acos(e1.t.x) : -acos(e1.t.x), r.C, r.dof[0], r.dof[1],
-                   r.at_bound, gm, arg[0], arg[1]);
+                   e1.t.y >= 0 ? acos(e1.t.x) : -acos(e1.t.x), r.C, r.dof[0], r.dof[1], r.at_bound,
+                   gm, arg[0], arg[1]);
     }
     /* The quintic sees the same bound. */
     ef_dend_t e0, e1;
@@ -744,8 +743,8 @@ static double compass(ef_ref_kind_t kind, const ef_dend_t *e0, const ef_dend_t *
     return f;
 }
 
-#define G2_N1 8
-#define G2_N2 9
+#define G2_N1    8
+#define G2_N2    9
 #define G2_CASES 40
 
 /* Quintic spot checks: coarse 4-D grid, polish the best few grid minima, compare. */
@@ -814,8 +813,8 @@ static void test_global_g2(void)
         }
         best = sqrt(best);
         if (!(r.C <= best * (1 + 1e-9) + 1e-12))
-            fprintf(stderr, "  G2 a=%.17g b=%.17g k=%.17g %.17g: C %.10g above polished %.10g\n",
-                    a, b, k0, k1, r.C, best);
+            fprintf(stderr, "  G2 a=%.17g b=%.17g k=%.17g %.17g: C %.10g above polished %.10g\n", a,
+                    b, k0, k1, r.C, best);
         EF_CHECK(r.C <= best * (1 + 1e-9) + 1e-12);
         EF_CHECK(r.converged);
         margin = fmax(margin, (best - r.C) / best);
@@ -846,7 +845,8 @@ static void test_global_quartic(void)
                     for (int v = 0; v < 5; v++)
                         for (int w = 0; w < 5; w++) {
                             const double d[5] = {x1g[i], x1g[j], 0.5 + 0.5 * og[u], og[v], og[w]};
-                            const double f = ef_ref_objective(EF_REF_G1_QUARTIC, &c.e0, &c.e1, d, NULL);
+                            const double f =
+                                ef_ref_objective(EF_REF_G1_QUARTIC, &c.e0, &c.e1, d, NULL);
                             if (f < best) {
                                 best = f;
                                 memcpy(bx, d, sizeof bx);
@@ -930,11 +930,11 @@ static void test_errors(void)
     ef_msg_t m;
     ef_ref_config(0.3, 0.2, 0.1, 0.1, &e0, &e1);
 
-#define EXPECT(call, code)                                                                     \
-    do {                                                                                       \
-        m.text[0] = 0;                                                                         \
-        EF_CHECK_EQ(call, code);                                                               \
-        EF_CHECK(m.text[0] != 0);                                                              \
+#define EXPECT(call, code)                                                                         \
+    do {                                                                                           \
+        m.text[0] = 0;                                                                             \
+        EF_CHECK_EQ(call, code);                                                                   \
+        EF_CHECK(m.text[0] != 0);                                                                  \
     } while (0)
 
     EXPECT(ef_ref_optimize((ef_ref_kind_t)0, &e0, &e1, NULL, &r, &m), EF_ERR_ARG);
@@ -949,15 +949,33 @@ static void test_errors(void)
     for (int k = 0; k < 9; k++) {
         ef_ref_opts_default(&o);
         switch (k) {
-        case 0: o.x1_min = 0.0; break;
-        case 1: o.x1_max = 0.05; break;
-        case 2: o.x1_min = NAN; break;
-        case 3: o.x2_max = 0.0; break;
-        case 4: o.x2_max = INFINITY; break;
-        case 5: o.max_iter = 0; break;
-        case 6: o.tol = -1.0; break;
-        case 7: o.tol = NAN; break;
-        default: o.warm = bad_warm; break;
+        case 0:
+            o.x1_min = 0.0;
+            break;
+        case 1:
+            o.x1_max = 0.05;
+            break;
+        case 2:
+            o.x1_min = NAN;
+            break;
+        case 3:
+            o.x2_max = 0.0;
+            break;
+        case 4:
+            o.x2_max = INFINITY;
+            break;
+        case 5:
+            o.max_iter = 0;
+            break;
+        case 6:
+            o.tol = -1.0;
+            break;
+        case 7:
+            o.tol = NAN;
+            break;
+        default:
+            o.warm = bad_warm;
+            break;
         }
         EXPECT(ef_ref_optimize(EF_REF_G1_CUBIC, &e0, &e1, &o, &r, &m), EF_ERR_ARG);
     }
@@ -968,10 +986,18 @@ static void test_errors(void)
         b1 = e1;
         ef_dend_t *e = f % 2 ? &b1 : &b0;
         switch (f / 2) {
-        case 0: e->p.y = NAN; break;
-        case 1: e->t.z = INFINITY; break;
-        case 2: e->n.x = NAN; break;
-        default: e->kappa = -INFINITY; break;
+        case 0:
+            e->p.y = NAN;
+            break;
+        case 1:
+            e->t.z = INFINITY;
+            break;
+        case 2:
+            e->n.x = NAN;
+            break;
+        default:
+            e->kappa = -INFINITY;
+            break;
         }
         EXPECT(ef_ref_optimize(EF_REF_G2_QUINTIC, &b0, &b1, NULL, &r, &m), EF_ERR_NONFINITE);
         if (f / 2 < 2)

@@ -156,10 +156,6 @@ static uint8_t *make_blob(int v, size_t *len)
     return b;
 }
 
-
-
-
-
 /* Recompute the trailing CRC so a corruption reaches the field check, not the CRC check. */
 static void fix_crc(uint8_t *b, size_t len)
 {

@@ -4,7 +4,7 @@
 /* atan(a) ~ a * P(a^2) on [0,1]; least-squares fit from tools/gen_fw_constants.c,
  * max error 1.8e-7 rad in float evaluation. */
 static const float ef_atan_c[8] = {
-    9.999999545e-01f, -3.333228719e-01f, 1.997350213e-01f,  -1.403925361e-01f,
+    9.999999545e-01f, -3.333228719e-01f, 1.997350213e-01f, -1.403925361e-01f,
     9.965704541e-02f, -6.018953761e-02f, 2.473677233e-02f, -4.825772456e-03f,
 };
 

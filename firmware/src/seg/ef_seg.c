@@ -102,8 +102,8 @@ int ef_seg_g2_quintic(const ef_table_t *tbl, const ef_endpoint_t *e0, const ef_e
 }
 
 /* Control points for caller-chosen DOFs, validated like the table paths. */
-int ef_seg_from_dofs(const ef_endpoint_t *e0, const ef_endpoint_t *e1, int degree,
-                     const float *dof, ef_seg_t *out)
+int ef_seg_from_dofs(const ef_endpoint_t *e0, const ef_endpoint_t *e1, int degree, const float *dof,
+                     ef_seg_t *out)
 {
     if (!out)
         return EF_ERR_ARG;

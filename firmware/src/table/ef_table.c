@@ -56,7 +56,8 @@ static inline float ef_ct_floorf(float x)
 }
 
 /* Cell index and fraction of x on one axis; sets *clamped when x was outside [lo, hi]. */
-static inline uint32_t ef_axis_cell(const ef_table_axis_t *ax, float x, float *frac, uint32_t *clamped)
+static inline uint32_t ef_axis_cell(const ef_table_axis_t *ax, float x, float *frac,
+                                    uint32_t *clamped)
 {
     *clamped = (uint32_t)((x < ax->lo) | (x > ax->hi));
     float xc = ef_ct_clampf(x, ax->lo, ax->hi);

@@ -7,22 +7,35 @@
 #include <string.h>
 #include "evenfeed/host/program/ef_gcode.h"
 
-#define EF_GC_MAX_WORDS 64   /* words on one line */
-#define EF_GC_MAX_ASSIGN 32  /* parameter assignments on one line */
-#define EF_GC_MAX_DEPTH 64   /* expression nesting: bounds the recursion on hostile input */
-#define EF_GC_INCH 25.4
+#define EF_GC_MAX_WORDS  64 /* words on one line */
+#define EF_GC_MAX_ASSIGN 32 /* parameter assignments on one line */
+#define EF_GC_MAX_DEPTH  64 /* expression nesting: bounds the recursion on hostile input */
+#define EF_GC_INCH       25.4
 
 /* Modal groups of G codes (RS274NGC numbering; 0 is the non-modal group). */
-enum { GR_NONMODAL = 0, GR_MOTION = 1, GR_PLANE = 2, GR_DIST = 3, GR_ARCDIST = 4, GR_FEEDMODE = 5,
-       GR_UNITS = 6, GR_CUTTER = 7, GR_TOOLLEN = 8, GR_RETRACT = 10, GR_COORD = 12, GR_PATH = 13,
-       GR_SPINDLEMODE = 14, GR_COUNT = 15 };
+enum {
+    GR_NONMODAL = 0,
+    GR_MOTION = 1,
+    GR_PLANE = 2,
+    GR_DIST = 3,
+    GR_ARCDIST = 4,
+    GR_FEEDMODE = 5,
+    GR_UNITS = 6,
+    GR_CUTTER = 7,
+    GR_TOOLLEN = 8,
+    GR_RETRACT = 10,
+    GR_COORD = 12,
+    GR_PATH = 13,
+    GR_SPINDLEMODE = 14,
+    GR_COUNT = 15
+};
 /* What a G code does here. */
 enum { GA_MODAL, GA_EVENT, GA_IGNORE, GA_UNSUPPORTED };
 
 /* One word of a line, in source order. */
 typedef struct {
     char letter;
-    int code;      /* G and M: value x 10, rounded */
+    int code; /* G and M: value x 10, rounded */
     double v;
     uint32_t col;
 } ef_gc_word_t;
@@ -52,7 +65,8 @@ typedef struct {
 } ef_gc_line_t;
 
 /* Record a sticky error "name:line:col: text". */
-__attribute__((format(printf, 3, 4))) static int ef_gc_err(ef_gcode_t *r, uint32_t col, const char *fmt, ...)
+__attribute__((format(printf, 3, 4))) static int ef_gc_err(ef_gcode_t *r, uint32_t col,
+                                                           const char *fmt, ...)
 {
     char text[320];
     va_list ap;
@@ -154,7 +168,8 @@ static int ef_gc_param_ref(ef_gc_line_t *L, int *index, char *name, uint32_t col
         L->i++;
         while (L->i < L->n && L->c[L->i] != '>') {
             if (k >= EF_GCODE_NAME_MAX)
-                return ef_gc_err(L->r, col, "parameter name longer than %d characters", EF_GCODE_NAME_MAX);
+                return ef_gc_err(L->r, col, "parameter name longer than %d characters",
+                                 EF_GCODE_NAME_MAX);
             name[k++] = L->c[L->i++];
         }
         if (L->i >= L->n)
@@ -171,7 +186,8 @@ static int ef_gc_param_ref(ef_gc_line_t *L, int *index, char *name, uint32_t col
         return rc;
     double rv = floor(v + 0.5);
     if (fabs(v - rv) > 1e-6 || rv < 1 || rv >= EF_GCODE_NPARAM)
-        return ef_gc_err(L->r, col, "parameter number %.6g out of range (#1..#%d)", v, EF_GCODE_NPARAM - 1);
+        return ef_gc_err(L->r, col, "parameter number %.6g out of range (#1..#%d)", v,
+                         EF_GCODE_NPARAM - 1);
     *index = (int)rv;
     return EF_OK;
 }
@@ -180,8 +196,9 @@ static int ef_gc_param_ref(ef_gc_line_t *L, int *index, char *name, uint32_t col
 static const struct {
     const char *s;
     int prec;
-} ef_gc_ops[] = {{"**", 4}, {"*", 3}, {"/", 3}, {"MOD", 3}, {"+", 2}, {"-", 2}, {"EQ", 1}, {"NE", 1},
-                 {"GT", 1}, {"GE", 1}, {"LT", 1}, {"LE", 1}, {"AND", 0}, {"OR", 0}, {"XOR", 0}};
+} ef_gc_ops[] = {{"**", 4}, {"*", 3},  {"/", 3},   {"MOD", 3}, {"+", 2},
+                 {"-", 2},  {"EQ", 1}, {"NE", 1},  {"GT", 1},  {"GE", 1},
+                 {"LT", 1}, {"LE", 1}, {"AND", 0}, {"OR", 0},  {"XOR", 0}};
 
 /* Apply binary operator k; errors point at the operator. */
 static int ef_gc_apply(ef_gc_line_t *L, int k, double a, double b, uint32_t col, double *out)
@@ -286,12 +303,13 @@ static int ef_gc_bracket(ef_gc_line_t *L, double *out)
 /* NAME[expr], or ATAN[y]/[x], with the cursor on the name. */
 static int ef_gc_function(ef_gc_line_t *L, double *out)
 {
-    static const char *names[] = {"ATAN", "ABS", "ACOS", "ASIN", "COS", "EXP", "FIX", "FUP",
-                                  "LN", "ROUND", "SIN", "SQRT", "TAN"};
+    static const char *names[] = {"ATAN", "ABS", "ACOS",  "ASIN", "COS",  "EXP", "FIX",
+                                  "FUP",  "LN",  "ROUND", "SIN",  "SQRT", "TAN"};
     uint32_t col = ef_gc_here(L);
     int f = -1;
     for (int k = 0; k < (int)(sizeof names / sizeof names[0]); k++)
-        if (ef_gc_at(L, names[k]) && L->i + strlen(names[k]) < L->n && L->c[L->i + strlen(names[k])] == '[') {
+        if (ef_gc_at(L, names[k]) && L->i + strlen(names[k]) < L->n &&
+            L->c[L->i + strlen(names[k])] == '[') {
             f = k;
             break;
         }
@@ -311,30 +329,46 @@ static int ef_gc_function(ef_gc_line_t *L, double *out)
             return rc;
         v = atan2(a, b) / EF_GC_D2R;
         break;
-    case 1: v = fabs(a); break;
+    case 1:
+        v = fabs(a);
+        break;
     case 2:
     case 3:
         if (a < -1 || a > 1)
             return ef_gc_err(L->r, col, "%s argument %.6g outside [-1, 1]", names[f], a);
         v = (f == 2 ? acos(a) : asin(a)) / EF_GC_D2R;
         break;
-    case 4: v = cos(a * EF_GC_D2R); break;
-    case 5: v = exp(a); break;
-    case 6: v = floor(a); break;
-    case 7: v = ceil(a); break;
+    case 4:
+        v = cos(a * EF_GC_D2R);
+        break;
+    case 5:
+        v = exp(a);
+        break;
+    case 6:
+        v = floor(a);
+        break;
+    case 7:
+        v = ceil(a);
+        break;
     case 8:
         if (a <= 0)
             return ef_gc_err(L->r, col, "LN argument %.6g is not positive", a);
         v = log(a);
         break;
-    case 9: v = round(a); break;
-    case 10: v = sin(a * EF_GC_D2R); break;
+    case 9:
+        v = round(a);
+        break;
+    case 10:
+        v = sin(a * EF_GC_D2R);
+        break;
     case 11:
         if (a < 0)
             return ef_gc_err(L->r, col, "SQRT of negative %.6g", a);
         v = sqrt(a);
         break;
-    default: v = tan(a * EF_GC_D2R); break;
+    default:
+        v = tan(a * EF_GC_D2R);
+        break;
     }
     *out = v;
     return ef_gc_finite(L, v, col, names[f]);
@@ -445,7 +479,8 @@ static int ef_gc_words(ef_gc_line_t *L)
         L->depth = 0;
         if (ch == '#') {
             if (L->nas >= EF_GC_MAX_ASSIGN)
-                return ef_gc_err(L->r, col, "more than %d assignments on one line", EF_GC_MAX_ASSIGN);
+                return ef_gc_err(L->r, col, "more than %d assignments on one line",
+                                 EF_GC_MAX_ASSIGN);
             ef_gc_assign_t *a = &L->as[L->nas];
             L->i++;
             if ((rc = ef_gc_param_ref(L, &a->index, a->name, col)) != 0)
@@ -507,22 +542,83 @@ static void ef_gc_gclass(int code, int *group, int *action)
 {
     *action = GA_MODAL;
     switch (code) {
-    case 0: case 10: case 20: case 30: *group = GR_MOTION; return;
-    case 800: *group = GR_MOTION; *action = GA_IGNORE; return;
-    case 40: case 530: *group = GR_NONMODAL; *action = GA_EVENT; return;
-    case 170: case 180: case 190: *group = GR_PLANE; return;
-    case 200: case 210: *group = GR_UNITS; return;
-    case 900: case 910: *group = GR_DIST; return;
-    case 901: case 911: *group = GR_ARCDIST; return;
-    case 940: *group = GR_FEEDMODE; *action = GA_IGNORE; return;
-    case 400: *group = GR_CUTTER; *action = GA_IGNORE; return;
-    case 430: case 431: case 490: *group = GR_TOOLLEN; *action = GA_EVENT; return;
-    case 980: case 990: *group = GR_RETRACT; *action = GA_IGNORE; return;
-    case 540: case 550: case 560: case 570: case 580: case 590: case 591: case 592: case 593:
-        *group = GR_COORD; *action = GA_EVENT; return;
-    case 610: case 611: case 640: *group = GR_PATH; return;
-    case 960: case 970: *group = GR_SPINDLEMODE; *action = GA_IGNORE; return;
-    default: *group = -1; *action = GA_UNSUPPORTED; return;
+    case 0:
+    case 10:
+    case 20:
+    case 30:
+        *group = GR_MOTION;
+        return;
+    case 800:
+        *group = GR_MOTION;
+        *action = GA_IGNORE;
+        return;
+    case 40:
+    case 530:
+        *group = GR_NONMODAL;
+        *action = GA_EVENT;
+        return;
+    case 170:
+    case 180:
+    case 190:
+        *group = GR_PLANE;
+        return;
+    case 200:
+    case 210:
+        *group = GR_UNITS;
+        return;
+    case 900:
+    case 910:
+        *group = GR_DIST;
+        return;
+    case 901:
+    case 911:
+        *group = GR_ARCDIST;
+        return;
+    case 940:
+        *group = GR_FEEDMODE;
+        *action = GA_IGNORE;
+        return;
+    case 400:
+        *group = GR_CUTTER;
+        *action = GA_IGNORE;
+        return;
+    case 430:
+    case 431:
+    case 490:
+        *group = GR_TOOLLEN;
+        *action = GA_EVENT;
+        return;
+    case 980:
+    case 990:
+        *group = GR_RETRACT;
+        *action = GA_IGNORE;
+        return;
+    case 540:
+    case 550:
+    case 560:
+    case 570:
+    case 580:
+    case 590:
+    case 591:
+    case 592:
+    case 593:
+        *group = GR_COORD;
+        *action = GA_EVENT;
+        return;
+    case 610:
+    case 611:
+    case 640:
+        *group = GR_PATH;
+        return;
+    case 960:
+    case 970:
+        *group = GR_SPINDLEMODE;
+        *action = GA_IGNORE;
+        return;
+    default:
+        *group = -1;
+        *action = GA_UNSUPPORTED;
+        return;
     }
 }
 
@@ -606,7 +702,8 @@ static void ef_gc_plane_axes(int plane, int *a, int *b, int *nrm, char *la, char
 #define EF_GC_TWO_PI (2.0 * 3.14159265358979323846)
 
 /* Build an arc item from the current position to end; errors point at col. */
-static int ef_gc_arc(ef_gcode_t *r, const ef_gc_line_t *L, const double end[3], int g3, double scale, uint32_t col)
+static int ef_gc_arc(ef_gcode_t *r, const ef_gc_line_t *L, const double end[3], int g3,
+                     double scale, uint32_t col)
 {
     int a, b, nrm;
     char la, lb, ln;
@@ -622,7 +719,8 @@ static int ef_gc_arc(ef_gcode_t *r, const ef_gc_line_t *L, const double end[3], 
         return ef_gc_err(r, wn->col, "%c word on a G%d-plane arc", ln, r->plane);
     if (wp) {
         if (wp->v < 1 || wp->v != floor(wp->v) || wp->v > 1e6)
-            return ef_gc_err(r, wp->col, "%s P (turns) must be a whole number >= 1, got %.6g", gname, wp->v);
+            return ef_gc_err(r, wp->col, "%s P (turns) must be a whole number >= 1, got %.6g",
+                             gname, wp->v);
         turns = (int)wp->v;
     }
     if (wr && (wa || wb))
@@ -632,13 +730,14 @@ static int ef_gc_arc(ef_gcode_t *r, const ef_gc_line_t *L, const double end[3], 
         if ((rc = ef_gc_coord_ok(r, R, wr->col, "arc radius")) != 0)
             return rc;
         if (chord <= EF_GCODE_ZERO_LEN)
-            return ef_gc_err(r, wr->col, "%s R form with end equal to start (a full circle needs IJK)", gname);
+            return ef_gc_err(r, wr->col,
+                             "%s R form with end equal to start (a full circle needs IJK)", gname);
         radius = fabs(R);
         h2 = radius * radius - chord * chord / 4;
         if (h2 < 0) {
             if (chord / 2 - radius > fmax(EF_GCODE_ARC_ABS_TOL, EF_GCODE_ARC_REL_TOL * radius))
-                return ef_gc_err(r, wr->col, "%s radius %.4f smaller than half the chord %.4f", gname, radius,
-                                 chord / 2);
+                return ef_gc_err(r, wr->col, "%s radius %.4f smaller than half the chord %.4f",
+                                 gname, radius, chord / 2);
             h2 = 0;
             radius = chord / 2;
         }
@@ -667,8 +766,8 @@ static int ef_gc_arc(ef_gcode_t *r, const ef_gc_line_t *L, const double end[3], 
         if (radius <= EF_GCODE_ZERO_LEN)
             return ef_gc_err(r, col, "%s arc radius is zero (centre at the start)", gname);
         if (fabs(r1 - radius) > tol)
-            return ef_gc_err(r, col, "%s arc radius mismatch: start %.3f end %.3f (tolerance %.3f)", gname,
-                             radius, r1, tol);
+            return ef_gc_err(r, col, "%s arc radius mismatch: start %.3f end %.3f (tolerance %.3f)",
+                             gname, radius, r1, tol);
     }
     double sweep;
     if (chord <= EF_GCODE_ZERO_LEN) {
@@ -719,7 +818,8 @@ static int ef_gc_execute(ef_gcode_t *r, ef_gc_line_t *L)
             if (grp[group]) {
                 char other[16];
                 ef_gc_fmt_code(other, sizeof other, 'G', grp[group]->code);
-                return ef_gc_err(r, w->col, "%s and %s on one line are in the same modal group", other, name);
+                return ef_gc_err(r, w->col, "%s and %s on one line are in the same modal group",
+                                 other, name);
             }
             grp[group] = w;
         } else if (w->letter == 'M') {
@@ -738,7 +838,8 @@ static int ef_gc_execute(ef_gcode_t *r, ef_gc_line_t *L)
             if (mg >= 0 && mgrp[mg]) {
                 char other[16];
                 ef_gc_fmt_code(other, sizeof other, 'M', mgrp[mg]->code);
-                return ef_gc_err(r, w->col, "%s and %s on one line are in the same modal group", other, name);
+                return ef_gc_err(r, w->col, "%s and %s on one line are in the same modal group",
+                                 other, name);
             }
             if (mg >= 0)
                 mgrp[mg] = w;
@@ -760,7 +861,8 @@ static int ef_gc_execute(ef_gcode_t *r, ef_gc_line_t *L)
     if (wf) {
         double f = wf->v * scale;
         if (!isfinite(f) || f < 0 || f > EF_GCODE_MAX_FEED)
-            return ef_gc_err(r, wf->col, "feed F%.6g outside 0..%g mm/min", wf->v, EF_GCODE_MAX_FEED);
+            return ef_gc_err(r, wf->col, "feed F%.6g outside 0..%g mm/min", wf->v,
+                             EF_GCODE_MAX_FEED);
         r->feed = f;
     }
 
@@ -887,7 +989,7 @@ static int ef_gc_execute(ef_gcode_t *r, ef_gc_line_t *L)
             snprintf(it->text, sizeof it->text, "G53 G%d", motion - 1);
             for (int k = 0; k < 3; k++)
                 if (axis[k]) {
-                    snprintf(tmp, sizeof tmp, " %c%.6g", "XYZ"[k], axis[k]->v);
+                    snprintf(tmp, sizeof tmp, " %c%.6g", "XYZ"[k], axis[k] -> v);
                     strncat(it->text, tmp, sizeof it->text - strlen(it->text) - 1);
                 }
         } else if (motion == 3 || motion == 4) {
@@ -899,7 +1001,11 @@ static int ef_gc_execute(ef_gcode_t *r, ef_gc_line_t *L)
                               (end[1] - r->cur[1]) * (end[1] - r->cur[1]) +
                               (end[2] - r->cur[2]) * (end[2] - r->cur[2]));
             int zero = len <= EF_GCODE_ZERO_LEN;
-            ef_gcode_item_t *it = ef_gc_push(r, zero ? EF_GC_ZERO_MOVE : motion == 1 ? EF_GC_RAPID : EF_GC_LINE, col);
+            ef_gcode_item_t *it = ef_gc_push(r,
+                                             zero          ? EF_GC_ZERO_MOVE
+                                             : motion == 1 ? EF_GC_RAPID
+                                                           : EF_GC_LINE,
+                                             col);
             memcpy(it->start, r->cur, sizeof it->start);
             memcpy(it->end, zero ? r->cur : end, sizeof it->end);
             if (motion == 2)
@@ -1074,6 +1180,7 @@ int ef_gcode_next(ef_gcode_t *r, ef_gcode_item_t *it, ef_msg_t *m)
 
 const char *ef_gcode_kind_name(int kind)
 {
-    static const char *names[] = {"?", "rapid", "line", "arc", "zero", "event", "ignored", "tolerance", "end"};
+    static const char *names[] = {"?",     "rapid",   "line",      "arc", "zero",
+                                  "event", "ignored", "tolerance", "end"};
     return kind >= 1 && kind <= EF_GC_END ? names[kind] : "?";
 }

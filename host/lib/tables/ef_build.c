@@ -130,7 +130,9 @@ static int ef_cpu_solve_rows(void *ctx, ef_tfile_t *t, uint32_t row_begin, uint3
     const ef_cpu_ctx_t *c = ctx;
     ef_cpu_job_t job[64];
     for (int i = 0; i < c->threads; i++)
-        job[i] = (ef_cpu_job_t){.t = t, .row_begin = row_begin + (uint32_t)i, .row_end = row_end,
+        job[i] = (ef_cpu_job_t){.t = t,
+                                .row_begin = row_begin + (uint32_t)i,
+                                .row_end = row_end,
                                 .stride = (uint32_t)c->threads};
     return ef_parallel_run(job, sizeof job[0], c->threads, ef_cpu_worker, "build", NULL, m);
 }
@@ -150,8 +152,11 @@ int ef_build_backend_cpu(ef_build_backend_t *b, int threads)
     if (!c)
         return EF_ERR_NOMEM;
     c->threads = threads;
-    *b = (ef_build_backend_t){.name = "cpu", .solve_rows = ef_cpu_solve_rows,
-                              .close = ef_cpu_close, .ctx = c, .chunk_nodes = 4096};
+    *b = (ef_build_backend_t){.name = "cpu",
+                              .solve_rows = ef_cpu_solve_rows,
+                              .close = ef_cpu_close,
+                              .ctx = c,
+                              .chunk_nodes = 4096};
     return EF_OK;
 }
 
@@ -207,38 +212,47 @@ static int ef_all_zero(const uint8_t *p, size_t n)
 /* Refuse a damaged journal, saying how to get past it. */
 static int ef_journal_corrupt(ef_msg_t *m, int code, const char *path, const char *detail)
 {
-    return ef_fail(m, code, "%s: corrupt build journal (%s); it cannot be resumed: delete it or "
-                   "pass --fresh to start this build over", path, detail);
+    return ef_fail(m, code,
+                   "%s: corrupt build journal (%s); it cannot be resumed: delete it or "
+                   "pass --fresh to start this build over",
+                   path, detail);
 }
 
 /* Check a journal image against this build and collect its records (values into t when t
  * is not NULL). A record cut short at the end of the file (a crash mid-append) is dropped,
  * anything else that fails a check refuses the journal. */
 static int ef_journal_scan(const char *path, const uint8_t *buf, size_t len,
-                           const ef_efile_hdr_t *want, ef_tfile_t *t, ef_jstate_t *js,
-                           ef_msg_t *m)
+                           const ef_efile_hdr_t *want, ef_tfile_t *t, ef_jstate_t *js, ef_msg_t *m)
 {
     ef_efile_hdr_t h;
     ef_msg_t sub = {{0}};
     char detail[440];
     int rc = ef_efile_get_header(path, buf, len, ef_magic_journal, "build journal", &h, &sub);
     if (rc == EF_ERR_TBL_MAGIC)
-        return ef_fail(m, rc, "%s; refusing to overwrite it: remove it or choose another "
-                       "--journal", sub.text);
+        return ef_fail(m, rc,
+                       "%s; refusing to overwrite it: remove it or choose another "
+                       "--journal",
+                       sub.text);
     if (rc != EF_OK)
-        return ef_fail(m, rc, "%.400s; it cannot be resumed: delete it or pass --fresh to start "
-                       "this build over", sub.text);
+        return ef_fail(m, rc,
+                       "%.400s; it cannot be resumed: delete it or pass --fresh to start "
+                       "this build over",
+                       sub.text);
     if (ef_spec_diff(&want->spec, &h.spec, detail, sizeof detail))
-        return ef_fail(m, EF_ERR_ARG, "%s: journal of a different build (this build vs the "
+        return ef_fail(m, EF_ERR_ARG,
+                       "%s: journal of a different build (this build vs the "
                        "journal: %.330s); pass --fresh to discard it, or --journal to use another "
-                       "file", path, detail);
+                       "file",
+                       path, detail);
     if (h.index != want->index || h.count != want->count) {
         char a[40], b[40];
         snprintf(a, sizeof a, want->count ? "shard %u/%u" : "the whole table", want->index,
                  want->count);
         snprintf(b, sizeof b, h.count ? "shard %u/%u" : "the whole table", h.index, h.count);
-        return ef_fail(m, EF_ERR_ARG, "%s: journal of a different build (%s; this build is %s); "
-                       "pass --fresh to discard it, or --journal to use another file", path, b, a);
+        return ef_fail(m, EF_ERR_ARG,
+                       "%s: journal of a different build (%s; this build is %s); "
+                       "pass --fresh to discard it, or --journal to use another file",
+                       path, b, a);
     }
     const uint32_t rb = want->row_begin, re = want->row_end;
     const size_t per_row = (size_t)want->spec.axis_nodes[0] * want->spec.ndof;
@@ -268,8 +282,10 @@ static int ef_journal_scan(const char *path, const uint8_t *buf, size_t len,
         if (ef_le_get32(v + 4 * nval) != ef_crc32(0, v, (uint32_t)(4 * nval))) {
             if (off + need == len && ef_all_zero(v, 4 * nval + 4))
                 break;
-            snprintf(detail, sizeof detail, "record %u at offset %zu (rows %u..%u): values CRC "
-                     "mismatch", rec, off, r0, r1 - 1);
+            snprintf(detail, sizeof detail,
+                     "record %u at offset %zu (rows %u..%u): values CRC "
+                     "mismatch",
+                     rec, off, r0, r1 - 1);
             return ef_journal_corrupt(m, EF_ERR_TBL_CRC, path, detail);
         }
         for (uint32_t row = r0; row < r1; row++)
@@ -307,13 +323,16 @@ static int ef_journal_deletable(const char *path, ef_msg_t *m)
     uint8_t head[8];
     int fd = open(path, O_RDONLY | O_CLOEXEC);
     if (fd < 0)
-        return errno == ENOENT ? EF_OK
-                               : ef_fail(m, EF_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+        return errno == ENOENT
+                   ? EF_OK
+                   : ef_fail(m, EF_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
     ssize_t n = read(fd, head, sizeof head);
     (void)close(fd);
     if (n != (ssize_t)sizeof head || memcmp(head, ef_magic_journal, sizeof head))
-        return ef_fail(m, EF_ERR_TBL_MAGIC, "%s: not a build journal; refusing to delete it for "
-                       "--fresh: remove it yourself or choose another --journal", path);
+        return ef_fail(m, EF_ERR_TBL_MAGIC,
+                       "%s: not a build journal; refusing to delete it for "
+                       "--fresh: remove it yourself or choose another --journal",
+                       path);
     return EF_OK;
 }
 
@@ -333,7 +352,9 @@ int ef_build_check(const ef_tfile_t *t, const char *backend, const ef_build_opts
     int rc = ef_build_prepare(t, backend, o, &h, m);
     if (rc != EF_OK)
         return rc;
-    ef_build_plan_t p = {.rows = h.spec.rows, .row_begin = h.row_begin, .row_end = h.row_end,
+    ef_build_plan_t p = {.rows = h.spec.rows,
+                         .row_begin = h.row_begin,
+                         .row_end = h.row_end,
                          .n0 = h.spec.axis_nodes[0]};
     struct stat st;
     if (o->journal && o->fresh)
@@ -395,8 +416,10 @@ static int ef_journal_open(const char *path, int fresh, const ef_efile_hdr_t *h,
     if (flock(fd, LOCK_EX | LOCK_NB) != 0) {
         err = errno;
         (void)close(fd);
-        return ef_fail(m, EF_ERR_IO, "%s: journal in use by another build (%s); wait for it or "
-                       "give this build another --journal", path, strerror(err));
+        return ef_fail(m, EF_ERR_IO,
+                       "%s: journal in use by another build (%s); wait for it or "
+                       "give this build another --journal",
+                       path, strerror(err));
     }
     uint8_t *buf;
     size_t len;
@@ -473,8 +496,7 @@ static size_t ef_build_bad_value(const ef_spec_rec_t *s, const ef_tfile_t *t, ui
                                  uint32_t n_end)
 {
     const size_t nval = (size_t)(n_end - n_begin) * t->view.ndof;
-    const size_t bad =
-        ef_values_check(s, NULL, t->values + (size_t)n_begin * t->view.ndof, nval);
+    const size_t bad = ef_values_check(s, NULL, t->values + (size_t)n_begin * t->view.ndof, nval);
     return bad < nval ? (size_t)n_begin * t->view.ndof + bad : SIZE_MAX;
 }
 
@@ -535,13 +557,15 @@ int ef_build_run(ef_tfile_t *t, ef_build_backend_t *b, const ef_build_opts_t *o,
         if (rc != EF_OK) {
             char safe[300];
             if (fd >= 0)
-                snprintf(safe, sizeof safe, "%u chunk%s (%u of %u rows) %s safe in %s: run the "
-                         "same command again to resume", js.chunks, js.chunks == 1 ? "" : "s",
-                         js.rows_done, re - rb, js.chunks == 1 ? "is" : "are", o->journal);
+                snprintf(safe, sizeof safe,
+                         "%u chunk%s (%u of %u rows) %s safe in %s: run the "
+                         "same command again to resume",
+                         js.chunks, js.chunks == 1 ? "" : "s", js.rows_done, re - rb,
+                         js.chunks == 1 ? "is" : "are", o->journal);
             else
                 snprintf(safe, sizeof safe, "no journal was kept, nothing is saved");
-            ef_fail(m, rc, "build stopped at rows %u..%u (backend %s): %.260s; %s", r, e - 1,
-                    bname, sub.text, safe);
+            ef_fail(m, rc, "build stopped at rows %u..%u (backend %s): %.260s; %s", r, e - 1, bname,
+                    sub.text, safe);
             break;
         }
         memset(js.done + (r - rb), 1, e - r);
@@ -557,8 +581,10 @@ int ef_build_run(ef_tfile_t *t, ef_build_backend_t *b, const ef_build_opts_t *o,
         if (rc != EF_OK && fd >= 0) {
             char text[sizeof m->text];
             snprintf(text, sizeof text, "%s", m->text);
-            ef_fail(m, rc, "%.380s; every row is safe in %s: rerun the same command to write the "
-                    "output without recomputing", text, o->journal);
+            ef_fail(m, rc,
+                    "%.380s; every row is safe in %s: rerun the same command to write the "
+                    "output without recomputing",
+                    text, o->journal);
         }
     }
     if (fd >= 0)
@@ -580,8 +606,7 @@ int ef_build_all(ef_tfile_t *t, ef_build_backend_t *b, ef_build_progress_fn prog
 }
 
 /* Compatibility wrapper: the CPU backend over the whole table. */
-int ef_build_cpu(ef_tfile_t *t, int threads, ef_build_progress_fn progress, void *ctx,
-                 ef_msg_t *m)
+int ef_build_cpu(ef_tfile_t *t, int threads, ef_build_progress_fn progress, void *ctx, ef_msg_t *m)
 {
     ef_build_backend_t b;
     if (ef_build_backend_cpu(&b, threads) != EF_OK)

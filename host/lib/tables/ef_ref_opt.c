@@ -41,15 +41,15 @@
 
 #include "evenfeed/host/tables/ef_ref.h"
 
-#define EF_OPT_LS_MAX 40   /* backtracking halvings per iteration */
-#define EF_OPT_JACOBI_SWEEPS 50 /* Jacobi sweeps per eigen-decomposition */
-#define EF_OPT_NC_STEP 0.1 /* least step (per unit chord) along negative curvature */
-#define EF_OPT_NOISE 1e-10 /* relative change of C^2 below which values are rounding noise */
-#define EF_OPT_ITER_CAP 100000 /* largest accepted max_iter */
-#define EF_OPT_AXIS_MAX 8   /* nodes per screening-grid axis */
-#define EF_OPT_GRID_MAX 1225 /* screening-grid points (quintic: 35 x 35) */
-#define EF_OPT_KEEP 8       /* Newton starts taken from the grid */
-#define EF_OPT_MAX_STARTS (1 + 81 + 7 + EF_OPT_KEEP) /* warm + fixed + bound + grid */
+#define EF_OPT_LS_MAX        40    /* backtracking halvings per iteration */
+#define EF_OPT_JACOBI_SWEEPS 50    /* Jacobi sweeps per eigen-decomposition */
+#define EF_OPT_NC_STEP       0.1   /* least step (per unit chord) along negative curvature */
+#define EF_OPT_NOISE         1e-10 /* relative change of C^2 below which values are rounding noise */
+#define EF_OPT_ITER_CAP      100000 /* largest accepted max_iter */
+#define EF_OPT_AXIS_MAX      8      /* nodes per screening-grid axis */
+#define EF_OPT_GRID_MAX      1225   /* screening-grid points (quintic: 35 x 35) */
+#define EF_OPT_KEEP          8      /* Newton starts taken from the grid */
+#define EF_OPT_MAX_STARTS    (1 + 81 + 7 + EF_OPT_KEEP) /* warm + fixed + bound + grid */
 
 /* One normalized problem: the segment with p0 at the origin and unit chord, and its box. */
 typedef struct {
@@ -179,8 +179,8 @@ static double ef_opt_local(const ef_prob_t *p, double *x, int max_iter, double t
         const double eps = fmin(pg, 1e-3);
         int act[EF_REF_MAX_DOF], fi[EF_REF_MAX_DOF], m = 0;
         for (int i = 0; i < n; i++) {
-            act[i] = (x[i] <= p->lo[i] + eps && g[i] > 0.0) ||
-                     (x[i] >= p->hi[i] - eps && g[i] < 0.0);
+            act[i] =
+                (x[i] <= p->lo[i] + eps && g[i] > 0.0) || (x[i] >= p->hi[i] - eps && g[i] < 0.0);
             if (!act[i])
                 fi[m++] = i;
         }
@@ -341,9 +341,8 @@ static void ef_opt_grid(const ef_prob_t *p, ef_grid_t *gr)
                                        ? sum
                                        : dif);
         if (v.x == 0.0 && v.y == 0.0 && v.z == 0.0) /* tangents along the chord */
-            v = ef_opt_unit(ef_opt_perp(fabs(u.x) > 0.6 ? (ef_dvec3_t){0.0, 1.0, 0.0}
-                                                         : (ef_dvec3_t){1.0, 0.0, 0.0},
-                                        u));
+            v = ef_opt_unit(ef_opt_perp(
+                fabs(u.x) > 0.6 ? (ef_dvec3_t){0.0, 1.0, 0.0} : (ef_dvec3_t){1.0, 0.0, 0.0}, u));
         gr->u = u;
         gr->v = v;
         gr->w = (ef_dvec3_t){u.y * v.z - u.z * v.y, u.z * v.x - u.x * v.z, u.x * v.y - u.y * v.x};
@@ -502,15 +501,14 @@ int ef_ref_optimize(ef_ref_kind_t kind, const ef_dend_t *e0, const ef_dend_t *e1
         ef_ref_opts_default(&def);
         o = &def;
     }
-    if (!(isfinite(o->x1_min) && o->x1_min > 0.0 && isfinite(o->x1_max) &&
-          o->x1_max > o->x1_min))
+    if (!(isfinite(o->x1_min) && o->x1_min > 0.0 && isfinite(o->x1_max) && o->x1_max > o->x1_min))
         return ef_fail(m, EF_ERR_ARG, "ef_ref_optimize: need 0 < x1_min < x1_max, got %g, %g",
                        o->x1_min, o->x1_max);
     if (!(isfinite(o->x2_max) && o->x2_max > 0.0))
         return ef_fail(m, EF_ERR_ARG, "ef_ref_optimize: need x2_max > 0, got %g", o->x2_max);
     if (o->max_iter < 1 || o->max_iter > EF_OPT_ITER_CAP)
-        return ef_fail(m, EF_ERR_ARG, "ef_ref_optimize: max_iter %d outside [1, %d]",
-                       o->max_iter, EF_OPT_ITER_CAP);
+        return ef_fail(m, EF_ERR_ARG, "ef_ref_optimize: max_iter %d outside [1, %d]", o->max_iter,
+                       EF_OPT_ITER_CAP);
     if (!(isfinite(o->tol) && o->tol >= 0.0))
         return ef_fail(m, EF_ERR_ARG, "ef_ref_optimize: tol %g not finite and >= 0", o->tol);
     if (o->warm)
@@ -534,9 +532,10 @@ int ef_ref_optimize(ef_ref_kind_t kind, const ef_dend_t *e0, const ef_dend_t *e1
     const ef_dvec3_t q = {e1->p.x - e0->p.x, e1->p.y - e0->p.y, e1->p.z - e0->p.z};
     /* The chord, scaled first so that no square overflows or underflows. */
     const double qm = fmax(fabs(q.x), fmax(fabs(q.y), fabs(q.z)));
-    const double s = qm > 0.0 ? qm * sqrt((q.x / qm) * (q.x / qm) + (q.y / qm) * (q.y / qm) +
-                                          (q.z / qm) * (q.z / qm))
-                              : 0.0;
+    const double s =
+        qm > 0.0
+            ? qm * sqrt((q.x / qm) * (q.x / qm) + (q.y / qm) * (q.y / qm) + (q.z / qm) * (q.z / qm))
+            : 0.0;
     if (!isfinite(s))
         return ef_fail(m, EF_ERR_NONFINITE, "ef_ref_optimize: chord overflows (|p1 - p0| > %g)",
                        DBL_MAX);
@@ -599,8 +598,9 @@ int ef_ref_optimize(ef_ref_kind_t kind, const ef_dend_t *e0, const ef_dend_t *e1
         /* Starts that reach the same minimum differ only by rounding there; among such
          * near-ties prefer one that met the stopping test. */
         const double tie = 1e-9 * bestf;
-        if (isfinite(f) && (f < bestf - tie ||
-                            (f <= bestf + tie && (conv > bestconv || (conv == bestconv && f < bestf))))) {
+        if (isfinite(f) &&
+            (f < bestf - tie ||
+             (f <= bestf + tie && (conv > bestconv || (conv == bestconv && f < bestf))))) {
             bestf = f;
             bestconv = conv;
             for (int i = 0; i < n; i++)

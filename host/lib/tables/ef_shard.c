@@ -47,8 +47,10 @@ int ef_spec_from_table(const ef_tfile_t *t, const char *backend, ef_spec_rec_t *
 {
     size_t blen = backend ? strlen(backend) : 0;
     if (!t || !s || blen == 0 || blen > EF_SPEC_MAX_BACKEND || !ef_printable(backend, blen))
-        return ef_fail(m, EF_ERR_ARG, "build: backend name '%s' is empty, longer than %u or "
-                       "not printable", backend ? backend : "(null)", EF_SPEC_MAX_BACKEND);
+        return ef_fail(m, EF_ERR_ARG,
+                       "build: backend name '%s' is empty, longer than %u or "
+                       "not printable",
+                       backend ? backend : "(null)", EF_SPEC_MAX_BACKEND);
     memset(s, 0, sizeof *s);
     s->kind = t->view.kind;
     s->symmetry = t->view.symmetry;
@@ -193,8 +195,8 @@ static int ef_spec_decode(const uint8_t *p, size_t len, ef_spec_rec_t *s)
     if (len < EF_SPEC_FIXED)
         return -1;
     const uint32_t blen = p[136], plen = ef_le_get16(p + 138);
-    if (p[137] != 0 || blen == 0 || blen > EF_SPEC_MAX_BACKEND ||
-        plen > EF_TABLE_MAX_PROVENANCE || len != EF_SPEC_FIXED + blen + plen)
+    if (p[137] != 0 || blen == 0 || blen > EF_SPEC_MAX_BACKEND || plen > EF_TABLE_MAX_PROVENANCE ||
+        len != EF_SPEC_FIXED + blen + plen)
         return -1;
     s->kind = (uint16_t)ef_le_get16(p);
     s->symmetry = (uint16_t)ef_le_get16(p + 2);
@@ -228,8 +230,7 @@ static int ef_spec_decode(const uint8_t *p, size_t len, ef_spec_rec_t *s)
 }
 
 /* Rows of shard index/count over rows (count 0: all); caller has checked the ranges. */
-static void ef_shard_range(uint32_t rows, uint32_t index, uint32_t count, uint32_t *b,
-                           uint32_t *e)
+static void ef_shard_range(uint32_t rows, uint32_t index, uint32_t count, uint32_t *b, uint32_t *e)
 {
     if (count == 0) {
         *b = 0;
@@ -325,9 +326,8 @@ static const char *ef_efile_kind(const uint8_t *buf, size_t len)
 }
 
 /* Header checks in file order, each failure naming the file, the field and its offset. */
-int ef_efile_get_header(const char *path, const uint8_t *buf, size_t len,
-                        const uint8_t magic[8], const char *what, ef_efile_hdr_t *h,
-                        ef_msg_t *m)
+int ef_efile_get_header(const char *path, const uint8_t *buf, size_t len, const uint8_t magic[8],
+                        const char *what, ef_efile_hdr_t *h, ef_msg_t *m)
 {
     memset(h, 0, sizeof *h);
     if (len < 8 || memcmp(buf, magic, 8)) {
@@ -369,9 +369,9 @@ int ef_efile_get_header(const char *path, const uint8_t *buf, size_t len,
     h->row_end = ef_le_get32(buf + 28);
     h->header_len = hlen;
     uint32_t b = 0, e = 0;
-    const int shard_ok = h->count == 0 ? h->index == 0
-                                       : h->index >= 1 && h->index <= h->count &&
-                                             h->count <= h->spec.rows;
+    const int shard_ok = h->count == 0
+                             ? h->index == 0
+                             : h->index >= 1 && h->index <= h->count && h->count <= h->spec.rows;
     if (shard_ok)
         ef_shard_range(h->spec.rows, h->index, h->count, &b, &e);
     if (!shard_ok || b != h->row_begin || e != h->row_end)
@@ -447,8 +447,8 @@ int ef_shard_write(const ef_tfile_t *t, const char *backend, const ef_build_shar
 }
 
 /* Read and fully check one shard file; *values points into *buf (little-endian floats). */
-static int ef_shard_load(const char *path, uint8_t **buf, ef_efile_hdr_t *h,
-                         const uint8_t **values, size_t *nval, ef_msg_t *m)
+static int ef_shard_load(const char *path, uint8_t **buf, ef_efile_hdr_t *h, const uint8_t **values,
+                         size_t *nval, ef_msg_t *m)
 {
     size_t len;
     int rc = ef_file_read(path, EF_SHARD_MAX_FILE, buf, &len, m);
@@ -540,8 +540,8 @@ int ef_shard_merge(const char *const *paths, uint32_t npaths, ef_tfile_t *out, e
         }
         if (seen[h->index - 1]) {
             rc = ef_fail(m, EF_ERR_ARG, "%s and %s are both shard %u/%u (rows %u..%u): overlap",
-                         paths[seen[h->index - 1] - 1], paths[k], h->index, h->count,
-                         h->row_begin, h->row_end - 1);
+                         paths[seen[h->index - 1] - 1], paths[k], h->index, h->count, h->row_begin,
+                         h->row_end - 1);
             break;
         }
         seen[h->index - 1] = k + 1;
@@ -564,8 +564,8 @@ int ef_shard_merge(const char *const *paths, uint32_t npaths, ef_tfile_t *out, e
                        first->count, b, e - 1);
         }
         if (missing)
-            rc = ef_fail(m, EF_ERR_ARG, "%u of %u shards missing: %s%s", missing,
-                         first->count, list, missing > 8 ? ", ..." : "");
+            rc = ef_fail(m, EF_ERR_ARG, "%u of %u shards missing: %s%s", missing, first->count,
+                         list, missing > 8 ? ", ..." : "");
     }
 done:
     if (rc != EF_OK)

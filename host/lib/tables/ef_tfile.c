@@ -459,8 +459,6 @@ int ef_tfile_serialize(const ef_tfile_t *t, uint8_t **blob, size_t *len, ef_msg_
     return ef_tf_validate(&h, t->values, "table", blob, len, &view, m);
 }
 
-
-
 /* Readers see the old file or the complete new one: the image goes to a temporary file
  * beside PATH (same file system, so rename is atomic), is flushed, then renamed over. */
 int ef_tfile_write(const ef_tfile_t *t, const char *path, ef_msg_t *m)

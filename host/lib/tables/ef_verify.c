@@ -182,10 +182,17 @@ int ef_verify_table(const ef_table_t *tbl, const ef_verify_opts_t *o, ef_verify_
     clock_gettime(CLOCK_MONOTONIC, &t0);
     ef_verify_job_t job[64];
     for (int i = 0; i < o->threads; i++)
-        job[i] = (ef_verify_job_t){.tbl = tbl, .o = o, .index = i, .threads = o->threads,
-                                   .excess = excess, .x1e = x1e, .x2e = x2e, .cfg = cfg};
+        job[i] = (ef_verify_job_t){.tbl = tbl,
+                                   .o = o,
+                                   .index = i,
+                                   .threads = o->threads,
+                                   .excess = excess,
+                                   .x1e = x1e,
+                                   .x2e = x2e,
+                                   .cfg = cfg};
     int started = 0;
-    int rc = ef_parallel_run(job, sizeof job[0], o->threads, ef_verify_worker, "verify", &started, m);
+    int rc =
+        ef_parallel_run(job, sizeof job[0], o->threads, ef_verify_worker, "verify", &started, m);
     if (rc == EF_OK) {
         uint32_t worst = 0;
         for (uint32_t i = 1; i < n; i++)

@@ -28,11 +28,11 @@ extern "C" {
 
 /** Geometric data at one end of a segment. */
 typedef struct {
-    ef_vec3_t p;  /**< position (program units) */
-    ef_vec3_t t;  /**< unit tangent, pointing in the direction of travel */
-    ef_vec3_t n;  /**< unit principal normal, perpendicular to t (G2 only). May be the zero
-                       vector when kappa == 0. */
-    float kappa;  /**< curvature (1/program units) along n; either sign (G2 only) */
+    ef_vec3_t p; /**< position (program units) */
+    ef_vec3_t t; /**< unit tangent, pointing in the direction of travel */
+    ef_vec3_t n; /**< unit principal normal, perpendicular to t (G2 only). May be the zero
+                      vector when kappa == 0. */
+    float kappa; /**< curvature (1/program units) along n; either sign (G2 only) */
 } ef_endpoint_t;
 
 /** A segment's normalized configuration and the frame that maps it back. */

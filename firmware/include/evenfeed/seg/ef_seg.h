@@ -29,13 +29,13 @@ extern "C" {
 
 /** A Bézier segment of degree 3 or 5. */
 typedef struct {
-    ef_vec3_t b[6];    /**< control points b[0..degree] */
-    uint8_t degree;    /**< 3, 5, or 0 when invalid */
-    uint8_t ndof;      /**< 2 (G1) or 4 (G2) */
-    uint32_t flags;    /**< EF_SEG_CLAMPED */
-    uint32_t clamp;    /**< EF_LOOKUP_CLAMP_* bits from the lookup */
-    float dof[4];      /**< x1_0, x1_1 (G1) or x1_0, x2_0, x1_1, x2_1 (G2), program units */
-    ef_norm_t norm;    /**< the normalized configuration the DOFs were looked up for */
+    ef_vec3_t b[6]; /**< control points b[0..degree] */
+    uint8_t degree; /**< 3, 5, or 0 when invalid */
+    uint8_t ndof;   /**< 2 (G1) or 4 (G2) */
+    uint32_t flags; /**< EF_SEG_CLAMPED */
+    uint32_t clamp; /**< EF_LOOKUP_CLAMP_* bits from the lookup */
+    float dof[4];   /**< x1_0, x1_1 (G1) or x1_0, x2_0, x1_1, x2_1 (G2), program units */
+    ef_norm_t norm; /**< the normalized configuration the DOFs were looked up for */
 } ef_seg_t;
 
 /**
@@ -77,8 +77,8 @@ int ef_seg_g2_quintic(const ef_table_t *tbl, const ef_endpoint_t *e0, const ef_e
  * @retval EF_ERR_NONFINITE  non-finite DOF, or as ef_normalize()
  * @retval EF_ERR_TANGENT, EF_ERR_NORMAL, EF_ERR_DEGENERATE, EF_ERR_DOMAIN  as ef_normalize()
  */
-int ef_seg_from_dofs(const ef_endpoint_t *e0, const ef_endpoint_t *e1, int degree,
-                     const float *dof, ef_seg_t *out);
+int ef_seg_from_dofs(const ef_endpoint_t *e0, const ef_endpoint_t *e1, int degree, const float *dof,
+                     ef_seg_t *out);
 
 #ifdef __cplusplus
 }

@@ -52,8 +52,8 @@
 extern "C" {
 #endif
 
-#define EF_TABLE_MAGIC_LEN 8
-#define EF_TABLE_VERSION 1u
+#define EF_TABLE_MAGIC_LEN   8
+#define EF_TABLE_VERSION     1u
 #define EF_TABLE_HEADER_SIZE 160u
 
 /** Table kinds (file field "kind"). */
@@ -65,9 +65,9 @@ enum {
 enum { EF_TABLE_F32 = 1 };
 /** Symmetry of the stored region. */
 enum {
-    EF_SYM_NONE = 0,      /**< the whole domain is stored */
-    EF_SYM_G1_FOLD = 1,   /**< G1: (u,v) fundamental region, 4x smaller */
-    EF_SYM_G2_MIRROR = 2  /**< G2: alpha >= 0 half, 2x smaller */
+    EF_SYM_NONE = 0,     /**< the whole domain is stored */
+    EF_SYM_G1_FOLD = 1,  /**< G1: (u,v) fundamental region, 4x smaller */
+    EF_SYM_G2_MIRROR = 2 /**< G2: alpha >= 0 half, 2x smaller */
 };
 /** Functional ids. */
 enum { EF_FUNCTIONAL_CONSTANT_SPEED = 1 };
@@ -79,18 +79,18 @@ enum { EF_QUAD_GAUSS_LEGENDRE = 1 };
 /** Lookup result flags: bit i set = user coordinate i (alpha, beta, k0, k1) was outside the
  *  table domain and was clamped to it. */
 #define EF_LOOKUP_CLAMP_ALPHA 1u
-#define EF_LOOKUP_CLAMP_BETA 2u
-#define EF_LOOKUP_CLAMP_K0 4u
-#define EF_LOOKUP_CLAMP_K1 8u
+#define EF_LOOKUP_CLAMP_BETA  2u
+#define EF_LOOKUP_CLAMP_K0    4u
+#define EF_LOOKUP_CLAMP_K1    8u
 
 /** One axis of a table as the lookup uses it. */
 typedef struct {
-    float lo;          /**< first node */
-    float hi;          /**< last node */
-    float inv_step;    /**< (nodes - 1) / (hi - lo) */
-    uint32_t nodes;    /**< node count, 2..EF_TABLE_MAX_AXIS_NODES */
-    uint32_t stride;   /**< distance between neighbouring nodes along this axis, in nodes */
-    uint32_t flags;    /**< EF_AXIS_PERIODIC */
+    float lo;        /**< first node */
+    float hi;        /**< last node */
+    float inv_step;  /**< (nodes - 1) / (hi - lo) */
+    uint32_t nodes;  /**< node count, 2..EF_TABLE_MAX_AXIS_NODES */
+    uint32_t stride; /**< distance between neighbouring nodes along this axis, in nodes */
+    uint32_t flags;  /**< EF_AXIS_PERIODIC */
 } ef_table_axis_t;
 
 /** A table ready for lookup. Generated C sources define these as `const`; ef_table_parse()
@@ -106,8 +106,8 @@ typedef struct {
     float x1_max;        /**< optimizer's x1 upper bound per unit chord */
     float x2_max;        /**< optimizer's |x2| bound per unit chord (G2) */
     ef_table_axis_t axis[EF_TABLE_MAX_AXES];
-    const float *data;   /**< nodes x ndof values */
-    const char *provenance;   /**< not NUL-terminated */
+    const float *data;      /**< nodes x ndof values */
+    const char *provenance; /**< not NUL-terminated */
     uint32_t provenance_len;
 } ef_table_t;
 
@@ -159,7 +159,8 @@ int ef_table_parse(const void *blob, uint32_t len, ef_table_t *out, uint32_t *ba
  * views built by generated C sources. Does not read the node values.
  * @retval EF_OK
  * @retval EF_ERR_ARG         NULL pointer or data NULL
- * @retval EF_ERR_TBL_KIND, EF_ERR_TBL_SHAPE, EF_ERR_TBL_AXIS, EF_ERR_TBL_SYMMETRY  as ef_table_parse()
+ * @retval EF_ERR_TBL_KIND, EF_ERR_TBL_SHAPE, EF_ERR_TBL_AXIS, EF_ERR_TBL_SYMMETRY  as
+ * ef_table_parse()
  */
 int ef_table_check(const ef_table_t *tbl);
 

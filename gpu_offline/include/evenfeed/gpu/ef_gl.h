@@ -24,12 +24,12 @@ typedef struct ef_gl ef_gl_t;
 
 /** Context options; zero-initialized means the defaults. */
 typedef struct {
-    const char *platform;   /**< "auto" (NULL), "device" or "surfaceless"; the environment
-                                 variable EF_GL_PLATFORM overrides it */
-    int device;             /**< EGL device index for "device" (default 0; EF_GL_DEVICE) */
-    uint32_t local_size;    /**< invocations per workgroup (default 32) */
-    double timeout_s;       /**< longest wait for one dispatch before the GPU counts as lost
-                                 (default 300 s) */
+    const char *platform; /**< "auto" (NULL), "device" or "surfaceless"; the environment
+                               variable EF_GL_PLATFORM overrides it */
+    int device;           /**< EGL device index for "device" (default 0; EF_GL_DEVICE) */
+    uint32_t local_size;  /**< invocations per workgroup (default 32) */
+    double timeout_s;     /**< longest wait for one dispatch before the GPU counts as lost
+                               (default 300 s) */
 } ef_gl_opts_t;
 
 /** Results per configuration, in doubles (the shader's output layout). */

@@ -75,55 +75,55 @@ typedef enum {
 
 /** One item of the stream. Fields not used by a kind are zero. */
 typedef struct {
-    int kind;          /**< ::ef_gcode_kind_t */
-    uint32_t line;     /**< 1-based source line */
-    uint32_t col;      /**< 1-based column (bytes) of the word that produced the item */
-    int units;         /**< program units when the item was read: 20 (inch) or 21 (mm) */
-    double start[3];   /**< X Y Z at the start (mm); also set for ZERO_MOVE */
-    double end[3];     /**< X Y Z at the end (mm) */
-    double centre[3];  /**< arc centre (mm); its normal-axis coordinate is the start's */
-    double radius;     /**< arc radius at the start (mm) */
-    double sweep;      /**< arc angle (rad) about the plane normal: > 0 for G3, < 0 for G2,
-                            full turns included */
-    double feed;       /**< LINE/ARC: feed in mm/min (> 0) */
-    int dir;           /**< arc direction: +1 G3 (counter-clockwise), -1 G2 (clockwise) */
-    int plane;         /**< arc plane: 17 (XY, normal +Z), 18 (ZX, normal +Y), 19 (YZ, +X) */
-    int turns;         /**< arc: P word, number of times the end angle is passed (>= 1) */
-    int path_mode;     /**< TOLERANCE: ::ef_gcode_path_t */
-    double p_tol;      /**< TOLERANCE: G64 P, path tolerance (mm), 0 when not given */
-    double q_tol;      /**< TOLERANCE: G64 Q, collinearity tolerance (mm), 0 when not given */
-    char text[128];    /**< EVENT/IGNORED: the words ("T1 M6", "G40"); END: what ended it
-                            ("M2", "M30", "%", "end of text") */
+    int kind;         /**< ::ef_gcode_kind_t */
+    uint32_t line;    /**< 1-based source line */
+    uint32_t col;     /**< 1-based column (bytes) of the word that produced the item */
+    int units;        /**< program units when the item was read: 20 (inch) or 21 (mm) */
+    double start[3];  /**< X Y Z at the start (mm); also set for ZERO_MOVE */
+    double end[3];    /**< X Y Z at the end (mm) */
+    double centre[3]; /**< arc centre (mm); its normal-axis coordinate is the start's */
+    double radius;    /**< arc radius at the start (mm) */
+    double sweep;     /**< arc angle (rad) about the plane normal: > 0 for G3, < 0 for G2,
+                           full turns included */
+    double feed;      /**< LINE/ARC: feed in mm/min (> 0) */
+    int dir;          /**< arc direction: +1 G3 (counter-clockwise), -1 G2 (clockwise) */
+    int plane;        /**< arc plane: 17 (XY, normal +Z), 18 (ZX, normal +Y), 19 (YZ, +X) */
+    int turns;        /**< arc: P word, number of times the end angle is passed (>= 1) */
+    int path_mode;    /**< TOLERANCE: ::ef_gcode_path_t */
+    double p_tol;     /**< TOLERANCE: G64 P, path tolerance (mm), 0 when not given */
+    double q_tol;     /**< TOLERANCE: G64 Q, collinearity tolerance (mm), 0 when not given */
+    char text[128];   /**< EVENT/IGNORED: the words ("T1 M6", "G40"); END: what ended it
+                           ("M2", "M30", "%", "end of text") */
 } ef_gcode_item_t;
 
 /** Reader state. Treat as opaque; the fields are here so it can live on the stack. */
 typedef struct {
-    const char *text;     /**< program text (not owned unless buf is set) */
-    size_t len;           /**< bytes of text */
-    size_t pos;           /**< offset of the next unread line */
-    char *buf;            /**< owned copy from ef_gcode_open(), or NULL */
-    char name[128];       /**< program name for messages */
-    uint32_t line;        /**< number of the last line read */
-    int err;              /**< sticky error code (0 while healthy) */
-    int ended;            /**< an end item has been produced */
-    int percent;          /**< the text opened with a % line */
-    int line_seen;        /**< a line with words has been read */
-    int units;            /**< 20 or 21 */
-    int absolute;         /**< G90 (1) or G91 (0) */
-    int arc_absolute;     /**< G90.1 (1) or G91.1 (0) */
-    int plane;            /**< 17, 18 or 19 */
-    int motion;           /**< modal motion: 0 none, 1 G0, 2 G1, 3 G2, 4 G3 */
-    double feed;          /**< mm/min, 0 until an F word */
-    double cur[3];        /**< current position (mm) */
-    uint32_t ignored_seen; /**< bit set of ignored words already reported */
-    double param[EF_GCODE_NPARAM];                 /**< numbered parameters */
+    const char *text;              /**< program text (not owned unless buf is set) */
+    size_t len;                    /**< bytes of text */
+    size_t pos;                    /**< offset of the next unread line */
+    char *buf;                     /**< owned copy from ef_gcode_open(), or NULL */
+    char name[128];                /**< program name for messages */
+    uint32_t line;                 /**< number of the last line read */
+    int err;                       /**< sticky error code (0 while healthy) */
+    int ended;                     /**< an end item has been produced */
+    int percent;                   /**< the text opened with a % line */
+    int line_seen;                 /**< a line with words has been read */
+    int units;                     /**< 20 or 21 */
+    int absolute;                  /**< G90 (1) or G91 (0) */
+    int arc_absolute;              /**< G90.1 (1) or G91.1 (0) */
+    int plane;                     /**< 17, 18 or 19 */
+    int motion;                    /**< modal motion: 0 none, 1 G0, 2 G1, 3 G2, 4 G3 */
+    double feed;                   /**< mm/min, 0 until an F word */
+    double cur[3];                 /**< current position (mm) */
+    uint32_t ignored_seen;         /**< bit set of ignored words already reported */
+    double param[EF_GCODE_NPARAM]; /**< numbered parameters */
     char named_key[EF_GCODE_NNAMED][EF_GCODE_NAME_MAX + 1]; /**< named parameter names */
-    double named_val[EF_GCODE_NNAMED];             /**< named parameter values */
-    int nnamed;                                    /**< named parameters defined */
-    ef_gcode_item_t queue[16];                     /**< items of the current line */
-    ef_gcode_item_t end_item;                      /**< the end item, repeated once ended */
-    int qhead, qlen;                               /**< queue read position and length */
-    ef_msg_t errmsg;                               /**< the sticky error's message */
+    double named_val[EF_GCODE_NNAMED];                      /**< named parameter values */
+    int nnamed;                                             /**< named parameters defined */
+    ef_gcode_item_t queue[16];                              /**< items of the current line */
+    ef_gcode_item_t end_item; /**< the end item, repeated once ended */
+    int qhead, qlen;          /**< queue read position and length */
+    ef_msg_t errmsg;          /**< the sticky error's message */
 } ef_gcode_t;
 
 /**

@@ -34,8 +34,7 @@ typedef struct {
      *  other rows of the call: chunks, shards and resumed builds then give the same bytes.
      *  The driver fills the rows with NaN before the call, so a row left unwritten is
      *  caught, and checks every value (finite, within the bounds) after it. */
-    int (*solve_rows)(void *ctx, ef_tfile_t *t, uint32_t row_begin, uint32_t row_end,
-                      ef_msg_t *m);
+    int (*solve_rows)(void *ctx, ef_tfile_t *t, uint32_t row_begin, uint32_t row_end, ef_msg_t *m);
     /** Optional (may be NULL). Release ctx. */
     void (*close)(void *ctx);
     void *ctx;
@@ -82,9 +81,7 @@ int ef_build_all(ef_tfile_t *t, ef_build_backend_t *b, ef_build_progress_fn prog
                  ef_msg_t *m);
 
 /** @brief ef_build_all() with the CPU backend (compatibility). */
-int ef_build_cpu(ef_tfile_t *t, int threads, ef_build_progress_fn progress, void *ctx,
-                 ef_msg_t *m);
-
+int ef_build_cpu(ef_tfile_t *t, int threads, ef_build_progress_fn progress, void *ctx, ef_msg_t *m);
 
 /* ---- Resumable, sharded builds ------------------------------------------------------- */
 
@@ -99,26 +96,26 @@ typedef struct {
 /** Options of ef_build_check() and ef_build_run(); zero-initialized = the whole table, no
  *  journal, no output file, no progress. */
 typedef struct {
-    ef_build_shard_t shard;   /**< which rows to build; count 0 = all */
-    const char *journal;      /**< journal of finished chunks (conventionally OUT.partial),
-                                   or NULL for none (nothing survives a failure) */
-    int fresh;                /**< nonzero: discard an existing journal instead of resuming */
-    const char *output;       /**< written atomically on success: a table file (.eft) for
-                                   the whole table, a shard file (.efs) for a shard; NULL:
-                                   the values stay in the table only */
+    ef_build_shard_t shard;        /**< which rows to build; count 0 = all */
+    const char *journal;           /**< journal of finished chunks (conventionally OUT.partial),
+                                        or NULL for none (nothing survives a failure) */
+    int fresh;                     /**< nonzero: discard an existing journal instead of resuming */
+    const char *output;            /**< written atomically on success: a table file (.eft) for
+                                        the whole table, a shard file (.efs) for a shard; NULL:
+                                        the values stay in the table only */
     ef_build_progress_fn progress; /**< may be NULL */
     void *progress_ctx;
 } ef_build_opts_t;
 
 /** What ef_build_check() found. */
 typedef struct {
-    uint32_t rows;            /**< rows of the table (nodes / axis 0 nodes) */
-    uint32_t row_begin;       /**< the shard's rows: [row_begin, row_end) */
+    uint32_t rows;      /**< rows of the table (nodes / axis 0 nodes) */
+    uint32_t row_begin; /**< the shard's rows: [row_begin, row_end) */
     uint32_t row_end;
-    uint32_t n0;              /**< nodes per row */
-    int journal_exists;       /**< a journal will be resumed */
-    uint32_t rows_done;       /**< rows of the shard already finished in that journal */
-    uint32_t chunks_done;     /**< chunk records in that journal */
+    uint32_t n0;          /**< nodes per row */
+    int journal_exists;   /**< a journal will be resumed */
+    uint32_t rows_done;   /**< rows of the shard already finished in that journal */
+    uint32_t chunks_done; /**< chunk records in that journal */
 } ef_build_plan_t;
 
 /**

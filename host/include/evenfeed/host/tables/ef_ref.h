@@ -31,13 +31,9 @@ typedef struct {
     double kappa;
 } ef_dend_t;
 
-typedef enum {
-    EF_REF_G1_CUBIC = 1,
-    EF_REF_G2_QUINTIC = 2,
-    EF_REF_G1_QUARTIC = 3
-} ef_ref_kind_t;
+typedef enum { EF_REF_G1_CUBIC = 1, EF_REF_G2_QUINTIC = 2, EF_REF_G1_QUARTIC = 3 } ef_ref_kind_t;
 
-#define EF_REF_MAX_DOF 5
+#define EF_REF_MAX_DOF    5
 #define EF_REF_MAX_DEGREE 7
 
 /** The same end data in the firmware's float32 form (what a drive would be given). */
@@ -52,8 +48,7 @@ int ef_ref_degree(ef_ref_kind_t kind);
  * @brief The normalized configuration: p0 = (0,0,0), p1 = (1,0,0),
  * t_i = (cos, sin, 0) of alpha / beta, n_i = t_i rotated +90 degrees, kappa_i = k0 / k1.
  */
-void ef_ref_config(double alpha, double beta, double k0, double k1, ef_dend_t *e0,
-                   ef_dend_t *e1);
+void ef_ref_config(double alpha, double beta, double k0, double k1, ef_dend_t *e0, ef_dend_t *e1);
 
 /**
  * @brief Control points b[0..degree] from end data and DOFs (no validation beyond NULLs).
@@ -88,13 +83,13 @@ double ef_ref_objective_hess(ef_ref_kind_t kind, const ef_dend_t *e0, const ef_d
 
 /** Optimizer settings. ef_ref_opts_default() gives the documented defaults. */
 typedef struct {
-    double x1_min;  /**< x1 lower bound per unit chord (default 0.1, as the thesis) */
-    double x1_max;  /**< x1 upper bound per unit chord (default 10) */
-    double x2_max;  /**< |x2| bound per unit chord (default 100) */
-    int max_iter;   /**< iterations per start (default 200) */
-    double tol;     /**< a start stops when the projected gradient's norm is below
-                         tol * max(1, C^2), or when the predicted gain falls below 1e-10 C^2
-                         (default 1e-12; docs/optimizer.md) */
+    double x1_min;      /**< x1 lower bound per unit chord (default 0.1, as the thesis) */
+    double x1_max;      /**< x1 upper bound per unit chord (default 10) */
+    double x2_max;      /**< |x2| bound per unit chord (default 100) */
+    int max_iter;       /**< iterations per start (default 200) */
+    double tol;         /**< a start stops when the projected gradient's norm is below
+                             tol * max(1, C^2), or when the predicted gain falls below 1e-10 C^2
+                             (default 1e-12; docs/optimizer.md) */
     const double *warm; /**< optional extra start, DOFs per unit chord (ndof values), or NULL */
 } ef_ref_opts_t;
 
@@ -102,11 +97,11 @@ typedef struct {
 typedef struct {
     double dof[EF_REF_MAX_DOF]; /**< optimal DOFs, program units */
     int ndof;
-    double C;        /**< C at the optimum */
+    double C;          /**< C at the optimum */
     unsigned at_bound; /**< bit i set: DOF i ends on a bound */
-    int starts;      /**< starts run */
-    int iters;       /**< iterations summed over starts */
-    int converged;   /**< 1 if the best start met tol (or a bound-stationarity test) */
+    int starts;        /**< starts run */
+    int iters;         /**< iterations summed over starts */
+    int converged;     /**< 1 if the best start met tol (or a bound-stationarity test) */
 } ef_ref_result_t;
 
 void ef_ref_opts_default(ef_ref_opts_t *o);

@@ -22,26 +22,26 @@ extern "C" {
 /** Parameters of a table to create. Domains are in storage coordinates (for a G1 fold
  *  table: u in [0, pi/2], v in [0, pi]). */
 typedef struct {
-    int kind;                            /**< EF_TABLE_G1_CUBIC / EF_TABLE_G2_QUINTIC */
-    int symmetry;                        /**< EF_SYM_* */
-    double lo[EF_TABLE_MAX_AXES];        /**< first node per axis */
-    double hi[EF_TABLE_MAX_AXES];        /**< last node per axis */
-    uint32_t nodes[EF_TABLE_MAX_AXES];   /**< node count per axis */
+    int kind;                               /**< EF_TABLE_G1_CUBIC / EF_TABLE_G2_QUINTIC */
+    int symmetry;                           /**< EF_SYM_* */
+    double lo[EF_TABLE_MAX_AXES];           /**< first node per axis */
+    double hi[EF_TABLE_MAX_AXES];           /**< last node per axis */
+    uint32_t nodes[EF_TABLE_MAX_AXES];      /**< node count per axis */
     uint32_t axis_flags[EF_TABLE_MAX_AXES]; /**< EF_AXIS_PERIODIC */
-    double x1_min, x1_max, x2_max;       /**< optimizer bounds per unit chord */
-    int quad_nodes;                      /**< Gauss–Legendre nodes of the functional */
-    const char *provenance;              /**< printable ASCII, <= EF_TABLE_MAX_PROVENANCE */
+    double x1_min, x1_max, x2_max;          /**< optimizer bounds per unit chord */
+    int quad_nodes;                         /**< Gauss–Legendre nodes of the functional */
+    const char *provenance;                 /**< printable ASCII, <= EF_TABLE_MAX_PROVENANCE */
 } ef_tfile_spec_t;
 
 /** A table owned by the host. `view` is the firmware lookup view onto `values`. */
 typedef struct {
     ef_table_t view;
-    float *values;                      /**< nodes x ndof, owned */
-    double lo[EF_TABLE_MAX_AXES];       /**< exact domains (the view holds float copies) */
+    float *values;                /**< nodes x ndof, owned */
+    double lo[EF_TABLE_MAX_AXES]; /**< exact domains (the view holds float copies) */
     double hi[EF_TABLE_MAX_AXES];
     double x1_min, x1_max, x2_max;
     char provenance[EF_TABLE_MAX_PROVENANCE + 1];
-    void *blob;                         /**< owned file image after ef_tfile_load() */
+    void *blob; /**< owned file image after ef_tfile_load() */
 } ef_tfile_t;
 
 /**

@@ -30,22 +30,22 @@ typedef struct {
 } ef_stat_t;
 
 typedef struct {
-    uint32_t count;        /**< random configurations (>= 1) */
-    uint64_t seed;         /**< PRNG seed; same seed, same configurations */
-    int three_d;           /**< G1 only: random twisted 3-D tangents instead of planar */
-    int threads;           /**< 1..64 */
+    uint32_t count; /**< random configurations (>= 1) */
+    uint64_t seed;  /**< PRNG seed; same seed, same configurations */
+    int three_d;    /**< G1 only: random twisted 3-D tangents instead of planar */
+    int threads;    /**< 1..64 */
 } ef_verify_opts_t;
 
 typedef struct {
     uint32_t count;
-    uint32_t clamped;      /**< configurations outside the table domain (flag set) */
-    uint32_t opt_misses;   /**< table beat the reference by > 1e-6 relative, beyond float32
-                                rounding of its control points (should be 0) */
-    ef_stat_t excess;      /**< relative excess of C */
-    ef_stat_t x1_err;      /**< relative error of x1 */
-    ef_stat_t x2_err;      /**< relative error of x2 (G2; zero for G1) */
-    double worst_cfg[4];   /**< configuration (alpha, beta, k0, k1) of the largest excess */
-    double seconds;        /**< wall time */
+    uint32_t clamped;    /**< configurations outside the table domain (flag set) */
+    uint32_t opt_misses; /**< table beat the reference by > 1e-6 relative, beyond float32
+                              rounding of its control points (should be 0) */
+    ef_stat_t excess;    /**< relative excess of C */
+    ef_stat_t x1_err;    /**< relative error of x1 */
+    ef_stat_t x2_err;    /**< relative error of x2 (G2; zero for G1) */
+    double worst_cfg[4]; /**< configuration (alpha, beta, k0, k1) of the largest excess */
+    double seconds;      /**< wall time */
 } ef_verify_result_t;
 
 /**
