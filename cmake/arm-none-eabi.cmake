@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Toolchain file for a Cortex-M4F (ARMv7E-M, single-precision FPU, hard-float ABI) with the
 # GNU Arm Embedded toolchain (Debian: gcc-arm-none-eabi, libnewlib-arm-none-eabi).
 #

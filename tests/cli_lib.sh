@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Shared by the CLI test scripts (sourced): pass/fail counters and expect(); the caller sets
 # $ef to the evenfeed binary.
 pass=0

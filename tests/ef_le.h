@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Little-endian stores and loads for tests that craft or corrupt file images byte by byte,
  * independently of the library's own writer (so a writer bug cannot hide in both). */
 #ifndef EF_LE_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * Child processes for the transport tests and benchmarks: start a program with its stdout
  * (or stderr) on a pipe, wait for its readiness line, stop it by its PID. Simulated drives

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * Minimal test harness shared by evenfeed's C tests: each executable runs its checks and
  * ends with the line "N passed, N failed"; its exit status is nonzero if any check failed.

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * Double-precision helper shared by tests that check firmware curves independently: the
  * control points of the k-th derivative of a Bézier curve (forward differences), without

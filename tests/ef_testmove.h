@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * Test moves for the drive tests (test_drive.c, test_codrive.c): Bézier moves with a
  * one-phase time law built here, and an independent double-precision evaluation of where a

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * Generator for the numeric constants in firmware/src/core/ef_math.c (atan polynomial) and
  * firmware/src/geom/ef_bezier.c (Gauss–Legendre nodes). Run: cc -O2 gen_fw_constants.c -lm &&

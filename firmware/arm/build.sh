@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # Build the firmware library alone for a Cortex-M4F, link firmware/arm/link_check.c against
 # it with --gc-sections, print sizes, and check that nothing a firmware must not need is
 # referenced.

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * Cortex-M4F link check: a complete freestanding image (own vector table and reset code,
  * no C runtime start files) that builds one G1 cubic and one G2 quintic segment through

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Embed a text file as a NUL-terminated C char array (no xxd needed).
 # Usage: cmake -DIN=file -DOUT=file.c -DNAME=symbol -P embed.cmake
 file(READ "${IN}" hex HEX)

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Check the compute shader compiles for a kind with glslangValidator (no GL context needed).
 # Usage: cmake -DVALIDATOR=... -DSHADER=... -DKIND=1 -DOUT=dir -P validate.cmake
 # The preamble must match ef_gl_program() in gpu_offline/src/ef_gl.c.

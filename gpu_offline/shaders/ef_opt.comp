@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * ef_opt.comp: the reference optimizer (host/lib/tables/ef_ref_opt.c, ef_ref_optimize) as an
  * OpenGL 4.3 compute shader in double precision, for normalized planar configurations:

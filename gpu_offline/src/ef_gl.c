@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Headless OpenGL 4.3 compute through EGL (device or surfaceless platform) via libepoxy. */
 #include <epoxy/egl.h>
 #include <epoxy/gl.h>

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Shared pieces of the evenfeed command line. */
 #ifndef EF_CLI_H
 #define EF_CLI_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* evenfeed demo: the built-in default job, runnable with no hardware and no input files:
  * smooth the shipped sample part programs (samples/bracket.ngc: lines, arcs, events;
  * samples/profile.ngc: CAM micro-segment curves and split edges; both embedded at build

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* evenfeed gcode: read a part program and print its item stream. */
 #include <string.h>
 #include "cli.h"

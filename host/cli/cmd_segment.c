@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* evenfeed segment: one G1 cubic / G2 quintic (or optimized G1 quartic) segment. */
 #include <getopt.h>
 #include <math.h>

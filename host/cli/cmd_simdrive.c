@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* evenfeed sim-drive: a simulated drive for tests and demos (docs/modbus.md). */
 #include <signal.h>
 #include <stdlib.h>

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* evenfeed smooth: a part program through the smoother, planner and interpolator; JSON,
  * CSV and SVG output and a summary (docs/smoothing-cli.md). */
 #include <math.h>

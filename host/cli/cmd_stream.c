@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* evenfeed stream: smooth a part program and stream it to a drive (docs/modbus.md). */
 #include <math.h>
 #include <net/if.h>

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* evenfeed table: info, verify, build, merge, emit-c. */
 #include <errno.h>
 #include <getopt.h>

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* evenfeed command line: dispatch and shared helpers. */
 #include <errno.h>
 #include <math.h>

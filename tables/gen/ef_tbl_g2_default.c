@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * GENERATED FILE - DO NOT EDIT.
  * Written by evenfeed ef_tfile_emit_c() (host/lib/tables/ef_tfile_emit.c) from a table file;

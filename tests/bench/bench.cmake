@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Constant-time benchmark: instruction counts per ef_seg_g1_cubic / ef_seg_g2_quintic call
 # under callgrind (tests/bench/ct_bench.sh). Not with sanitizers: their instrumentation
 # adds data-dependent checks to the counted code, and valgrind cannot run ASan binaries.

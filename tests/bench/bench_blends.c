@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * Corner treatments compared on standard paths (docs/benchmarks-smoothing.md).
  *

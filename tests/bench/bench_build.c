@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Table builder throughput, GL backend against the CPU reference on the same grids in one
  * run, and whether the two tables agree value for value. Prints figures; asserts nothing.
  * Usage: bench_build [cpu-threads] */

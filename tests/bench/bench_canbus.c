@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * CAN bus load, CSP at 1 kHz against evenfeed's segment mode, measured side by side in one
  * run (docs/benchmarks-can.md).

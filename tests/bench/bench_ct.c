@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * Constant-time benchmark driver for ef_seg_g1_cubic / ef_seg_g2_quintic.
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * Modbus throughput, measured side by side in one run (docs/benchmarks-modbus.md):
  *  - segment mode: sustained slot writes per second while streaming the standard path

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * Timing of ef_ref_optimize per kind on random normalized configurations (the table
  * builder's workload), in thread CPU time. Build without sanitizers for meaningful figures.

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * Throughput of the runtime chain on a CAM-like part program (tests/bench/gen_cam.c,
  * docs/benchmarks-smoothing.md):

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* What the planar G1 table costs on 3-D data: relative excess of C over the true 3-D optimum,
  * binned by the twist between the tangents' planes. Prints a table; asserts nothing.
  * Usage: bench_twist [COUNT_PER_BIN] */

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # Constant-time check of ef_seg_g1_cubic / ef_seg_g2_quintic / ef_blend_corner by
 # instruction count.
 #

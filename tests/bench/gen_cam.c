@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * Deterministic CAM-like part program for the smoother throughput benchmark
  * (tests/bench/bench_smooth.c, docs/benchmarks-smoothing.md).

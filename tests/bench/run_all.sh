@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Every benchmark, printing figures (nothing here is a pass/fail timing test; the
 # constant-time property itself is asserted by the ctest fw_constant_time).
 # Usage: run_all.sh BUILD_DIR   (a release build without sanitizers)

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Path primitives (ef_prim_check, ef_prim_frame, ef_move_measure), arc pieces and corner
 # blends with arc/helix ends (ef_blend_arc_piece, ef_blend_prims) against the default G2 table.
 if(TARGET ef_tables_default)

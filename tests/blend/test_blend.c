@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * Corner blends (ef_blend_corner) with the default G2 table: deviation from the programmed
  * corner measured by dense sampling on random corners in 2-D and 3-D, G2 contact with the

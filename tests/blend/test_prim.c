@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * Path primitives and arc-ended corner blends with the default G2 table:
  * - ef_prim_check(): every bad-input case with its exact error code;

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Hardware-in-loop tests: real kernel drivers inside User-Mode Linux (docs: see
 # tests/hil/uml_run.sh and /work/shared/docs/hil.md). Each test boots linux.uml on the host's
 # file system, runs a guest script, and passes only on the guest's PASS verdict; it is

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * Hardware-in-loop CAN tests, run INSIDE a User-Mode Linux guest on a real kernel vcan bus
  * (tests/hil/uml_run.sh boots the guest; tests/hil/can.sh runs this program there).

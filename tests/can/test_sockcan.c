@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* SocketCAN transport (ef_sockcan) tests.
  *
  *   test_sockcan offline WORKDIR   on any host: argument checks, open failure text, candump

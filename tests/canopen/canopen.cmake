@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # CANopen helpers and the segment-mode codec (firmware ef_can.c, ef_canopen.c).
 add_executable(test_canopen ${CMAKE_CURRENT_SOURCE_DIR}/canopen/test_canopen.c)
 target_link_libraries(test_canopen PRIVATE ef_fw m)

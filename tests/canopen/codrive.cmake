@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # CANopen CiA 402 drive (firmware ef_codrive): NMT and heartbeat, the SDO server and its
 # aborts, PDO configuration, the power state machine, CSP, segment mode end to end through
 # the ef_canopen codec, faults and EMCY, the TX queue, malformed frames, the SYNC-loss watchdog.

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # CANopen master (firmware ef_comaster): scripted fake-drive tests of bring-up, SDO errors,
 # refusals, TX retries and bus errors, the caller's SDO client; integration with real ef_codrive drives on the
 # in-memory bus of ef_canbus_sim.h (CSP, segment mode, go-back-N, EMCY, heartbeat loss).

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * CANopen helpers and the segment-mode codec (ef_can.h, ef_canopen.h): frame bit counts,
  * statusword decoding, position scaling, and the law/axis records through chunks and

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* CANopen CiA 402 drive (ef_codrive): NMT, heartbeat, SDO server, PDO configuration, the
  * power state machine, CSP, segment mode end to end through the ef_canopen codec, faults and
  * EMCY, the TX queue, and malformed input. The drive is fed frames directly; its port records

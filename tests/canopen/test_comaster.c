@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* CANopen master (ef_comaster) tests.
  *
  * Scripted parts: a fake port captures the master's frames and small fake drives written

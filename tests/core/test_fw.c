@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Unit tests of the firmware geometry: atan2, Bézier, functional, normalization, lookup,
  * segment construction and bad input. Tables here are synthetic (known functions) so the
  * folding, wrapping and clamping logic is checked independently of the optimizer. */

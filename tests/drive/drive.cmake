@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Drive side (firmware ef_drive, ef_modbus): the slot codec and CRC, the drive executing
 # streamed segments with its servo model, and the Modbus register device.
 add_executable(test_drive ${CMAKE_CURRENT_SOURCE_DIR}/drive/test_drive.c)

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Drive side tests: CRC and slot codec (ef_modbus), the drive executing streamed segments
  * with its servo model (ef_drive), controlled stops and faults, and the Modbus register
  * device. Expected positions come from an independent double-precision evaluation of the

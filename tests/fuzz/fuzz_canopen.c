@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * libFuzzer target for the CANopen code that handles untrusted bus input: the drive
  * (ef_codrive_rx / process) and the master (ef_comaster_rx / process). The input bytes

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * libFuzzer target for the G-code reader: every input must either be read to an end item
  * or be rejected with EF_ERR_GCODE and a "fuzz:line:col: " message; every item must have a

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * libFuzzer target for the runtime chain: the input bytes are decoded into a configuration
  * and a stream of primitives (lines, arcs, helices; ordinary and hostile values: NaN, inf,

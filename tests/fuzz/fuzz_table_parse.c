@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * libFuzzer target for the table parser: every input must either be rejected cleanly
  * (known code, offset inside the input, view zeroed) or yield a view that ef_table_check()

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Entry point shared by the libFuzzer target and the plain-C corpus replay driver. */
 #ifndef EF_FUZZ_TABLE_PARSE_H
 #define EF_FUZZ_TABLE_PARSE_H

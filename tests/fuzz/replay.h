@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * Plain-C replay driver shared by the fuzz targets: runs every file named on the command
  * line (or found in a named directory, in name order) through a check, so seed corpora

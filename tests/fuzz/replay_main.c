@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * Plain-C driver for the fuzz target: runs every file named on the command line (or found
  * in a named directory) through LLVMFuzzerTestOneInput, so the seed corpus and saved

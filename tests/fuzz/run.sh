@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # Fuzz the table parser, the G-code reader, the runtime chain (smoother, planner,
 # interpolator) and the CANopen frame handling (drive and master) with libFuzzer for a
 # fixed time.

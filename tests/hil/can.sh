@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # Guest side of the hil_can_* tests (run by uml_run.sh inside User-Mode Linux, vcan0 up):
 #   can.sh TEST_BINARY EVENFEED SRC_DIR WORKDIR PART
 # Runs test_can_hil, which starts three simulated drives and the streamer on vcan0 and

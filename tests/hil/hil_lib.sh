@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Helpers for guest scripts run by uml_run.sh (source with: . "$EF_HIL_DIR/hil_lib.sh").
 # Background processes are tracked and stopped by PID; readiness is a file the process
 # writes (or any condition), waited for with a bound, never a fixed sleep.

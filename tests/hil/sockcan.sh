@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # Guest side of hil_sockcan (run by uml_run.sh inside User-Mode Linux, vcan0 up):
 #   sockcan.sh TEST_BINARY WORKDIR
 # Checks the tools the test calls, loads the plug qdisc it uses for ENOBUFS, runs the test.

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Hardware-in-loop runner: boot User-Mode Linux on the host's own file system (hostfs), bring
 # up virtual CAN interfaces, run a guest script inside it, and judge its verdict file.
 #

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Modbus transport end to end (docs/modbus.md): the master and the simulated drive on
 # libmodbus, over TCP on loopback and RTU on a socat pseudo-terminal pair. Test names start
 # with "modbus" (ctest -R modbus).

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * Modbus end to end on the real protocol: the master (ef_mb_stream, libmodbus) against the
  * simulated drive (`evenfeed sim-drive modbus`, a separate process on libmodbus) over TCP

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # `evenfeed stream` and `evenfeed sim-drive` from the command line: argument errors, an
 # unreachable drive, and a whole program streamed to a simulated drive over Modbus TCP.
 # The drive signals readiness on stdout (read through a FIFO); it is stopped by its PID.

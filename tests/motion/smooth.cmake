@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # The streaming smoother (firmware ef_smooth) end to end against the default tables:
 # invariants of every run, deviation measured independently, vertex rules, bad input.
 if(TARGET ef_tables_default)

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Feed planner (ef_plan) and interpolator (ef_interp) tests. Moves are built here with
  * length, kappa_max and tabs computed by the test itself (exact for lines, dense sampling in
  * double for curves), so these tests do not depend on ef_move_measure(). */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * The streaming smoother (ef_smooth): primitives pushed, planned moves pulled, with the
  * default tables. Every run is checked for the invariants a drive relies on (a continuous

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # G-code reader: unit tests, the sample program, the CLI, and the fuzz corpus replay
 # (docs/gcode.md). Test names start with "gcode" (ctest -R gcode).
 set(EF_GCODE_DIR ${CMAKE_CURRENT_SOURCE_DIR})

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Host pipeline and `evenfeed smooth` (docs/smoothing-cli.md): conversions, exact stops,
 # events, notes, refused input, the sample program end to end, and the CLI's outputs.
 # Test names start with "pipeline" (ctest -R pipeline).

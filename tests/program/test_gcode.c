@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Tests of the G-code reader (host/lib/program/ef_gcode.c, docs/gcode.md). */
 #include <string.h>
 #include "ef_test.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Tests of the host pipeline (host/lib/program/ef_pipeline.c, docs/smoothing-cli.md): item
  * conversion, tolerance modes, rapids and events as exact stops in order, notes, refused
  * primitives, and the sample program end to end through the interpolator. */

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # End-to-end tests of `evenfeed smooth` (docs/smoothing-cli.md): summary, JSON, CSV, SVG,
 # units, and bad input (exit status = negated ef_err code, one message).
 # Usage: test_smooth_cli.sh EVENFEED_BINARY SOURCE_DIR

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Resumable, sharded table builds: driver, journal, shard files, merge (host/lib/tables/ef_build.c,
 # host/lib/tables/ef_shard.c; docs/table-build.md). Test names start with "build".
 add_executable(test_build ${CMAKE_CURRENT_SOURCE_DIR}/table/test_build.c)

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Agreement of the compute shader (gpu_offline/shaders/ef_opt.comp) with the CPU reference,
 # through ef_gl.h; on CI it runs on llvmpipe. Only when the GL builder (ef_gpu) is built;
 # exits 77 (skipped) when no headless GL context can be made.

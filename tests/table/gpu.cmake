@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # The headless GL context (gpu_offline/src/ef_gl.c); only when the GL builder is built.
 if(TARGET ef_gpu)
   add_executable(test_gl_open ${CMAKE_CURRENT_SOURCE_DIR}/table/test_gl_open.c)

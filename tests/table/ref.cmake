@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Double-precision reference (host/lib/tables/ef_ref.c, ef_ref_opt.c).
 find_package(Threads REQUIRED)
 add_executable(test_ref ${CMAKE_CURRENT_SOURCE_DIR}/table/test_ref.c)

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # The shipped default tables and the command line, end to end.
 if(TARGET ef_tables_default)
   add_executable(test_tables ${CMAKE_CURRENT_SOURCE_DIR}/table/test_tables.c)

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The chunked, resumable, sharded table builder (host/lib/tables/ef_build.c, ef_shard.c):
  * shard arithmetic, shard builds merged back byte for byte, resume after an injected
  * failure (only missing chunks recomputed), journals of other builds and corrupt journals

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # End-to-end tests of the evenfeed command line: results, JSON, and every bad-input path
 # (exit status = negated ef_err code, one clear message, nothing on stdout that looks like a
 # segment). Usage: test_cli.sh EVENFEED_BINARY SOURCE_DIR

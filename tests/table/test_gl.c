@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * Agreement of the compute-shader optimizer (gpu_offline/shaders/ef_opt.comp, run through
  * ef_gl.h) with the CPU reference ef_ref_optimize on a deterministic sample of normalized

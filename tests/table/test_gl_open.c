@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The headless GL context: it opens on llvmpipe (CI) or a GPU, and fails with a clear
  * message when it cannot. Usage: test_gl_open ok | expect-fail PATTERN
  * (the failure cases are set up by the environment: see tests/table/gpu.cmake). */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * Tests of the double-precision reference (ef_ref.h): quadrature, functional and gradient,
  * the published values, invariances and symmetries, global-ness of the optimizer against

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The shipped default tables: the linked C data equals the .eft files bit for bit, sampled
  * nodes are recomputed by the reference optimizer and agree, the chain end data -> table ->
  * segment reproduces the published reference, and the accuracy harness stays above a floor.

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * Table file format tests: CRC, the firmware parser and view check, the host file API
  * (create, serialize, atomic write, load, messages) and the C emitter.

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Table file format: parser, host file API, C emitter, fuzz corpus replay and the optional
 # libFuzzer target (docs/table-format.md). Test names start with "tfile" (ctest -R tfile).
 set(EF_TFILE_DIR ${CMAKE_CURRENT_SOURCE_DIR})

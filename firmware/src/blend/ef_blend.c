@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Corner blends between straight moves: a symmetric G2 quintic from the G2 table. The
  * construction and its reasoning are in ef_blend.h and docs/math.md ("Corner blends"). */
 #include "evenfeed/blend/ef_blend.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Corners with arc/helix ends (ef_blend_prims()) and arc pieces as G2 quintics
  * (ef_blend_arc_piece()). Both build the quintic from exact end frames of the primitives
  * (ef_prim_frame()) through the G2 table and measure its deviation, since no closed form

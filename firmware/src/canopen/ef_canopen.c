@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* CANopen / CiA 402 helpers and the segment-mode record codec (see ef_canopen.h). */
 #include "evenfeed/canopen/ef_canopen.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* CANopen CiA 402 drive (one axis) on the CAN HAL (see ef_codrive.h). */
 #include <stddef.h>
 #include <stdint.h>

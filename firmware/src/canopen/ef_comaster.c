@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* CANopen master for CiA 402 drives: bring-up, SYNC, CSP / segment streaming, supervision
  * and controlled stops (see ef_comaster.h; the wire protocol is docs/can.md).
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Error code names. */
 #include "evenfeed/core/ef_err.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Branch-free scalar functions for the firmware (no libm). */
 #include "evenfeed/core/ef_math.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Drive: segment ring, interpolator and servo model (see ef_drive.h). */
 #include <stddef.h>
 #include "evenfeed/drive/ef_drive.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Bézier evaluation, degree elevation and the constant-speed functional (float32). */
 #include "evenfeed/geom/ef_bezier.h"
 #include "evenfeed/core/ef_err.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* End-data validation and normalization into table coordinates. */
 #include "evenfeed/geom/ef_endpoint.h"
 #include "evenfeed/core/ef_config.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* CAN bus-time arithmetic (ef_can.h); freestanding. */
 #include <stdint.h>
 #include "evenfeed/hal/ef_can.h"

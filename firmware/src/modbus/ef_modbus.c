@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Modbus register map, slot codec and drive-side register device (see ef_modbus.h). */
 #include "evenfeed/modbus/ef_modbus.h"
 #include "evenfeed/core/ef_err.h"

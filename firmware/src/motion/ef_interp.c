@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Interpolator: planned moves -> setpoints at the servo period (see ef_interp.h). */
 #include "evenfeed/motion/ef_interp.h"
 #include "evenfeed/geom/ef_bezier.h"

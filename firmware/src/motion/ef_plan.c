@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Feed planner: per-move limits, backward/forward passes over the look-ahead window, and
  * the time law of each released move (see ef_plan.h and ef_path.h).
  *

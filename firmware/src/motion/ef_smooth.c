@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The streaming smoother: primitives in, feed-planned moves out (ef_smooth.h,
  * docs/smoothing.md). Geometry decisions lag the input by one primitive, because a line's
  * direction is final only once the next primitive has shown it cannot be merged into it. */

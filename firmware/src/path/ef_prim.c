@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Path primitives (lines, arcs, helices): validation, exact frames at an arc length, and the
  * measurement of a move's curve (length, curvature bound, largest tangent components).
  * Freestanding float32, no libm: sin/cos are a fixed-count polynomial below. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Bézier segments from end data: DOFs from a table (or given), then control points. */
 #include "evenfeed/seg/ef_seg.h"
 #include "evenfeed/core/ef_err.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* CRC-32 (IEEE 802.3, reflected, zlib-compatible) for table blobs; freestanding. */
 #include <stdint.h>
 #include "evenfeed/table/ef_table.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Constant-time multilinear lookup of optimal DOFs, with symmetry folding. */
 #include "evenfeed/table/ef_table.h"
 #include "evenfeed/core/ef_err.h"

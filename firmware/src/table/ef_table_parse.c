@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Validating parser for table blobs (format v1) and consistency check of table views.
  * Freestanding: no libc calls, no heap, no libm; every loop is bounded by a count that was
  * validated before the loop starts. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Simulated CANopen CiA 402 drive (evenfeed sim-drive can): the firmware's drive
  * (ef_codrive.h) on a SocketCAN raw socket, with a trace and fault injection. */
 #include <errno.h>

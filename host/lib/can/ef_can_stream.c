@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* evenfeed stream --can as a library call: smooth a program and stream it over CANopen
  * (SocketCAN) to up to three CiA 402 drives, in CSP or evenfeed segment mode. */
 #include <errno.h>

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* A path streamed by the CANopen master to three drives on a simulated bus, bits counted
  * (see ef_canload.h). */
 #include "evenfeed/host/can/ef_canload.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* SocketCAN transport: raw CAN socket, error frames, ENOBUFS back-off, candump log. */
 #include <errno.h>
 #include <net/if.h>

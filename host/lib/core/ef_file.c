@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* File helpers shared by host/lib: capped whole-file reads and atomic writes. */
 #include <errno.h>
 #include <fcntl.h>

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Private to host/lib: capped whole-file reads and atomic writes (ef_file.c). */
 #ifndef EF_FILE_INT_H
 #define EF_FILE_INT_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Host error messages. */
 #include <stdarg.h>
 #include <stdio.h>

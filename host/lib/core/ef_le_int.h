@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Little-endian stores and loads shared by the host's file writers and readers (table
  * files, shards, journals): files are the same bytes on any host. Internal header. */
 #ifndef EF_LE_INT_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Thread fan-out shared by the CPU table builder and the accuracy harness. */
 #include <pthread.h>
 #include "core/ef_parallel_int.h"

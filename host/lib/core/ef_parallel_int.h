@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Private to host/lib: run workers on threads and report the first failure (ef_parallel.c). */
 #ifndef EF_PARALLEL_INT_H
 #define EF_PARALLEL_INT_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Modbus master on libmodbus: streams segment slots to an evenfeed drive with flow
  * control, idempotent retries and reconnection (docs/modbus.md). */
 #include <errno.h>

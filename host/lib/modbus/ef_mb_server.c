@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Simulated Modbus drive: libmodbus server (TCP, several clients, or RTU) around the
  * firmware's register device (ef_modbus.h) and drive model (ef_drive.h). */
 #include <errno.h>

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* evenfeed stream --modbus as a library call: smooth a program and stream its segments
  * (or, in direct mode, sampled target positions) to one drive. */
 #include <math.h>

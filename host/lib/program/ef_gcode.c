@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* G-code reader: the RS274NGC subset of CAM post-processors, as a stream of items. */
 #include <errno.h>
 #include <math.h>

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Host pipeline: G-code reader -> streaming smoother -> interpolator, through callbacks
  * (host/include/evenfeed/host/program/ef_pipeline.h, docs/smoothing-cli.md). */
 #include <math.h>

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Table building: node configurations, storage, the CPU backend, and the chunked driver
  * with its journal of finished chunks (layout: docs/table-build.md). */
 #ifndef _POSIX_C_SOURCE

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * Double-precision reference geometry: control points of the three segment kinds from end
  * data and DOFs, and the constant-speed functional C(f) = sqrt(int <f',f''>^2 |f'|^2 dt)

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * Bounded, deterministic, multi-start projected-Newton minimization of C^2 over all DOFs of
  * a segment jointly: the CPU reference optimum. docs/optimizer.md describes the algorithm

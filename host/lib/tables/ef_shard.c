@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Build-spec records, the header shared by build journals and shard files, shard files
  * themselves and their merge into one table (layouts: docs/table-build.md). */
 #ifndef _POSIX_C_SOURCE

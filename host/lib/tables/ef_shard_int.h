@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Private to host/lib (ef_build.c, ef_shard.c): the build-spec record and the file prefix
  * shared by build journals (.partial) and shard files (.efs); docs/table-build.md has the
  * byte layouts. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Table files on the host: build file images, validate them with the firmware parser,
  * write atomically, load and describe failures. */
 #ifndef _POSIX_C_SOURCE

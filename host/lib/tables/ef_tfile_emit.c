@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Emit a table as C source for firmware without a file system. */
 #include <stdint.h>
 #include <stdio.h>
@@ -126,6 +127,7 @@ int ef_tfile_emit_c(const ef_tfile_t *t, const char *name, FILE *out, ef_msg_t *
     count = v.nodes * v.ndof;
 
     fprintf(out,
+            "/* SPDX-License-Identifier: Apache-2.0 */\n"
             "/*\n"
             " * GENERATED FILE - DO NOT EDIT.\n"
             " * Written by evenfeed %s (host/lib/tables/ef_tfile_emit.c) from a table file;\n"

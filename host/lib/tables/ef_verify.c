@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Accuracy harness: table segments against the reference optimum on random configurations. */
 #include <math.h>
 #include <stdlib.h>

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file ef_blend.h
  * @brief Corner blends between two straight moves: a G2 quintic from the G2 table that

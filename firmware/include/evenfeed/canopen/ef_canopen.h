@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file ef_canopen.h
  * @brief CANopen (CiA 301) and CiA 402 definitions shared by evenfeed's master

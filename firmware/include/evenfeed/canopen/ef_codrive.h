@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file ef_codrive.h
  * @brief A CANopen CiA 402 drive (one axis) on the CAN HAL: what `evenfeed sim-drive can`

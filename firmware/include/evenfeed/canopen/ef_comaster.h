@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file ef_comaster.h
  * @brief CANopen master for CiA 402 drives on the CAN HAL: bring-up, SYNC, streaming in CSP

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file ef_config.h
  * @brief Compile-time limits and tolerances of the firmware. Every one may be overridden

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file ef_err.h
  * @brief Error codes shared by every evenfeed layer.

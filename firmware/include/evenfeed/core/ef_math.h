@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file ef_math.h
  * @brief float32 vector helpers and branch-free scalar functions for the firmware.

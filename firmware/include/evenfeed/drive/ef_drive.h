@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file ef_drive.h
  * @brief Drive side: executes streamed Bézier segments with a servo model.

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file ef_bezier.h
  * @brief Bézier curves of degree 1..::EF_BEZIER_MAX_DEGREE in 3-D (float32): evaluation with

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file ef_endpoint.h
  * @brief End data of a segment and its normalization into table coordinates.

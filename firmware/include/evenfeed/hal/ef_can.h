@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file ef_can.h
  * @brief CAN peripheral contract (the HAL the CANopen master and drive run on), the frame

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file ef_modbus.h
  * @brief evenfeed's Modbus register map (docs/modbus.md), the segment slot codec and the

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file ef_interp.h
  * @brief The interpolator: turns planned moves into per-axis setpoints at the servo period.

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file ef_plan.h
  * @brief Feed planning over a look-ahead window of moves: speed limits per move, backward

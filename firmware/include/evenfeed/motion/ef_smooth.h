@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file ef_smooth.h
  * @brief The streaming smoother: push path primitives, pull feed-planned moves.

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file ef_path.h
  * @brief Path primitives (what a part program commands) and moves (what the smoother emits

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file ef_seg.h
  * @brief End data in, Bézier segment out: G1 cubic and G2 quintic through a DOF table.

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file ef_table.h
  * @brief Optimal-DOF tables: the binary format (v1), a validating parser that works on a

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file ef_gl.h
  * @brief Headless OpenGL 4.3 compute: the table builder's GPU backend.

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /*
  * In-memory CAN bus for tests, the bus-load benchmark and the demo (ef_canload.h): one
  * ef_comaster and up to EF_SIM_MAX_DRIVES ef_codrive objects on a simulated bus with

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file ef_canhost.h
  * @brief CANopen over SocketCAN on the host: `evenfeed stream --can` (the master streaming a

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file ef_canload.h
  * @brief A smoothed path streamed by the real CANopen master (ef_comaster.h) to real drives

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file ef_sockcan.h
  * @brief SocketCAN transport (Linux raw CAN socket): the host implementation of the CAN

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file ef_host.h
  * @brief Host-side error convention: the firmware's ::ef_err_t codes plus a message.

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file ef_mb.h
  * @brief Modbus transport on libmodbus (TCP and RTU): the master that streams segments

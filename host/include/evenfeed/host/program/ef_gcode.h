@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file ef_gcode.h
  * @brief Streaming reader for the RS274NGC subset that CAM post-processors emit.

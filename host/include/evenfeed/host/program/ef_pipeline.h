@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file ef_pipeline.h
  * @brief Host pipeline: a part program through the G-code reader, the streaming smoother

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file ef_build.h
  * @brief Build a table's node values with an optimizer backend (CPU reference, or the

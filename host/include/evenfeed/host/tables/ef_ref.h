@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file ef_ref.h
  * @brief CPU reference (double precision): control points from DOFs, the constant-speed

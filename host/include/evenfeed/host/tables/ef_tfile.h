@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file ef_tfile.h
  * @brief Table files on the host: create, fill, serialize, write, load, emit C source.

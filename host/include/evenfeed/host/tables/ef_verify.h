@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file ef_verify.h
  * @brief Accuracy harness: a table's segments against the reference optimum on random
