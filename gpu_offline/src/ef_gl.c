@@ -29,7 +29,7 @@ struct ef_gl {
 };
 
 /* EGL's last error as text for messages. */
-static const char *ef_egl_err(void)
+static const char *gl_egl_err(void)
 {
     switch (eglGetError()) {
     case EGL_SUCCESS:
@@ -58,7 +58,7 @@ static const char *ef_egl_err(void)
 }
 
 /* Whether a space-separated extension list names ext exactly. */
-static int ef_has_ext(const char *list, const char *ext)
+static int gl_has_ext(const char *list, const char *ext)
 {
     size_t n = strlen(ext);
     for (const char *p = list; p && (p = strstr(p, ext)) != NULL; p += n)
@@ -69,11 +69,11 @@ static int ef_has_ext(const char *list, const char *ext)
 
 /* A display on the EGL device platform: the index-th device, skipping Mesa's software
  * device in "auto" mode so a real GPU wins and llvmpipe comes from the surfaceless path. */
-static EGLDisplay ef_gl_device_display(int index, int skip_software, char *why, size_t whylen)
+static EGLDisplay gl_device_display(int index, int skip_software, char *why, size_t whylen)
 {
     const char *cext = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
-    if (!ef_has_ext(cext, "EGL_EXT_device_enumeration") ||
-        !ef_has_ext(cext, "EGL_EXT_platform_device")) {
+    if (!gl_has_ext(cext, "EGL_EXT_device_enumeration") ||
+        !gl_has_ext(cext, "EGL_EXT_platform_device")) {
         snprintf(why, whylen, "EGL has no device platform (EGL_EXT_platform_device)");
         return EGL_NO_DISPLAY;
     }
@@ -85,7 +85,7 @@ static EGLDisplay ef_gl_device_display(int index, int skip_software, char *why, 
     }
     for (EGLint i = 0, seen = 0; i < count; i++) {
         const char *dext = eglQueryDeviceStringEXT(devs[i], EGL_EXTENSIONS);
-        if (skip_software && ef_has_ext(dext, "EGL_MESA_device_software"))
+        if (skip_software && gl_has_ext(dext, "EGL_MESA_device_software"))
             continue;
         if (seen++ == index)
             return eglGetPlatformDisplayEXT(EGL_PLATFORM_DEVICE_EXT, devs[i], NULL);
@@ -96,29 +96,29 @@ static EGLDisplay ef_gl_device_display(int index, int skip_software, char *why, 
 }
 
 /* Initialize dpy and create a 4.3 core context on it, current with no surface. */
-static int ef_gl_context(ef_gl_t *gl, EGLDisplay dpy, ef_msg_t *m)
+static int gl_context(ef_gl_t *gl, EGLDisplay dpy, ef_msg_t *m)
 {
     EGLint maj = 0, min = 0;
     if (dpy == EGL_NO_DISPLAY || !eglInitialize(dpy, &maj, &min))
         return ef_fail(m, EF_ERR_IO, "gl: cannot initialize the %s EGL display (%s)%s",
-                       gl->platform, ef_egl_err(),
+                       gl->platform, gl_egl_err(),
                        strcmp(gl->platform, "surfaceless") ? ""
                                                            : "; is libgl1-mesa-dri installed?");
     gl->dpy = dpy;
     const char *dext = eglQueryString(dpy, EGL_EXTENSIONS);
-    if (!ef_has_ext(dext, "EGL_KHR_surfaceless_context"))
+    if (!gl_has_ext(dext, "EGL_KHR_surfaceless_context"))
         return ef_fail(m, EF_ERR_IO, "gl: EGL %d.%d lacks EGL_KHR_surfaceless_context", maj, min);
     if (!eglBindAPI(EGL_OPENGL_API))
-        return ef_fail(m, EF_ERR_IO, "gl: EGL cannot bind the OpenGL API (%s)", ef_egl_err());
+        return ef_fail(m, EF_ERR_IO, "gl: EGL cannot bind the OpenGL API (%s)", gl_egl_err());
     EGLConfig cfg = EGL_NO_CONFIG_KHR;
-    if (!ef_has_ext(dext, "EGL_KHR_no_config_context")) {
+    if (!gl_has_ext(dext, "EGL_KHR_no_config_context")) {
         const EGLint ca[] = {EGL_RENDERABLE_TYPE, EGL_OPENGL_BIT, EGL_NONE};
         EGLint n = 0;
         if (!eglChooseConfig(dpy, ca, &cfg, 1, &n) || n == 0)
             return ef_fail(m, EF_ERR_IO, "gl: no EGL config for desktop OpenGL");
     }
     /* Robustness when offered: a lost context then says so instead of returning garbage. */
-    int robust = ef_has_ext(dext, "EGL_EXT_create_context_robustness");
+    int robust = gl_has_ext(dext, "EGL_EXT_create_context_robustness");
     EGLint attr[16], k = 0;
     attr[k++] = EGL_CONTEXT_MAJOR_VERSION;
     attr[k++] = 4;
@@ -142,9 +142,9 @@ static int ef_gl_context(ef_gl_t *gl, EGLDisplay dpy, ef_msg_t *m)
     if (gl->ctx == EGL_NO_CONTEXT)
         return ef_fail(m, EF_ERR_IO,
                        "gl: no OpenGL 4.3 core context (%s); compute shaders need GL 4.3",
-                       ef_egl_err());
+                       gl_egl_err());
     if (!eglMakeCurrent(dpy, EGL_NO_SURFACE, EGL_NO_SURFACE, gl->ctx))
-        return ef_fail(m, EF_ERR_IO, "gl: cannot make the context current (%s)", ef_egl_err());
+        return ef_fail(m, EF_ERR_IO, "gl: cannot make the context current (%s)", gl_egl_err());
     GLint gmaj = 0, gmin = 0;
     glGetIntegerv(GL_MAJOR_VERSION, &gmaj);
     glGetIntegerv(GL_MINOR_VERSION, &gmin);
@@ -156,7 +156,7 @@ static int ef_gl_context(ef_gl_t *gl, EGLDisplay dpy, ef_msg_t *m)
 }
 
 /* Options with defaults and the environment's overrides applied. */
-static ef_gl_opts_t ef_gl_defaults(const ef_gl_opts_t *o)
+static ef_gl_opts_t gl_defaults(const ef_gl_opts_t *o)
 {
     ef_gl_opts_t r = {0};
     if (o)
@@ -182,7 +182,7 @@ int ef_gl_open(ef_gl_t **out, const ef_gl_opts_t *opts, ef_msg_t *m)
     if (!out)
         return ef_fail(m, EF_ERR_ARG, "gl: NULL output");
     *out = NULL;
-    ef_gl_opts_t o = ef_gl_defaults(opts);
+    ef_gl_opts_t o = gl_defaults(opts);
     int want_dev = !strcmp(o.platform, "device"), want_sl = !strcmp(o.platform, "surfaceless");
     int is_auto = !strcmp(o.platform, "auto");
     if (!want_dev && !want_sl && !is_auto)
@@ -196,10 +196,10 @@ int ef_gl_open(ef_gl_t **out, const ef_gl_opts_t *opts, ef_msg_t *m)
     char why[600] = "";
     int rc = EF_ERR_IO;
     if (want_dev || is_auto) {
-        EGLDisplay d = ef_gl_device_display(o.device, is_auto, why, sizeof why);
+        EGLDisplay d = gl_device_display(o.device, is_auto, why, sizeof why);
         if (d != EGL_NO_DISPLAY) {
             gl->platform = "device";
-            rc = ef_gl_context(gl, d, m);
+            rc = gl_context(gl, d, m);
             if (rc != EF_OK && is_auto) { /* fall back to surfaceless */
                 snprintf(why, sizeof why, "%s", m ? m->text : "device platform failed");
                 if (gl->dpy != EGL_NO_DISPLAY)
@@ -213,14 +213,14 @@ int ef_gl_open(ef_gl_t **out, const ef_gl_opts_t *opts, ef_msg_t *m)
     }
     if (rc != EF_OK && (want_sl || is_auto)) {
         const char *cext = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
-        if (!ef_has_ext(cext, "EGL_MESA_platform_surfaceless"))
+        if (!gl_has_ext(cext, "EGL_MESA_platform_surfaceless"))
             rc = ef_fail(m, EF_ERR_IO,
                          "gl: no headless EGL platform: %s%sand no Mesa surfaceless "
                          "platform (install libegl-mesa0 and libgl1-mesa-dri)",
                          why, *why ? "; " : "");
         else {
             gl->platform = "surfaceless";
-            rc = ef_gl_context(
+            rc = gl_context(
                 gl,
                 eglGetPlatformDisplayEXT(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, NULL),
                 m);
@@ -265,7 +265,7 @@ void ef_gl_close(ef_gl_t *gl)
 }
 
 /* Compile and link the optimizer for a kind, with the driver's log on failure. */
-static int ef_gl_program(ef_gl_t *gl, int kind, ef_msg_t *m)
+static int gl_program(ef_gl_t *gl, int kind, ef_msg_t *m)
 {
     if (gl->prog[kind])
         return EF_OK;
@@ -302,7 +302,7 @@ static int ef_gl_program(ef_gl_t *gl, int kind, ef_msg_t *m)
 }
 
 /* A pending GL error, or a reset of the context, as a message. */
-static int ef_gl_check(ef_gl_t *gl, const char *step, ef_msg_t *m)
+static int gl_check(ef_gl_t *gl, const char *step, ef_msg_t *m)
 {
     if (gl->robust) {
         GLenum reset = glGetGraphicsResetStatus();
@@ -317,7 +317,7 @@ static int ef_gl_check(ef_gl_t *gl, const char *step, ef_msg_t *m)
 }
 
 /* Set a double uniform by name (absent uniforms are optimized away: fine). */
-static void ef_gl_set_d(GLuint p, const char *name, double v)
+static void gl_set_d(GLuint p, const char *name, double v)
 {
     GLint loc = glGetUniformLocation(p, name);
     if (loc >= 0)
@@ -325,8 +325,7 @@ static void ef_gl_set_d(GLuint p, const char *name, double v)
 }
 
 /* The CPU reference for one configuration, in the shader's result layout. */
-static int ef_gl_cpu_solve(int kind, const double *c, const ef_ref_opts_t *o, double *r,
-                           ef_msg_t *m)
+static int gl_cpu_solve(int kind, const double *c, const ef_ref_opts_t *o, double *r, ef_msg_t *m)
 {
     ef_dend_t e0, e1;
     const int g2 = kind == EF_TABLE_G2_QUINTIC;
@@ -355,7 +354,7 @@ int ef_gl_solve(ef_gl_t *gl, int kind, const double *cfg, uint32_t n, const ef_r
     ef_ref_opts_default(&o);
     if (opts)
         o = *opts;
-    int rc = ef_gl_program(gl, kind, m);
+    int rc = gl_program(gl, kind, m);
     if (rc != EF_OK)
         return rc;
     double *in = malloc(sizeof(double) * EF_GL_CFG_STRIDE * n);
@@ -380,11 +379,11 @@ int ef_gl_solve(ef_gl_t *gl, int kind, const double *cfg, uint32_t n, const ef_r
     free(in);
     glUniform1ui(glGetUniformLocation(p, "ef_count"), n);
     glUniform1i(glGetUniformLocation(p, "ef_max_iter"), o.max_iter);
-    ef_gl_set_d(p, "ef_x1_min", o.x1_min);
-    ef_gl_set_d(p, "ef_x1_max", o.x1_max);
-    ef_gl_set_d(p, "ef_x2_max", o.x2_max);
-    ef_gl_set_d(p, "ef_tol", o.tol);
-    if ((rc = ef_gl_check(gl, "upload", m)) != EF_OK)
+    gl_set_d(p, "ef_x1_min", o.x1_min);
+    gl_set_d(p, "ef_x1_max", o.x1_max);
+    gl_set_d(p, "ef_x2_max", o.x2_max);
+    gl_set_d(p, "ef_tol", o.tol);
+    if ((rc = gl_check(gl, "upload", m)) != EF_OK)
         return rc;
     glDispatchCompute((n + gl->local_size - 1) / gl->local_size, 1, 1);
     glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
@@ -398,17 +397,17 @@ int ef_gl_solve(ef_gl_t *gl, int kind, const double *cfg, uint32_t n, const ef_r
                        n, gl->timeout_s);
     if (w == GL_WAIT_FAILED)
         return ef_fail(m, EF_ERR_IO, "gl: waiting for the dispatch failed (context lost?)");
-    if ((rc = ef_gl_check(gl, "dispatch", m)) != EF_OK)
+    if ((rc = gl_check(gl, "dispatch", m)) != EF_OK)
         return rc;
     glGetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0,
                        (GLsizeiptr)(sizeof(double) * EF_GL_RES_STRIDE * n), res);
-    if ((rc = ef_gl_check(gl, "read-back", m)) != EF_OK)
+    if ((rc = gl_check(gl, "read-back", m)) != EF_OK)
         return rc;
     for (uint32_t i = 0; i < n; i++) {
         double *r = res + EF_GL_RES_STRIDE * (size_t)i;
         const double *c = cfg + 4 * (size_t)i;
         if (r[7] < 0) { /* the driver cut this invocation's loops short: solve it here */
-            if ((rc = ef_gl_cpu_solve(kind, c, &o, r, m)) != EF_OK)
+            if ((rc = gl_cpu_solve(kind, c, &o, r, m)) != EF_OK)
                 return rc;
             gl->fallbacks++;
             continue;
@@ -429,8 +428,8 @@ uint64_t ef_gl_fallbacks(const ef_gl_t *gl)
 }
 
 /* Backend: the rows' node configurations in one dispatch, stored as the CPU backend does. */
-static int ef_gl_solve_rows(void *ctx, ef_tfile_t *t, uint32_t row_begin, uint32_t row_end,
-                            ef_msg_t *m)
+static int gl_solve_rows(void *ctx, ef_tfile_t *t, uint32_t row_begin, uint32_t row_end,
+                         ef_msg_t *m)
 {
     ef_gl_t *gl = ctx;
     const uint32_t n0 = t->view.axis[0].nodes, first = row_begin * n0;
@@ -458,7 +457,7 @@ static int ef_gl_solve_rows(void *ctx, ef_tfile_t *t, uint32_t row_begin, uint32
     return rc;
 }
 
-static void ef_gl_backend_close(void *ctx)
+static void gl_backend_close(void *ctx)
 {
     ef_gl_close(ctx);
 }
@@ -473,8 +472,8 @@ int ef_gl_backend_open(ef_build_backend_t *b, ef_msg_t *m)
     if (rc != EF_OK)
         return rc;
     *b = (ef_build_backend_t){.name = "gl",
-                              .solve_rows = ef_gl_solve_rows,
-                              .close = ef_gl_backend_close,
+                              .solve_rows = gl_solve_rows,
+                              .close = gl_backend_close,
                               .ctx = gl,
                               .chunk_nodes = 2048};
     return EF_OK;

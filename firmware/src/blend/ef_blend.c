@@ -11,7 +11,7 @@
 
 /* Hide an integer's value from the optimizer (an empty asm, no code), so a 0/1 flag used
  * in arithmetic stays arithmetic instead of being turned back into branches. */
-static inline int ef_blend_hidei(int x)
+static inline int bl_hidei(int x)
 {
 #ifdef __GNUC__
     __asm__("" : "+r"(x));
@@ -20,7 +20,7 @@ static inline int ef_blend_hidei(int x)
 }
 
 /* Zero the whole result so a failed call leaves nothing a caller could send to a drive. */
-static int ef_blend_fail(ef_blend_t *out, int rc)
+static int bl_fail(ef_blend_t *out, int rc)
 {
     ef_blend_t zero = {0};
     *out = zero;
@@ -28,7 +28,7 @@ static int ef_blend_fail(ef_blend_t *out, int rc)
 }
 
 /* Every component bounded by EF_MAX_COORD (false for NaN and inf). */
-static inline int ef_blend_v3_ok(ef_vec3_t a)
+static inline int bl_v3_ok(ef_vec3_t a)
 {
     int ox = ef_fabsf(a.x) <= EF_MAX_COORD, oy = ef_fabsf(a.y) <= EF_MAX_COORD;
     int oz = ef_fabsf(a.z) <= EF_MAX_COORD;
@@ -36,7 +36,7 @@ static inline int ef_blend_v3_ok(ef_vec3_t a)
 }
 
 /* Finite without libm: NaN fails x == x, inf fails x - x == 0. */
-static inline int ef_blend_finite(float x)
+static inline int bl_finite(float x)
 {
     return (x == x) & (x - x == 0.0f);
 }
@@ -47,22 +47,22 @@ int ef_blend_corner(const ef_table_t *g2, ef_vec3_t v, ef_vec3_t u_in, ef_vec3_t
     if (!out)
         return EF_ERR_ARG;
     if (!g2)
-        return ef_blend_fail(out, EF_ERR_ARG);
+        return bl_fail(out, EF_ERR_ARG);
     if (g2->kind != EF_TABLE_G2_QUINTIC)
-        return ef_blend_fail(out, EF_ERR_KIND);
-    int finite = ef_blend_v3_ok(v) & ef_blend_v3_ok(u_in) & ef_blend_v3_ok(u_out) &
-                 ef_blend_finite(tol) & ef_blend_finite(max_in) & ef_blend_finite(max_out);
-    if (!ef_blend_hidei(finite))
-        return ef_blend_fail(out, EF_ERR_NONFINITE);
+        return bl_fail(out, EF_ERR_KIND);
+    int finite = bl_v3_ok(v) & bl_v3_ok(u_in) & bl_v3_ok(u_out) & bl_finite(tol) &
+                 bl_finite(max_in) & bl_finite(max_out);
+    if (!bl_hidei(finite))
+        return bl_fail(out, EF_ERR_NONFINITE);
     int positive = (tol > 0.0f) & (max_in > 0.0f) & (max_out > 0.0f);
-    if (!ef_blend_hidei(positive))
-        return ef_blend_fail(out, EF_ERR_ARG);
+    if (!bl_hidei(positive))
+        return bl_fail(out, EF_ERR_ARG);
     float ii = ef_v3_dot(u_in, u_in), oo = ef_v3_dot(u_out, u_out);
     int unit_in = ef_fabsf(ii - 1.0f) <= 2.0f * EF_UNIT_TOL;
     int unit_out = ef_fabsf(oo - 1.0f) <= 2.0f * EF_UNIT_TOL;
     int unit = unit_in & unit_out;
-    if (!ef_blend_hidei(unit))
-        return ef_blend_fail(out, EF_ERR_TANGENT);
+    if (!bl_hidei(unit))
+        return bl_fail(out, EF_ERR_TANGENT);
 
     /* Unit directions; the turn from |u_in x u_out| and <u_in, u_out> (accurate at both
      * ends of [0, pi]); 2 cos(phi) and 2 sin(phi) as |ui + uo| and |uo - ui|, likewise. */
@@ -70,7 +70,7 @@ int ef_blend_corner(const ef_table_t *g2, ef_vec3_t v, ef_vec3_t u_in, ef_vec3_t
     ef_vec3_t uo = ef_v3_scale(u_out, 1.0f / ef_sqrtf(oo));
     float theta = ef_atan2f(ef_v3_norm(ef_v3_cross(ui, uo)), ef_v3_dot(ui, uo));
     if (!(theta <= EF_BLEND_MAX_TURN))
-        return ef_blend_fail(out, EF_ERR_REVERSAL);
+        return bl_fail(out, EF_ERR_REVERSAL);
     ef_vec3_t sum = ef_v3_add(ui, uo);
     float two_cos = ef_v3_norm(sum);               /* chord per unit trim, 2 cos(phi) */
     float two_sin = ef_v3_norm(ef_v3_sub(uo, ui)); /* 2 sin(phi) */
@@ -81,7 +81,7 @@ int ef_blend_corner(const ef_table_t *g2, ef_vec3_t v, ef_vec3_t u_in, ef_vec3_t
     uint32_t tclamp = 0;
     int rc = ef_table_lookup_g2(g2, c, d, &tclamp);
     if (rc != EF_OK)
-        return ef_blend_fail(out, rc);
+        return bl_fail(out, rc);
     /* Per unit trim (L = 1): x1, x2 in program units are the table's times the chord. */
     float x1 = 0.5f * (d[0] + d[2]) * two_cos;
     float x2 = 0.5f * (d[1] - d[3]) * two_cos;
@@ -106,7 +106,7 @@ int ef_blend_corner(const ef_table_t *g2, ef_vec3_t v, ef_vec3_t u_in, ef_vec3_t
     float chord = len * two_cos;
     int stop = (chord < EF_MIN_CHORD) | (chord < EF_MIN_CHORD_REL * scale) | (tol_geo <= 0.0f);
     stop &= straight ^ 1;
-    int blend = ef_blend_hidei((straight | stop) ^ 1);
+    int blend = bl_hidei((straight | stop) ^ 1);
     float m = (float)blend;
     float lb = len * m;
 

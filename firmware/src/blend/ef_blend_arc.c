@@ -3,8 +3,8 @@
  * (ef_blend_arc_piece()). Both build the quintic from exact end frames of the primitives
  * (ef_prim_frame()) through the G2 table and measure its deviation, since no closed form
  * exists for it; the distance from a point to a line or arc piece is in closed form
- * (ef_ba_dist_piece(), the pieces prepared once per trial by ef_ba_piece()), and the
- * quintic is evaluated in Bernstein form (ef_ba_q5()). See ef_blend.h. */
+ * (ba_dist_piece(), the pieces prepared once per trial by ba_piece()), and the
+ * quintic is evaluated in Bernstein form (ba_q5()). See ef_blend.h. */
 #include "evenfeed/blend/ef_blend.h"
 #include "evenfeed/geom/ef_bezier.h"
 #include "evenfeed/core/ef_config.h"
@@ -15,14 +15,14 @@
 #define EF_BA_ROUND_MARGIN (4.0f * 1.1920929e-7f)
 /* Samples of an arc piece's quintic for its deviation from the true arc (fixed count). */
 #define EF_BA_PIECE_SAMPLES 64
-/* Float32 error of ef_prim_frame()'s angle on an arc, in ulp of the angle (ef_ba_piece()):
+/* Float32 error of ef_prim_frame()'s angle on an arc, in ulp of the angle (ba_piece()):
  * rounding s / len and sweep * frac, half an ulp each, doubled for len's own rounding.
  * Empirical, not proven: tests/blend/test_prim.c's 1500 arc pieces (up to 4 turns) find the true
  * deviation at most 0.998 x the reported one with it, 2.8 x without. */
 #define EF_BA_ANGLE_ULP 2.0f
-/* Extra samples per refined interval, plus one (ef_ba_try()). */
+/* Extra samples per refined interval, plus one (ba_try()). */
 #define EF_BA_REFINE 8
-/* Points of each replaced piece checked for their distance to the blend (ef_ba_try()). */
+/* Points of each replaced piece checked for their distance to the blend (ba_try()). */
 #define EF_BA_PATH_PTS 3
 /* Relative allowance over the blend's bounded deviation: the between-sample term is an
  * estimate (second differences), not a proof. tests/blend/test_prim.c (6000 random corners)
@@ -42,20 +42,20 @@
 #define EF_BA_TANGENT_GAIN 1.0f
 
 /* Finite test without libm (NaN fails x == x, inf fails x - x == 0). */
-static int ef_ba_finite(float x)
+static int ba_finite(float x)
 {
     return (x == x) & (x - x == 0.0f);
 }
 
 /* Zero a move, so a failed arc piece hands back no partial data. */
-static void ef_ba_zero_move(ef_move_t *m)
+static void ba_zero_move(ef_move_t *m)
 {
     ef_move_t zero = {0};
     *m = zero;
 }
 
 /* Zero the blend result and return rc: the single failure exit of ef_blend_prims(). */
-static int ef_ba_fail_blend(ef_blend_t *res, int rc)
+static int ba_fail_blend(ef_blend_t *res, int rc)
 {
     ef_blend_t zero = {0};
     *res = zero;
@@ -63,13 +63,13 @@ static int ef_ba_fail_blend(ef_blend_t *res, int rc)
 }
 
 /* Largest coordinate magnitude, to scale the float32 rounding margin. */
-static float ef_ba_maxabs(ef_vec3_t a)
+static float ba_maxabs(ef_vec3_t a)
 {
     return ef_maxf(ef_maxf(ef_fabsf(a.x), ef_fabsf(a.y)), ef_fabsf(a.z));
 }
 
 /* Start radius of an arc (perpendicular to the axis); 0 for a line. */
-static float ef_ba_radius(ef_vec3_t start, const ef_prim_t *pr)
+static float ba_radius(ef_vec3_t start, const ef_prim_t *pr)
 {
     if (pr->kind != EF_PRIM_ARC)
         return 0.0f;
@@ -82,7 +82,7 @@ static float ef_ba_radius(ef_vec3_t start, const ef_prim_t *pr)
 /* Point of the quintic b at t: the control points weighted by the degree-5 Bernstein
  * polynomials (all positive, so as accurate as de Casteljau's algorithm, without its
  * copies). */
-static ef_vec3_t ef_ba_q5(const ef_vec3_t *b, float t)
+static ef_vec3_t ba_q5(const ef_vec3_t *b, float t)
 {
     float u = 1.0f - t, t2 = t * t, u2 = u * u;
     float w0 = u2 * u2 * u, w1 = 5.0f * u2 * u2 * t, w2 = 10.0f * u2 * u * t2;
@@ -96,8 +96,7 @@ static ef_vec3_t ef_ba_q5(const ef_vec3_t *b, float t)
 }
 
 /* The same for the first (degree 4, h1) and second (degree 3, h2) hodographs. */
-static void ef_ba_d12(const ef_vec3_t *h1, const ef_vec3_t *h2, float t, ef_vec3_t *d1,
-                      ef_vec3_t *d2)
+static void ba_d12(const ef_vec3_t *h1, const ef_vec3_t *h2, float t, ef_vec3_t *d1, ef_vec3_t *d2)
 {
     float u = 1.0f - t, t2 = t * t, u2 = u * u;
     ef_vec3_t r = ef_v3_scale(h1[0], u2 * u2);
@@ -112,7 +111,7 @@ static void ef_ba_d12(const ef_vec3_t *h1, const ef_vec3_t *h2, float t, ef_vec3
 }
 
 /* sin x for |x| <= pi/4 (fdlibm's float kernel, about 1 ulp). */
-static float ef_ba_sin(float x)
+static float ba_sin(float x)
 {
     float z = x * x;
     return x + x * z *
@@ -121,7 +120,7 @@ static float ef_ba_sin(float x)
 }
 
 /* cos x for |x| <= pi/4 (fdlibm's float kernel). */
-static float ef_ba_cos(float x)
+static float ba_cos(float x)
 {
     float z = x * x;
     return 1.0f - 0.5f * z +
@@ -129,7 +128,7 @@ static float ef_ba_cos(float x)
 }
 
 /* A replaced piece [sa, sb] of a checked primitive, prepared once per trial for
- * ef_ba_dist_piece(). Lines: start p0, unit direction t, length l. Arcs and helices (a piece
+ * ba_dist_piece(). Lines: start p0, unit direction t, length l. Arcs and helices (a piece
  * of at most EF_ARC_PIECE_SWEEP, plus rounding): the axis point cm level with the piece's
  * middle, the outward radial unit ex there, ey = +-(axis x ex) in the direction of travel,
  * the unit axis a, radius r, axial rise c per radian of travel, half sweep psi; a point of
@@ -138,7 +137,7 @@ static float ef_ba_cos(float x)
  * point along an arc, EF_BA_ANGLE_ULP ulp of the angle at the piece's far end times the
  * radius, added to every distance (the blend's ends come from those frames, so they may lie
  * that far beyond the true piece's ends); 0 for lines. q: EF_BA_PATH_PTS points of the piece,
- * evenly spaced (the path-to-blend check of ef_ba_try()). */
+ * evenly spaced (the path-to-blend check of ba_try()). */
 typedef struct {
     ef_vec3_t p0, t, cm, ex, ey, a, pa, pb;
     ef_vec3_t q[EF_BA_PATH_PTS]; /* points at k / (EF_BA_PATH_PTS + 1) of the piece */
@@ -146,9 +145,9 @@ typedef struct {
     int arc;
 } ef_ba_piece_t;
 
-/* Prepare the replaced piece [sa, sb] of a primitive for ef_ba_dist_piece(). */
-static void ef_ba_piece(ef_vec3_t start, const ef_prim_t *pr, float len, float sa, float sb,
-                        ef_ba_piece_t *pc)
+/* Prepare the replaced piece [sa, sb] of a primitive for ba_dist_piece(). */
+static void ba_piece(ef_vec3_t start, const ef_prim_t *pr, float len, float sa, float sb,
+                     ef_ba_piece_t *pc)
 {
     ef_frame_t f;
     ef_prim_frame(start, pr, sa, &f);
@@ -169,7 +168,7 @@ static void ef_ba_piece(ef_vec3_t start, const ef_prim_t *pr, float len, float s
     pc->pb = f.p;
     float aa = ef_v3_dot(pr->axis, pr->axis);
     ef_vec3_t a = ef_v3_scale(pr->axis, 1.0f / ef_sqrtf(ef_maxf(aa, 1e-30f)));
-    float r0 = ef_ba_radius(start, pr);
+    float r0 = ba_radius(start, pr);
     ef_prim_frame(start, pr, 0.5f * (sa + sb), &f);
     ef_vec3_t ex = ef_v3_scale(f.n, -1.0f);
     float asw = ef_fabsf(pr->sweep);
@@ -184,7 +183,7 @@ static void ef_ba_piece(ef_vec3_t start, const ef_prim_t *pr, float len, float s
     pc->err = r0 * asw * (sb / len) * (EF_BA_ANGLE_ULP * 1.1920929e-7f);
     for (int k = 0; k < EF_BA_PATH_PTS; k++) {
         float th = pc->psi * ((float)(2 * (k + 1)) / (float)(EF_BA_PATH_PTS + 1) - 1.0f);
-        float sn = ef_ba_sin(th), cs = ef_ba_cos(th);
+        float sn = ba_sin(th), cs = ba_cos(th);
         ef_vec3_t rad = ef_v3_axpy(ef_v3_scale(ex, cs), sn, pc->ey);
         pc->q[k] = ef_v3_axpy(ef_v3_axpy(pc->cm, r0, rad), pc->c * th, a);
     }
@@ -196,7 +195,7 @@ static void ef_ba_piece(ef_vec3_t start, const ef_prim_t *pr, float len, float s
  * when |phi| <= psi also the point at angle phi, sqrt((rho - r)^2 + (z - c phi)^2), exact
  * for a circle; for a helix also the point one Newton step on from phi (clamped to the
  * piece), |q - P(th)|^2 = (rho - r)^2 + 4 rho r sin^2((th - phi) / 2) + (z - c th)^2. */
-static float ef_ba_dist_piece(ef_vec3_t q, const ef_ba_piece_t *pc)
+static float ba_dist_piece(ef_vec3_t q, const ef_ba_piece_t *pc)
 {
     if (!pc->arc) {
         ef_vec3_t w = ef_v3_sub(q, pc->p0);
@@ -212,7 +211,7 @@ static float ef_ba_dist_piece(ef_vec3_t q, const ef_ba_piece_t *pc)
     float dr = rho - r, dz = z - c * phi;
     float d1 = dr * dr + dz * dz;
     float th = ef_minf(ef_maxf(phi + c * dz / ef_maxf(rho * r + c * c, 1e-30f), -psi), psi);
-    float sn = ef_ba_sin(0.5f * (th - phi)), dz2 = z - c * th;
+    float sn = ba_sin(0.5f * (th - phi)), dz2 = z - c * th;
     float d2 = dr * dr + 4.0f * rho * r * sn * sn + dz2 * dz2;
     int inside = ef_fabsf(phi) <= psi;
     float din = ef_minf(d1, d2);
@@ -225,7 +224,7 @@ int ef_blend_arc_piece(const ef_table_t *g2, ef_vec3_t start, const ef_prim_t *p
 {
     if (!m)
         return EF_ERR_ARG;
-    ef_ba_zero_move(m);
+    ba_zero_move(m);
     if (!g2 || !pr || pr->kind != EF_PRIM_ARC)
         return EF_ERR_ARG;
     if (g2->kind != EF_TABLE_G2_QUINTIC)
@@ -252,10 +251,10 @@ int ef_blend_arc_piece(const ef_table_t *g2, ef_vec3_t start, const ef_prim_t *p
     /* Deviation from the true arc piece: EF_BA_PIECE_SAMPLES interior samples. */
     float dev = 0.0f;
     ef_ba_piece_t pc;
-    ef_ba_piece(start, pr, len, s0, s1, &pc);
+    ba_piece(start, pr, len, s0, s1, &pc);
     for (int i = 1; i <= EF_BA_PIECE_SAMPLES; i++) {
         float t = (float)i * (1.0f / (float)(EF_BA_PIECE_SAMPLES + 1));
-        dev = ef_maxf(dev, ef_ba_dist_piece(ef_ba_q5(seg.b, t), &pc));
+        dev = ef_maxf(dev, ba_dist_piece(ba_q5(seg.b, t), &pc));
     }
     for (int i = 0; i < 6; i++)
         m->b[i] = seg.b[i];
@@ -267,7 +266,7 @@ int ef_blend_arc_piece(const ef_table_t *g2, ef_vec3_t start, const ef_prim_t *p
     m->dev = dev;
     rc = ef_move_measure(m);
     if (rc != EF_OK) {
-        ef_ba_zero_move(m);
+        ba_zero_move(m);
         return rc;
     }
     return EF_OK;
@@ -286,7 +285,7 @@ typedef struct {
  * interpolation error of a smooth function (second differences at the first and last sample
  * taken from their neighbours); the largest value of the smaller of the two bounds is at an
  * end or where they cross. */
-static void ef_ba_interval_bounds(const float *fa, const float *fb, int n, float *bnd)
+static void ba_interval_bounds(const float *fa, const float *fb, int n, float *bnd)
 {
     for (int i = 0; i + 1 < n; i++) {
         int k0 = i < 1 ? 1 : i, k1 = i + 1 > n - 2 ? n - 2 : i + 1;
@@ -308,8 +307,8 @@ static void ef_ba_interval_bounds(const float *fa, const float *fb, int n, float
 /* Distance from x to the quintic (samples cs[0..n-1] at i / (n - 1), hodographs h1, h2),
  * from above: the nearest sample, then one Newton step on |f(t) - x|^2 from it; the smaller
  * distance. */
-static float ef_ba_dist_curve(const ef_vec3_t *b, const ef_vec3_t *h1, const ef_vec3_t *h2,
-                              const ef_vec3_t *cs, int n, ef_vec3_t x)
+static float ba_dist_curve(const ef_vec3_t *b, const ef_vec3_t *h1, const ef_vec3_t *h2,
+                           const ef_vec3_t *cs, int n, ef_vec3_t x)
 {
     int j = 0;
     float d2 = 3.4e38f;
@@ -321,17 +320,17 @@ static float ef_ba_dist_curve(const ef_vec3_t *b, const ef_vec3_t *h1, const ef_
     }
     float t = (float)j / (float)(n - 1);
     ef_vec3_t der1, der2;
-    ef_ba_d12(h1, h2, t, &der1, &der2);
+    ba_d12(h1, h2, t, &der1, &der2);
     ef_vec3_t w = ef_v3_sub(cs[j], x);
     float g = ef_v3_dot(w, der1);
     float gg = ef_maxf(ef_v3_dot(der1, der1) + ef_v3_dot(w, der2), 1e-30f);
     float tn = ef_minf(ef_maxf(t - g / gg, 0.0f), 1.0f);
-    return ef_minf(ef_v3_norm(ef_v3_sub(ef_ba_q5(b, tn), x)), ef_sqrtf(d2));
+    return ef_minf(ef_v3_norm(ef_v3_sub(ba_q5(b, tn), x)), ef_sqrtf(d2));
 }
 
 /* Build one trial blend for trims (li, lo) and bound its two-way deviation. */
-static void ef_ba_try(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in, float len_in,
-                      const ef_prim_t *out, float len_out, float li, float lo, ef_ba_trial_t *tr)
+static void ba_try(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in, float len_in,
+                   const ef_prim_t *out, float len_out, float li, float lo, ef_ba_trial_t *tr)
 {
     ef_vec3_t v = in->end;
     ef_frame_t ga, gb;
@@ -344,24 +343,24 @@ static void ef_ba_try(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t 
     tr->li = li;
     tr->lo = lo;
     ef_ba_piece_t pin, pout;
-    ef_ba_piece(start_in, in, len_in, len_in - li, len_in, &pin);
-    ef_ba_piece(v, out, len_out, 0.0f, lo, &pout);
+    ba_piece(start_in, in, len_in, len_in - li, len_in, &pin);
+    ba_piece(v, out, len_out, 0.0f, lo, &pout);
     const ef_vec3_t *b = tr->seg.b;
     /* Deviation, blend to path: max_t min(f_in(t), f_out(t)), f the distances to the replaced
-     * pieces (each an upper bound, see ef_ba_dist_piece()); its top is usually a kink where
+     * pieces (each an upper bound, see ba_dist_piece()); its top is usually a kink where
      * the two cross, not a sample. EF_BLEND_DEV_SAMPLES + 2 samples (ends included) and a
-     * bound per interval (ef_ba_interval_bounds()); then the interval with the largest bound
+     * bound per interval (ba_interval_bounds()); then the interval with the largest bound
      * is sampled EF_BA_REFINE - 1 times more and its bound replaced by the finer one. */
     enum { NS = EF_BLEND_DEV_SAMPLES + 2 };
     float fa[NS], fb[NS], bnd[NS - 1];
     ef_vec3_t cs[NS];
     const float h = 1.0f / (float)(NS - 1);
     for (int i = 0; i < NS; i++) {
-        cs[i] = ef_ba_q5(b, (float)i * h);
-        fa[i] = ef_ba_dist_piece(cs[i], &pin);
-        fb[i] = ef_ba_dist_piece(cs[i], &pout);
+        cs[i] = ba_q5(b, (float)i * h);
+        fa[i] = ba_dist_piece(cs[i], &pin);
+        fb[i] = ba_dist_piece(cs[i], &pout);
     }
-    ef_ba_interval_bounds(fa, fb, NS, bnd);
+    ba_interval_bounds(fa, fb, NS, bnd);
     int jm = 0;
     for (int i = 1; i < NS - 1; i++)
         jm = bnd[i] > bnd[jm] ? i : jm;
@@ -372,11 +371,11 @@ static void ef_ba_try(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t 
     gb_[EF_BA_REFINE] = fb[jm + 1];
     for (int k = 1; k < EF_BA_REFINE; k++) {
         float t = ((float)jm + (float)k * (1.0f / (float)EF_BA_REFINE)) * h;
-        ef_vec3_t pt = ef_ba_q5(b, t);
-        ga_[k] = ef_ba_dist_piece(pt, &pin);
-        gb_[k] = ef_ba_dist_piece(pt, &pout);
+        ef_vec3_t pt = ba_q5(b, t);
+        ga_[k] = ba_dist_piece(pt, &pin);
+        gb_[k] = ba_dist_piece(pt, &pout);
     }
-    ef_ba_interval_bounds(ga_, gb_, EF_BA_REFINE + 1, gbnd);
+    ba_interval_bounds(ga_, gb_, EF_BA_REFINE + 1, gbnd);
     float fine = 0.0f;
     for (int k = 0; k < EF_BA_REFINE; k++)
         fine = ef_maxf(fine, gbnd[k]);
@@ -387,16 +386,16 @@ static void ef_ba_try(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t 
     /* The other way: the path's points must be within the tolerance of the blend too (a
      * lopsided hairpin blend could otherwise cut the tip short while staying close to one of
      * the two nearly parallel pieces). Checked for the vertex and EF_BA_PATH_PTS points of
-     * each replaced piece, by ef_ba_dist_curve() (an upper bound). */
+     * each replaced piece, by ba_dist_curve() (an upper bound). */
     ef_vec3_t h1[5], h2[4];
     for (int i = 0; i < 5; i++)
         h1[i] = ef_v3_scale(ef_v3_sub(b[i + 1], b[i]), 5.0f);
     for (int i = 0; i < 4; i++)
         h2[i] = ef_v3_scale(ef_v3_sub(h1[i + 1], h1[i]), 4.0f);
-    dev = ef_maxf(dev, ef_ba_dist_curve(b, h1, h2, cs, NS, v));
+    dev = ef_maxf(dev, ba_dist_curve(b, h1, h2, cs, NS, v));
     for (int k = 0; k < EF_BA_PATH_PTS; k++) {
-        dev = ef_maxf(dev, ef_ba_dist_curve(b, h1, h2, cs, NS, pin.q[k]) + pin.err);
-        dev = ef_maxf(dev, ef_ba_dist_curve(b, h1, h2, cs, NS, pout.q[k]) + pout.err);
+        dev = ef_maxf(dev, ba_dist_curve(b, h1, h2, cs, NS, pin.q[k]) + pin.err);
+        dev = ef_maxf(dev, ba_dist_curve(b, h1, h2, cs, NS, pout.q[k]) + pout.err);
     }
     tr->dev = dev * EF_BA_DEV_REL;
     /* A configuration whose tangent angles the table had to clamp (a lopsided hairpin: a
@@ -404,8 +403,8 @@ static void ef_ba_try(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t 
      * count. (A clamped curvature, a tight arc, is fine: the curve still meets the end data
      * exactly and its deviation is measured.) */
     uint32_t bad = EF_LOOKUP_CLAMP_ALPHA | EF_LOOKUP_CLAMP_BETA;
-    tr->ok = (rc == EF_OK) & (tr->seg.degree == 5) & ef_ba_finite(tr->dev) &
-             ((tr->seg.clamp & bad) == 0u);
+    tr->ok =
+        (rc == EF_OK) & (tr->seg.degree == 5) & ba_finite(tr->dev) & ((tr->seg.clamp & bad) == 0u);
 }
 
 /* G2 blend of a corner or tangent join with arc ends (contract in ef_blend.h). */
@@ -416,20 +415,20 @@ int ef_blend_prims(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in
     if (!res)
         return EF_ERR_ARG;
     if (!g2 || !in || !out)
-        return ef_ba_fail_blend(res, EF_ERR_ARG);
+        return ba_fail_blend(res, EF_ERR_ARG);
     if (g2->kind != EF_TABLE_G2_QUINTIC)
-        return ef_ba_fail_blend(res, EF_ERR_KIND);
-    int finite = ef_ba_finite(len_in) & ef_ba_finite(len_out) & ef_ba_finite(tol) &
-                 ef_ba_finite(max_in) & ef_ba_finite(max_out);
+        return ba_fail_blend(res, EF_ERR_KIND);
+    int finite = ba_finite(len_in) & ba_finite(len_out) & ba_finite(tol) & ba_finite(max_in) &
+                 ba_finite(max_out);
     if (!finite)
-        return ef_ba_fail_blend(res, EF_ERR_NONFINITE);
+        return ba_fail_blend(res, EF_ERR_NONFINITE);
     float cl_in, cl_out;
     int rc = ef_prim_check(start_in, in, &cl_in);
     if (rc != EF_OK)
-        return ef_ba_fail_blend(res, rc);
+        return ba_fail_blend(res, rc);
     rc = ef_prim_check(in->end, out, &cl_out);
     if (rc != EF_OK)
-        return ef_ba_fail_blend(res, rc);
+        return ba_fail_blend(res, rc);
     /* The lengths must be the primitives' (ef_prim_check()'s, up to rounding). */
     int lens_in = ef_fabsf(len_in - cl_in) <= 1e-5f * cl_in;
     int lens_out = ef_fabsf(len_out - cl_out) <= 1e-5f * cl_out;
@@ -437,7 +436,7 @@ int ef_blend_prims(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in
     int range = (tol > 0.0f) & (max_in > 0.0f) & (max_out > 0.0f) & (max_in <= len_in) &
                 (max_out <= len_out);
     if (!(lens & range))
-        return ef_ba_fail_blend(res, EF_ERR_ARG);
+        return ba_fail_blend(res, EF_ERR_ARG);
     /* From here on the lengths as this code computes them, so s = len is exactly the end. */
     len_in = cl_in;
     len_out = cl_out;
@@ -456,7 +455,7 @@ int ef_blend_prims(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in
     ef_blend_t ll;
     rc = ef_blend_corner(g2, v, fi.t, fo.t, tol, EF_MAX_COORD, EF_MAX_COORD, &ll);
     if (rc != EF_OK)
-        return ef_ba_fail_blend(res, rc);
+        return ba_fail_blend(res, rc);
     float theta = ll.turn;
     int straight = (ll.flags & EF_BLEND_STRAIGHT) != 0u;
     /* A tangent join: straight, but the curvature vectors differ (a line tangent to an arc,
@@ -475,8 +474,8 @@ int ef_blend_prims(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in
         cap_in = ef_minf(cap_in, len_in * (EF_ARC_PIECE_SWEEP / ef_fabsf(in->sweep)));
     if (out->kind == EF_PRIM_ARC)
         cap_out = ef_minf(cap_out, len_out * (EF_ARC_PIECE_SWEEP / ef_fabsf(out->sweep)));
-    float r_in = ef_ba_radius(start_in, in), r_out = ef_ba_radius(v, out);
-    float scale = ef_ba_maxabs(v) + r_in + r_out;
+    float r_in = ba_radius(start_in, in), r_out = ba_radius(v, out);
+    float scale = ba_maxabs(v) + r_in + r_out;
     float tol_geo = tol - EF_BA_ROUND_MARGIN * scale;
 
     /* Trims as a scale lambda of the line–line trim, each side clamped by its own limit.
@@ -498,7 +497,7 @@ int ef_blend_prims(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in
     ef_ba_trial_t tr = {0}, best = {0};
     for (int it = 0; it < EF_BLEND_ITER; it++) {
         float li = ef_minf(lam * l0, cap_in), lo = ef_minf(lam * l0, cap_out);
-        ef_ba_try(g2, start_in, in, len_in, out, len_out, li, lo, &tr);
+        ba_try(g2, start_in, in, len_in, out, len_out, li, lo, &tr);
         int feasible = tr.ok & (tr.dev <= tol_geo);
         if (feasible && lam > lo_ok) {
             lo_ok = lam;

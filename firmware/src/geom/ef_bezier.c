@@ -69,7 +69,7 @@ static const float (*ef_gl_rule(int degree, int *n))[2]
 }
 
 /* Plain de Casteljau on a working copy; degree is at most EF_BEZIER_MAX_DEGREE. */
-static ef_vec3_t ef_casteljau(ef_vec3_t *w, int degree, float t)
+static ef_vec3_t bz_casteljau(ef_vec3_t *w, int degree, float t)
 {
     for (int r = 1; r <= degree; r++)
         for (int i = 0; i <= degree - r; i++)
@@ -90,7 +90,7 @@ int ef_bezier_eval(const ef_vec3_t *b, int degree, float t, int nder, ef_vec3_t 
         int d = degree - k;
         for (int i = 0; i <= d; i++)
             work[i] = diff[i];
-        out[k] = ef_v3_scale(ef_casteljau(work, d, t), factor);
+        out[k] = ef_v3_scale(bz_casteljau(work, d, t), factor);
         for (int i = 0; i < d; i++)
             diff[i] = ef_v3_sub(diff[i + 1], diff[i]);
         factor *= (float)d;

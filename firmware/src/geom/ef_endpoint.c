@@ -6,7 +6,7 @@
 
 /* Hide an integer's value from the optimizer (an empty asm, no code), so a flag combined
  * with & stays one test instead of being split back into short-circuit branches. */
-static inline int ef_ct_hidei(int x)
+static inline int ep_ct_hidei(int x)
 {
 #ifdef __GNUC__
     __asm__("" : "+r"(x));
@@ -15,7 +15,7 @@ static inline int ef_ct_hidei(int x)
 }
 
 /* Finite test without libm: NaN fails x == x, inf fails x - x == 0. */
-static int ef_finite(float x)
+static int ep_finite(float x)
 {
     return (x == x) & (x - x == 0.0f);
 }
@@ -24,7 +24,7 @@ static int ef_finite(float x)
  * test alone says both, since EF_MAX_COORD is finite: NaN compares false and |inf| exceeds
  * it. A separate finite test per component cost about 25 instructions a vector, and this
  * runs four times per G1 segment and six per G2. */
-static inline int ef_v3_ok(ef_vec3_t v)
+static inline int ep_v3_ok(ef_vec3_t v)
 {
     int ox = ef_fabsf(v.x) <= EF_MAX_COORD, oy = ef_fabsf(v.y) <= EF_MAX_COORD;
     int oz = ef_fabsf(v.z) <= EF_MAX_COORD;
@@ -33,11 +33,11 @@ static inline int ef_v3_ok(ef_vec3_t v)
 
 /* Checks combine with & rather than && so valid input always runs the same instructions.
  * Inline so ef_normalize() pays no call per end; e is not NULL here. */
-static inline int ef_check(const ef_endpoint_t *e, int g2)
+static inline int ep_check(const ef_endpoint_t *e, int g2)
 {
-    int finite = ef_v3_ok(e->p) & ef_v3_ok(e->t);
+    int finite = ep_v3_ok(e->p) & ep_v3_ok(e->t);
     if (g2)
-        finite &= ef_v3_ok(e->n) & ef_finite(e->kappa);
+        finite &= ep_v3_ok(e->n) & ep_finite(e->kappa);
     if (!finite)
         return EF_ERR_NONFINITE;
     float tt = ef_v3_dot(e->t, e->t);
@@ -51,7 +51,7 @@ static inline int ef_check(const ef_endpoint_t *e, int g2)
         int bad_n = (unit_n & perp_n) ^ 1;
         /* gcc -O2 evaluated `curved` only when bad_n was set: a data-dependent count on
          * valid input (kappa == 0 with a zero normal). One opaque test keeps it fixed. */
-        if (ef_ct_hidei(curved & bad_n))
+        if (ep_ct_hidei(curved & bad_n))
             return EF_ERR_NORMAL;
     }
     return EF_OK;
@@ -60,25 +60,25 @@ static inline int ef_check(const ef_endpoint_t *e, int g2)
 /* Public entry: validate one end (NULL-safe). */
 int ef_endpoint_check(const ef_endpoint_t *e, int g2)
 {
-    return e ? ef_check(e, g2) : EF_ERR_ARG;
+    return e ? ep_check(e, g2) : EF_ERR_ARG;
 }
 
 /* v / |v|, or the zero vector when |v| is 0 (callers select away from that case). */
-static inline ef_vec3_t ef_v3_unit_or_zero(ef_vec3_t v)
+static inline ef_vec3_t ep_v3_unit_or_zero(ef_vec3_t v)
 {
     float l2 = ef_v3_dot(v, v);
     return ef_v3_scale(v, 1.0f / ef_sqrtf(ef_selectf(l2 > 0.0f, l2, 1.0f)));
 }
 
 /* Component-wise select between two vectors. */
-static ef_vec3_t ef_v3_select(int c, ef_vec3_t a, ef_vec3_t b)
+static ef_vec3_t ep_v3_select(int c, ef_vec3_t a, ef_vec3_t b)
 {
     return ef_v3(ef_selectf(c, a.x, b.x), ef_selectf(c, a.y, b.y), ef_selectf(c, a.z, b.z));
 }
 
 /* m0 + sigma m1 with sigma = +-1 making the two terms agree, so opposite normals of a
  * C-shaped configuration add rather than cancel. */
-static ef_vec3_t ef_v3_agree_sum(ef_vec3_t m0, ef_vec3_t m1, float *sigma)
+static ef_vec3_t ep_v3_agree_sum(ef_vec3_t m0, ef_vec3_t m1, float *sigma)
 {
     *sigma = ef_selectf(ef_v3_dot(m0, m1) >= 0.0f, 1.0f, -1.0f);
     return ef_v3_axpy(m0, *sigma, m1);
@@ -98,9 +98,9 @@ int ef_normalize(const ef_endpoint_t *e0, const ef_endpoint_t *e1, int g2, ef_no
 {
     if (!e0 || !e1 || !out)
         return EF_ERR_ARG;
-    int rc = ef_check(e0, g2);
+    int rc = ep_check(e0, g2);
     if (rc == EF_OK)
-        rc = ef_check(e1, g2);
+        rc = ep_check(e1, g2);
     if (rc != EF_OK)
         return rc;
 
@@ -113,10 +113,10 @@ int ef_normalize(const ef_endpoint_t *e0, const ef_endpoint_t *e1, int g2, ef_no
         return EF_ERR_DEGENERATE;
 
     ef_vec3_t ex = ef_v3_scale(d, 1.0f / s);
-    ef_vec3_t t0 = ef_v3_unit_or_zero(e0->t), t1 = ef_v3_unit_or_zero(e1->t);
+    ef_vec3_t t0 = ep_v3_unit_or_zero(e0->t), t1 = ep_v3_unit_or_zero(e1->t);
     ef_vec3_t m0 = ef_v3_cross(ex, t0), m1 = ef_v3_cross(ex, t1);
     float sigma;
-    ef_vec3_t m = ef_v3_agree_sum(m0, m1, &sigma);
+    ef_vec3_t m = ep_v3_agree_sum(m0, m1, &sigma);
     /* True angle to the chord; the sign (side of the chord) comes below. */
     float a0 = ef_atan2f(ef_v3_norm(m0), ef_v3_dot(t0, ex));
     float a1 = ef_atan2f(ef_v3_norm(m1), ef_v3_dot(t1, ex));
@@ -129,15 +129,15 @@ int ef_normalize(const ef_endpoint_t *e0, const ef_endpoint_t *e1, int g2, ef_no
     } else {
         float sigma_k;
         ef_vec3_t cand_k =
-            ef_v3_agree_sum(ef_v3_cross(ex, ef_v3_scale(e0->n, e0->kappa * s)),
+            ep_v3_agree_sum(ef_v3_cross(ex, ef_v3_scale(e0->n, e0->kappa * s)),
                             ef_v3_cross(ex, ef_v3_scale(e1->n, e1->kappa * s)), &sigma_k);
         /* When the curvature candidate vanishes too, |kappa s| < 1e-5 at both ends and both
          * tangents lie along the chord: angles are 0 or pi and curvatures ~0 in any plane,
          * so no further fallback is needed (a zero e3 gives exactly 0 curvatures). */
         const float tiny = 1e-10f;
         int m_tiny = ef_v3_dot(m, m) < tiny, k_ok = ef_v3_dot(cand_k, cand_k) >= tiny;
-        m = ef_v3_select(m_tiny & k_ok, cand_k, m);
-        ef_vec3_t ez = ef_v3_unit_or_zero(m);
+        m = ep_v3_select(m_tiny & k_ok, cand_k, m);
+        ef_vec3_t ez = ep_v3_unit_or_zero(m);
         float key = ef_selectf(ez.z != 0.0f, ez.z, ef_selectf(ez.y != 0.0f, ez.y, ez.x));
         ez = ef_v3_scale(ez, ef_selectf(key < 0.0f, -1.0f, 1.0f));
         out->alpha = ef_selectf(ef_v3_dot(m0, ez) < 0.0f, -a0, a0);
@@ -163,7 +163,7 @@ float ef_norm_twist(const ef_norm_t *nm, const ef_endpoint_t *e0, const ef_endpo
         return 0.0f;
     ef_vec3_t m0 = ef_v3_cross(nm->e1, e0->t), m1 = ef_v3_cross(nm->e1, e1->t);
     float sigma;
-    (void)ef_v3_agree_sum(m0, m1, &sigma);
+    (void)ep_v3_agree_sum(m0, m1, &sigma);
     ef_vec3_t m1s = ef_v3_scale(m1, sigma);
     return ef_atan2f(ef_v3_norm(ef_v3_cross(m0, m1s)), ef_v3_dot(m0, m1s));
 }

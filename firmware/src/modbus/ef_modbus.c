@@ -91,7 +91,7 @@ float ef_mb_get_f32(const uint16_t *w)
 }
 
 /* Whether every number a slot carries for this move is finite. */
-static int mb_move_finite(const ef_move_t *m)
+static int mbd_move_finite(const ef_move_t *m)
 {
     int ok = ef_finitef(m->duration) & ef_finitef(m->length) & ef_finitef(m->v_exit);
     for (int k = 0; k < EF_TIMELAW_PHASES; k++) {
@@ -109,7 +109,7 @@ int ef_mb_slot_encode(const ef_move_t *m, uint16_t w[EF_MB_SLOT_WORDS])
 {
     if (!m || !w || (m->degree != 1 && m->degree != 3 && m->degree != 5))
         return EF_ERR_ARG;
-    if (!mb_move_finite(m))
+    if (!mbd_move_finite(m))
         return EF_ERR_NONFINITE;
     if (!(m->duration > 0.0f))
         return EF_ERR_ARG;
@@ -165,7 +165,7 @@ int ef_mb_slot_decode(const uint16_t w[EF_MB_SLOT_WORDS], ef_move_t *m)
         const uint16_t *p = &w[EF_MB_SLOT_POINTS + 6 * i];
         r.b[i] = ef_v3(ef_mb_get_f32(&p[0]), ef_mb_get_f32(&p[2]), ef_mb_get_f32(&p[4]));
     }
-    if (!mb_move_finite(&r))
+    if (!mbd_move_finite(&r))
         return EF_ERR_NONFINITE;
     if (!(r.duration > 0.0f))
         return EF_ERR_ARG;
@@ -198,7 +198,7 @@ int ef_mbdev_init(ef_mbdev_t *dev, const ef_servo_cfg_t *cfg, ef_vec3_t home, ui
 }
 
 /* Three floats into six registers. */
-static void mb_put_v3(uint16_t *w, ef_vec3_t v)
+static void mbd_put_v3(uint16_t *w, ef_vec3_t v)
 {
     ef_mb_put_f32(&w[0], v.x);
     ef_mb_put_f32(&w[2], v.y);
@@ -206,7 +206,7 @@ static void mb_put_v3(uint16_t *w, ef_vec3_t v)
 }
 
 /* Slot index of the segment executing now, or of the next one to execute. */
-static uint16_t mb_tail(const ef_drive_t *d)
+static uint16_t mbd_tail(const ef_drive_t *d)
 {
     uint32_t s = d->next_seq;
     if (d->moving)
@@ -220,7 +220,7 @@ static uint16_t mb_tail(const ef_drive_t *d)
 
 /* Snapshot of the identification, control, status and target blocks, so a read sees one
  * consistent state. */
-static void mb_snapshot(const ef_mbdev_t *dev, uint16_t blk[EF_MB_FIXED_WORDS])
+static void mbd_snapshot(const ef_mbdev_t *dev, uint16_t blk[EF_MB_FIXED_WORDS])
 {
     const ef_drive_t *d = &dev->drv;
     for (uint32_t i = 0; i < EF_MB_FIXED_WORDS; i++)
@@ -253,18 +253,18 @@ static void mb_snapshot(const ef_mbdev_t *dev, uint16_t blk[EF_MB_FIXED_WORDS])
     blk[EF_MB_REG_FAULT] = d->fault;
     blk[EF_MB_REG_FREE] = (uint16_t)ef_drive_free(d);
     blk[EF_MB_REG_HEAD] = (uint16_t)(d->next_seq % EF_DRIVE_SLOTS);
-    blk[EF_MB_REG_TAIL] = mb_tail(d);
+    blk[EF_MB_REG_TAIL] = mbd_tail(d);
     ef_mb_put_u32(&blk[EF_MB_REG_NEXT_SEQ], d->next_seq);
     ef_mb_put_u32(&blk[EF_MB_REG_DONE_SEQ], d->done_any ? d->done_seq : EF_MB_DONE_NONE);
     ef_mb_put_u32(&blk[EF_MB_REG_EXEC_SEQ], d->exec_seq);
     ef_mb_put_u32(&blk[EF_MB_REG_TIME_MS], d->time_ms);
-    mb_put_v3(&blk[EF_MB_REG_ACT], d->act);
-    mb_put_v3(&blk[EF_MB_REG_CMD], d->cmd);
+    mbd_put_v3(&blk[EF_MB_REG_ACT], d->act);
+    mbd_put_v3(&blk[EF_MB_REG_CMD], d->cmd);
     ef_mb_put_f32(&blk[EF_MB_REG_FERR_MAX], d->ferr_max);
     ef_mb_put_u32(&blk[EF_MB_REG_DONE_COUNT], d->done_any);
     blk[EF_MB_REG_REJECTED] = dev->rejected;
     blk[EF_MB_REG_DUPLICATES] = dev->duplicates;
-    mb_put_v3(&blk[EF_MB_REG_TARGET], d->target); /* live: enable and stops move it */
+    mbd_put_v3(&blk[EF_MB_REG_TARGET], d->target); /* live: enable and stops move it */
 }
 
 /* FC3: registers from the live state, holes as 0 (ef_modbus.h). */
@@ -282,7 +282,7 @@ int ef_mbdev_read(ef_mbdev_t *dev, uint16_t addr, uint16_t n, uint16_t *out, uin
     }
     uint16_t blk[EF_MB_FIXED_WORDS];
     if (addr < EF_MB_FIXED_WORDS)
-        mb_snapshot(dev, blk);
+        mbd_snapshot(dev, blk);
     for (uint32_t i = 0; i < n; i++) {
         uint32_t a = (uint32_t)addr + i;
         if (a < EF_MB_FIXED_WORDS) {
@@ -299,7 +299,7 @@ int ef_mbdev_read(ef_mbdev_t *dev, uint16_t addr, uint16_t n, uint16_t *out, uin
 }
 
 /* Modbus exception for a drive or codec refusal. */
-static uint8_t mb_exc_of(int rc)
+static uint8_t mbd_exc_of(int rc)
 {
     switch (rc) {
     case EF_OK:
@@ -314,7 +314,7 @@ static uint8_t mb_exc_of(int rc)
 }
 
 /* Run the command word's actions in their documented order; the first refusal stops. */
-static int mb_control(ef_drive_t *d, uint16_t cw)
+static int mbd_control(ef_drive_t *d, uint16_t cw)
 {
     int rc = EF_OK;
     if (cw & EF_MB_CTL_FAULT_RESET)
@@ -331,7 +331,7 @@ static int mb_control(ef_drive_t *d, uint16_t cw)
 }
 
 /* A write inside 0x10..0x12: values checked, then mode, watchdog and command word. */
-static int mb_write_control(ef_mbdev_t *dev, uint16_t addr, uint16_t n, const uint16_t *v)
+static int mbd_write_control(ef_mbdev_t *dev, uint16_t addr, uint16_t n, const uint16_t *v)
 {
     int has_cw = 0, has_mode = 0, has_wd = 0;
     uint16_t cw = 0u, mode = dev->mode, wd = dev->watchdog_ms;
@@ -357,19 +357,19 @@ static int mb_write_control(ef_mbdev_t *dev, uint16_t addr, uint16_t n, const ui
         if (rc != EF_OK)
             return rc;
         dev->mode = mode;
-        mb_put_v3(dev->target, dev->drv.target);
+        mbd_put_v3(dev->target, dev->drv.target);
     }
     if (has_wd)
         dev->watchdog_ms = wd;
     if (has_cw) {
         dev->control = cw;
-        return mb_control(&dev->drv, cw);
+        return mbd_control(&dev->drv, cw);
     }
     return EF_OK;
 }
 
 /* The whole target block: three finite floats, accepted in direct mode only. */
-static int mb_write_target(ef_mbdev_t *dev, const uint16_t *v)
+static int mbd_write_target(ef_mbdev_t *dev, const uint16_t *v)
 {
     ef_vec3_t p = ef_v3(ef_mb_get_f32(&v[0]), ef_mb_get_f32(&v[2]), ef_mb_get_f32(&v[4]));
     if (!ef_finitef(p.x) || !ef_finitef(p.y) || !ef_finitef(p.z))
@@ -385,7 +385,7 @@ static int mb_write_target(ef_mbdev_t *dev, const uint16_t *v)
 }
 
 /* A whole slot k: decoded, its index checked against its sequence number, queued. */
-static int mb_write_slot(ef_mbdev_t *dev, uint32_t k, const uint16_t *v)
+static int mbd_write_slot(ef_mbdev_t *dev, uint32_t k, const uint16_t *v)
 {
     ef_move_t m;
     int rc = ef_mb_slot_decode(v, &m);
@@ -422,12 +422,12 @@ int ef_mbdev_write(ef_mbdev_t *dev, uint16_t addr, uint16_t n, const uint16_t *v
     if (n == 0u || n > EF_MB_WRITE_MAX || end > (uint32_t)EF_MB_REGS) {
         range_ok = 0;
     } else if (a >= EF_MB_REG_CONTROL && end <= EF_MB_CONTROL_END) {
-        rc = mb_write_control(dev, addr, n, v);
+        rc = mbd_write_control(dev, addr, n, v);
     } else if (a == EF_MB_REG_TARGET && n == EF_MB_TARGET_WORDS) {
-        rc = mb_write_target(dev, v);
+        rc = mbd_write_target(dev, v);
     } else if (a >= EF_MB_REG_SLOT0 && (a - EF_MB_REG_SLOT0) % EF_MB_SLOT_WORDS == 0u &&
                n == EF_MB_SLOT_WORDS) {
-        rc = mb_write_slot(dev, (a - EF_MB_REG_SLOT0) / EF_MB_SLOT_WORDS, v);
+        rc = mbd_write_slot(dev, (a - EF_MB_REG_SLOT0) / EF_MB_SLOT_WORDS, v);
     } else {
         range_ok = 0; /* read-only, a hole, a partial block or across blocks */
     }
@@ -436,7 +436,7 @@ int ef_mbdev_write(ef_mbdev_t *dev, uint16_t addr, uint16_t n, const uint16_t *v
         *exc = EF_MB_EX_ILLEGAL_ADDRESS;
         return EF_ERR_ARG;
     }
-    *exc = mb_exc_of(rc);
+    *exc = mbd_exc_of(rc);
     if (rc != EF_OK)
         dev->rejected++;
     return rc;

@@ -16,7 +16,7 @@
 #define EF_INTERP_RESYNC_ITER 3
 
 /* A point finite and within EF_MAX_COORD on every axis. */
-static int ef_interp_vok(ef_vec3_t v)
+static int ip_vok(ef_vec3_t v)
 {
     return ef_finitef(v.x) & ef_finitef(v.y) & ef_finitef(v.z) & (ef_fabsf(v.x) <= EF_MAX_COORD) &
            (ef_fabsf(v.y) <= EF_MAX_COORD) & (ef_fabsf(v.z) <= EF_MAX_COORD);
@@ -27,7 +27,7 @@ int ef_interp_init(ef_interp_t *ip, ef_vec3_t home, uint32_t period_us, int mode
 {
     if (!ip || period_us == 0u || (mode != EF_STEP_UNIFORM && mode != EF_STEP_CORRECTED))
         return EF_ERR_ARG;
-    if (!ef_interp_vok(home))
+    if (!ip_vok(home))
         return EF_ERR_NONFINITE;
     ip->head = ip->count = 0;
     ip->mode = mode;
@@ -56,7 +56,7 @@ int ef_interp_check(const ef_move_t *m, ef_vec3_t start)
         return EF_ERR_ARG;
     int ok = ef_finitef(m->duration) & ef_finitef(m->length) & ef_finitef(m->v_exit);
     for (int i = 0; i <= m->degree; i++)
-        ok &= ef_interp_vok(m->b[i]);
+        ok &= ip_vok(m->b[i]);
     for (int k = 0; k < EF_TIMELAW_PHASES; k++) {
         ok &= ef_finitef(m->law.dt[k]) & (m->law.dt[k] >= 0.0f);
         for (int i = 0; i < 5; i++)
@@ -94,7 +94,7 @@ int ef_interp_push(ef_interp_t *ip, const ef_move_t *m)
 /* Compensated (Kahan) sum *sum += x: the running error *c is fed back, so adding many
  * small steps to a large total keeps full precision (the firmware is never built with
  * -ffast-math, which would undo it). */
-static void ef_interp_kahan(float *sum, float *c, float x)
+static void ip_kahan(float *sum, float *c, float x)
 {
     float y = x - *c;
     float t = *sum + y;
@@ -104,7 +104,7 @@ static void ef_interp_kahan(float *sum, float *c, float x)
 
 /* Arc length of the curve between parameters a and b by 8-point Gauss-Legendre quadrature
  * of |f'| (exact to float rounding for the smooth speeds of degree <= 5 curves). */
-static float ef_interp_arc(const ef_vec3_t *lb, int degree, float a, float b)
+static float ip_arc(const ef_vec3_t *lb, int degree, float a, float b)
 {
     static const float gx[4] = {0.1834346425f, 0.5255324099f, 0.7966664774f,
                                 0.9602898565f}; /* abscissae on [-1, 1] */
@@ -121,7 +121,7 @@ static float ef_interp_arc(const ef_vec3_t *lb, int degree, float a, float b)
 }
 
 /** Position on the head move at time ip->t (uniform or corrected parameter step). */
-static void ef_interp_eval(ef_interp_t *ip, const ef_move_t *m, float *v)
+static void ip_eval(ef_interp_t *ip, const ef_move_t *m, float *v)
 {
     float tau_law = 0.0f;
     ef_timelaw_eval(m, ip->t, &tau_law, v);
@@ -150,7 +150,7 @@ static void ef_interp_eval(ef_interp_t *ip, const ef_move_t *m, float *v)
          * span, one linear step misses on an uneven curve), so S stays a true arc length. */
         float t0 = ip->tau, s0 = ip->s_done, tn = tau_law, arc = 0.0f;
         for (int it = 0; it < EF_INTERP_RESYNC_ITER; it++) {
-            arc = ef_interp_arc(lb, m->degree, t0, tn);
+            arc = ip_arc(lb, m->degree, t0, tn);
             ef_vec3_t e[2];
             ef_bezier_eval(lb, m->degree, tn, 1, e);
             float sp0 = ef_v3_norm(e[1]);
@@ -159,8 +159,8 @@ static void ef_interp_eval(ef_interp_t *ip, const ef_move_t *m, float *v)
                 next = tn + (s - s0 - arc) / sp0;
             tn = ef_finitef(next) ? ef_maxf(t0, ef_minf(1.0f, next)) : tn;
         }
-        arc = ef_interp_arc(lb, m->degree, t0, tn);
-        ef_interp_kahan(&ip->s_done, &ip->s_c, arc);
+        arc = ip_arc(lb, m->degree, t0, tn);
+        ip_kahan(&ip->s_done, &ip->s_c, arc);
         ef_vec3_t q0;
         ef_bezier_eval(lb, m->degree, tn, 0, &q0);
         ip->tau = tn;
@@ -181,7 +181,7 @@ static void ef_interp_eval(ef_interp_t *ip, const ef_move_t *m, float *v)
     tn = ef_maxf(ip->tau, ef_minf(ef_minf(1.0f, ip->tau + cap), tn));
     ef_vec3_t p[1];
     ef_bezier_eval(lb, m->degree, tn, 0, p);
-    ef_interp_kahan(&ip->s_done, &ip->s_c, ef_v3_norm(ef_v3_sub(p[0], d[0])));
+    ip_kahan(&ip->s_done, &ip->s_c, ef_v3_norm(ef_v3_sub(p[0], d[0])));
     ip->tau = tn;
     ip->pos = ef_v3_add(m->b[0], p[0]);
 }
@@ -196,13 +196,13 @@ int ef_interp_process(ef_interp_t *ip, uint32_t dt_us, uint32_t *next_us, ef_set
     int rc = EF_OK;
     float v = 0.0f;
     if (ip->count > 0) {
-        ef_interp_kahan(&ip->t, &ip->t_c, (float)dt_us * 1e-6f);
+        ip_kahan(&ip->t, &ip->t_c, (float)dt_us * 1e-6f);
         /* Finish every move the elapsed time covers; the leftover carries into the next. */
         for (uint32_t i = 0; i < EF_INTERP_QUEUE && ip->count > 0; i++) {
             const ef_move_t *m = &ip->q[ip->head];
             if (ip->t < m->duration)
                 break;
-            ef_interp_kahan(&ip->t, &ip->t_c, -m->duration);
+            ip_kahan(&ip->t, &ip->t_c, -m->duration);
             ip->pos = m->b[m->degree];
             ip->last_seq = m->seq;
             ip->last_tag = m->tag;
@@ -213,7 +213,7 @@ int ef_interp_process(ef_interp_t *ip, uint32_t dt_us, uint32_t *next_us, ef_set
         }
         if (ip->count > 0) {
             const ef_move_t *m = &ip->q[ip->head];
-            ef_interp_eval(ip, m, &v);
+            ip_eval(ip, m, &v);
             sp->p = ip->pos;
             sp->v_plan = v;
             sp->seq = m->seq;

@@ -22,7 +22,7 @@
 #define EF_PLAN_DV_REL 1e-6f
 
 /* A point finite and within EF_MAX_COORD on every axis. */
-static int ef_plan_vfinite(ef_vec3_t v)
+static int pl_vfinite(ef_vec3_t v)
 {
     return ef_finitef(v.x) & ef_finitef(v.y) & ef_finitef(v.z) & (ef_fabsf(v.x) <= EF_MAX_COORD) &
            (ef_fabsf(v.y) <= EF_MAX_COORD) & (ef_fabsf(v.z) <= EF_MAX_COORD);
@@ -51,7 +51,7 @@ int ef_limits_check(const ef_limits_t *lim)
 /* ---------------------------------------------------------------- ramp geometry */
 
 /** Duration of a ramp changing the speed by dv >= 0. */
-static float ef_ramp_time(float dv, float a, float j)
+static float pl_ramp_time(float dv, float a, float j)
 {
     float t = dv / a;
     if (j > 0.0f)
@@ -60,9 +60,9 @@ static float ef_ramp_time(float dv, float a, float j)
 }
 
 /** Distance of a ramp from va to vb (either direction). */
-static float ef_ramp_dist(float va, float vb, float a, float j)
+static float pl_ramp_dist(float va, float vb, float a, float j)
 {
-    return 0.5f * (va + vb) * ef_ramp_time(ef_fabsf(vb - va), a, j);
+    return 0.5f * (va + vb) * pl_ramp_time(ef_fabsf(vb - va), a, j);
 }
 
 /** Largest distance a ramp from v0 down to any speed in [e, v0] needs. With a jerk limit the
@@ -70,9 +70,9 @@ static float ef_ramp_dist(float va, float vb, float a, float j)
  * v = v0 / 3, so slowing to v0 / 3 can take longer than stopping. The backward pass bounds
  * entries with this, so that a later rise of the exit bound (more moves pushed) never makes
  * a committed entry speed unable to reach it. */
-static float ef_ramp_dist_down(float v0, float e, float a, float j)
+static float pl_ramp_dist_down(float v0, float e, float a, float j)
 {
-    float d = ef_ramp_dist(v0, e, a, j);
+    float d = pl_ramp_dist(v0, e, a, j);
     if (j > 0.0f && v0 > e) {
         float v = ef_maxf(e, v0 * (1.0f / 3.0f));
         d = ef_maxf(d, 0.5f * (v0 + v) * ef_sqrtf(6.0f * (v0 - v) / j));
@@ -96,26 +96,26 @@ static float ef_ramp_dist_down(float v0, float e, float a, float j)
 
 /** Largest v >= vf such that a ramp between v and vf fits in len (either direction: the
  *  distance is symmetric); with `down`, every ramp from v to a speed in [vf, v] must fit
- *  (ef_ramp_dist_down()). The returned value always satisfies the condition. Without a jerk
+ *  (pl_ramp_dist_down()). The returned value always satisfies the condition. Without a jerk
  *  limit the answer is closed-form, sqrt(vf^2 + 2 a len), lowered by a few ulps if rounding
  *  puts it just beyond len; the bisection is only the fallback for that case and the
  *  search with a jerk limit. */
-static float ef_ramp_top(float vf, float len, float a, float j, int down)
+static float pl_ramp_top(float vf, float len, float a, float j, int down)
 {
     float lo = vf;
     float hi = ef_sqrtf(vf * vf + 2.0f * a * len); /* no-jerk bound, >= the jerk answer */
-    float d = down ? ef_ramp_dist_down(hi, vf, a, j) : ef_ramp_dist(hi, vf, a, j);
+    float d = down ? pl_ramp_dist_down(hi, vf, a, j) : pl_ramp_dist(hi, vf, a, j);
     if (d <= len)
         return hi;
     if (!(j > 0.0f)) {
         float v = hi;
-        EF_PLAN_ULP_DOWN(v, v >= vf && ef_ramp_dist(v, vf, a, 0.0f) <= len);
+        EF_PLAN_ULP_DOWN(v, v >= vf && pl_ramp_dist(v, vf, a, 0.0f) <= len);
         if (v >= vf)
             return v;
     }
     for (int i = 0; i < EF_PLAN_BISECT; i++) {
         float mid = 0.5f * (lo + hi);
-        d = down ? ef_ramp_dist_down(mid, vf, a, j) : ef_ramp_dist(mid, vf, a, j);
+        d = down ? pl_ramp_dist_down(mid, vf, a, j) : pl_ramp_dist(mid, vf, a, j);
         if (d <= len)
             lo = mid;
         else
@@ -126,16 +126,16 @@ static float ef_ramp_top(float vf, float len, float a, float j, int down)
 
 /** A v in [0, v0] such that a ramp from v0 down to v fits in len: 0 when stopping fits,
  *  else the upper end of a bisection bracket (always a fitting speed; the smallest one when
- *  the distance is monotone, see ef_ramp_dist_down()). Only reached for entry/exit pairs
+ *  the distance is monotone, see pl_ramp_dist_down()). Only reached for entry/exit pairs
  *  the passes did not produce. */
-static float ef_ramp_bottom(float v0, float len, float a, float j)
+static float pl_ramp_bottom(float v0, float len, float a, float j)
 {
     float lo = 0.0f, hi = v0;
-    if (ef_ramp_dist(v0, 0.0f, a, j) <= len)
+    if (pl_ramp_dist(v0, 0.0f, a, j) <= len)
         return 0.0f;
     for (int i = 0; i < EF_PLAN_BISECT; i++) {
         float mid = 0.5f * (lo + hi);
-        if (ef_ramp_dist(v0, mid, a, j) <= len)
+        if (pl_ramp_dist(v0, mid, a, j) <= len)
             hi = mid;
         else
             lo = mid;
@@ -146,7 +146,7 @@ static float ef_ramp_bottom(float v0, float len, float a, float j)
 /* ---------------------------------------------------------------- time law */
 
 /** Fill phase k as a ramp from va to vb lasting T, starting at distance s0. */
-static void ef_law_ramp(ef_timelaw_t *law, int k, float va, float vb, float T, float s0, float len,
+static void pl_law_ramp(ef_timelaw_t *law, int k, float va, float vb, float T, float s0, float len,
                         float j)
 {
     float *c = law->c[k];
@@ -167,9 +167,9 @@ static void ef_law_ramp(ef_timelaw_t *law, int k, float va, float vb, float T, f
     }
 }
 
-/** ef_plan_timelaw() with, when up >= 0, ef_ramp_top(v_entry, length, a_max, j_max, 0)
+/** ef_plan_timelaw() with, when up >= 0, pl_ramp_top(v_entry, length, a_max, j_max, 0)
  *  already known (the pull computes it for the exit). */
-static int ef_plan_timelaw_up(ef_move_t *m, float j_max, float up)
+static int pl_timelaw_up(ef_move_t *m, float j_max, float up)
 {
     float len = m->length, v0 = m->v_entry, v1 = m->v_exit, vmax = m->v_max, a = m->a_max;
     int fin = ef_finitef(len) & ef_finitef(v0) & ef_finitef(v1) & ef_finitef(vmax) & ef_finitef(a) &
@@ -183,28 +183,28 @@ static int ef_plan_timelaw_up(ef_move_t *m, float j_max, float up)
      * passes planned it). */
     if (v1 > v0) {
         if (!(up >= 0.0f))
-            up = ef_ramp_top(v0, len, a, j, 0);
+            up = pl_ramp_top(v0, len, a, j, 0);
         v1 = ef_minf(v1, up);
-    } else if (v1 < v0 && ef_ramp_dist(v0, v1, a, j) > len) {
-        v1 = ef_ramp_bottom(v0, len, a, j);
+    } else if (v1 < v0 && pl_ramp_dist(v0, v1, a, j) > len) {
+        v1 = pl_ramp_bottom(v0, len, a, j);
     }
     float vtop = ef_maxf(vmax, ef_maxf(v0, v1));
 
     /* Cruise speed: vtop if the two ramps fit, else the largest that does (bisection). */
     float vc = vtop;
-    if (ef_ramp_dist(v0, vtop, a, j) + ef_ramp_dist(vtop, v1, a, j) > len) {
+    if (pl_ramp_dist(v0, vtop, a, j) + pl_ramp_dist(vtop, v1, a, j) > len) {
         float lo = ef_maxf(v0, v1), hi = vtop;
         if (!(j > 0.0f)) {
             /* (2 vc^2 - v0^2 - v1^2) / (2 a) = len, within [lo, vtop] */
             float v = ef_minf(vtop, ef_sqrtf(0.5f * (v0 * v0 + v1 * v1) + a * len));
             EF_PLAN_ULP_DOWN(
-                v, v >= lo && ef_ramp_dist(v0, v, a, 0.0f) + ef_ramp_dist(v, v1, a, 0.0f) <= len);
+                v, v >= lo && pl_ramp_dist(v0, v, a, 0.0f) + pl_ramp_dist(v, v1, a, 0.0f) <= len);
             if (v >= lo)
                 lo = hi = v;
         }
         for (int i = 0; i < EF_PLAN_BISECT && lo < hi; i++) {
             float mid = 0.5f * (lo + hi);
-            if (ef_ramp_dist(v0, mid, a, j) + ef_ramp_dist(mid, v1, a, j) <= len)
+            if (pl_ramp_dist(v0, mid, a, j) + pl_ramp_dist(mid, v1, a, j) <= len)
                 lo = mid;
             else
                 hi = mid;
@@ -221,11 +221,11 @@ static int ef_plan_timelaw_up(ef_move_t *m, float j_max, float up)
         vc = v1;
     float T0 = 0.0f, T2 = 0.0f, d0 = 0.0f, d2 = 0.0f;
     if (ef_fabsf(vc - v0) > eps) {
-        T0 = ef_ramp_time(ef_fabsf(vc - v0), a, j);
+        T0 = pl_ramp_time(ef_fabsf(vc - v0), a, j);
         d0 = 0.5f * (v0 + vc) * T0;
     }
     if (vc - v1 > eps) {
-        T2 = ef_ramp_time(vc - v1, a, j);
+        T2 = pl_ramp_time(vc - v1, a, j);
         d2 = 0.5f * (vc + v1) * T2;
     }
     float dc = len - d0 - d2;
@@ -236,12 +236,12 @@ static int ef_plan_timelaw_up(ef_move_t *m, float j_max, float up)
         Tc = dc / vc;
 
     ef_timelaw_t law;
-    ef_law_ramp(&law, 0, T0 > 0.0f ? v0 : vc, vc, T0, 0.0f, len, j);
+    pl_law_ramp(&law, 0, T0 > 0.0f ? v0 : vc, vc, T0, 0.0f, len, j);
     law.dt[1] = Tc;
     law.c[1][0] = d0 / len;
     law.c[1][1] = vc / len;
     law.c[1][2] = law.c[1][3] = law.c[1][4] = 0.0f;
-    ef_law_ramp(&law, 2, vc, v1, T2, d0 + dc, len, j);
+    pl_law_ramp(&law, 2, vc, v1, T2, d0 + dc, len, j);
 
     float dur = T0 + Tc + T2;
     int ok = ef_finitef(dur) & (dur > 0.0f);
@@ -261,7 +261,7 @@ int ef_plan_timelaw(ef_move_t *m, float j_max)
 {
     if (!m)
         return EF_ERR_ARG;
-    return ef_plan_timelaw_up(m, j_max, -1.0f);
+    return pl_timelaw_up(m, j_max, -1.0f);
 }
 
 /* Curve parameter and path speed at time t of a move (contract in ef_path.h). */
@@ -304,13 +304,13 @@ int ef_timelaw_eval(const ef_move_t *m, float t, float *tau, float *v)
  *  entry of the move after it (0 for the newest, which is assumed to end at rest): the
  *  largest entry speed from which every later move can still be followed and the newest
  *  stopped at its end. */
-static float ef_plan_bound(const ef_plan_t *p, uint32_t n, float v_next)
+static float pl_bound(const ef_plan_t *p, uint32_t n, float v_next)
 {
     const ef_move_t *q = &p->q[(p->head + n) % EF_LOOKAHEAD];
     if (n > 0 && (p->q[(p->head + n - 1u) % EF_LOOKAHEAD].flags & EF_MOVE_STOP_END))
         return 0.0f;
     float exit_b = (q->flags & EF_MOVE_STOP_END) ? 0.0f : v_next;
-    float v = ef_minf(q->v_max, ef_ramp_top(exit_b, q->length, q->a_max, p->lim.j_max, 1));
+    float v = ef_minf(q->v_max, pl_ramp_top(exit_b, q->length, q->a_max, p->lim.j_max, 1));
     if (n > 0)
         v = ef_minf(v, p->q[(p->head + n - 1u) % EF_LOOKAHEAD].v_max);
     return v;
@@ -321,16 +321,16 @@ static float ef_plan_bound(const ef_plan_t *p, uint32_t n, float v_next)
  *  bound, so an unchanged bound leaves every earlier one unchanged: v_lim always equals a
  *  from-scratch pass over the window (the oldest move's bound is never read, so releasing
  *  it changes nothing). At most count bound computations. */
-static void ef_plan_backward(ef_plan_t *p)
+static void pl_backward(ef_plan_t *p)
 {
     uint32_t n = p->count - 1u;
-    float v = ef_plan_bound(p, n, 0.0f);
+    float v = pl_bound(p, n, 0.0f);
     p->v_lim[(p->head + n) % EF_LOOKAHEAD] = v;
     while (n-- > 0) {
         uint32_t idx = (p->head + n) % EF_LOOKAHEAD;
         if (p->q[idx].flags & EF_MOVE_STOP_END)
             break; /* exit bound 0 whatever follows */
-        float w = ef_plan_bound(p, n, v);
+        float w = pl_bound(p, n, v);
         if (w == p->v_lim[idx])
             break;
         p->v_lim[idx] = w;
@@ -369,9 +369,9 @@ int ef_plan_push(ef_plan_t *p, const ef_move_t *m)
     if (m->degree != 1 && m->degree != 3 && m->degree != 5)
         return EF_ERR_ARG;
     int fin = ef_finitef(m->length) & ef_finitef(m->kappa_max) & ef_finitef(m->feed) &
-              ef_plan_vfinite(m->tabs);
+              pl_vfinite(m->tabs);
     for (int i = 0; i <= m->degree; i++)
-        fin &= ef_plan_vfinite(m->b[i]);
+        fin &= pl_vfinite(m->b[i]);
     if (!fin)
         return EF_ERR_NONFINITE;
     if (!(m->length >= EF_MIN_CHORD) || !(m->kappa_max >= 0.0f) || !(m->tabs.x >= 0.0f) ||
@@ -422,7 +422,7 @@ int ef_plan_push(ef_plan_t *p, const ef_move_t *m)
     if (q->flags & EF_MOVE_STOP_END)
         p->nstops++;
     p->finished = 0;
-    ef_plan_backward(p);
+    pl_backward(p);
     return EF_OK;
 }
 
@@ -457,11 +457,11 @@ int ef_plan_pull(ef_plan_t *p, ef_move_t *out)
     if (!(m.flags & EF_MOVE_STOP_END) && p->count > 1)
         exit_b = p->v_lim[(p->head + 1u) % EF_LOOKAHEAD];
     float v0 = p->v_last;
-    float up = ef_ramp_top(v0, m.length, m.a_max, p->lim.j_max, 0);
+    float up = pl_ramp_top(v0, m.length, m.a_max, p->lim.j_max, 0);
     float v1 = ef_minf(exit_b, up);
     m.v_entry = v0;
     m.v_exit = ef_minf(v1, m.v_max);
-    int rc = ef_plan_timelaw_up(&m, p->lim.j_max, up);
+    int rc = pl_timelaw_up(&m, p->lim.j_max, up);
     if (rc != EF_OK)
         return rc; /* not reachable for data push accepted; state unchanged */
     if (m.flags & EF_MOVE_STOP_END) {

@@ -22,32 +22,32 @@ enum {
 enum { EF_E_BODY = 0, EF_E_BLEND = 1, EF_E_DONE = 2 };
 
 /* Finite and within EF_MAX_COORD, without libm (NaN fails every comparison). */
-static int ef_sm_coord_ok(float x)
+static int sm_coord_ok(float x)
 {
     return ef_fabsf(x) <= EF_MAX_COORD;
 }
 
 /* A point usable by the smoother: every coordinate finite and within EF_MAX_COORD. */
-static int ef_sm_v3_ok(ef_vec3_t a)
+static int sm_v3_ok(ef_vec3_t a)
 {
-    return ef_sm_coord_ok(a.x) && ef_sm_coord_ok(a.y) && ef_sm_coord_ok(a.z);
+    return sm_coord_ok(a.x) && sm_coord_ok(a.y) && sm_coord_ok(a.z);
 }
 
 /* Ring index of the i-th held primitive (0 = oldest). */
-static ef_smooth_prim_t *ef_sm_held(ef_smooth_t *s, uint32_t i)
+static ef_smooth_prim_t *sm_held(ef_smooth_t *s, uint32_t i)
 {
     return &s->pq[(s->ph + i) % EF_SMOOTH_PRIMS];
 }
 
 /* Unit direction of a line primitive. */
-static ef_vec3_t ef_sm_dir(const ef_smooth_prim_t *h)
+static ef_vec3_t sm_dir(const ef_smooth_prim_t *h)
 {
     ef_vec3_t d = ef_v3_sub(h->pr.end, h->start);
     return ef_v3_scale(d, 1.0f / ef_maxf(ef_v3_norm(d), 1e-30f));
 }
 
 /* Distance from p to the segment a-b. */
-static float ef_sm_dist_seg(ef_vec3_t p, ef_vec3_t a, ef_vec3_t b)
+static float sm_dist_seg(ef_vec3_t p, ef_vec3_t a, ef_vec3_t b)
 {
     ef_vec3_t ab = ef_v3_sub(b, a), ap = ef_v3_sub(p, a);
     float l2 = ef_v3_dot(ab, ab);
@@ -57,7 +57,7 @@ static float ef_sm_dist_seg(ef_vec3_t p, ef_vec3_t a, ef_vec3_t b)
 }
 
 /* Validate the configuration; tables must be of the right kinds. */
-static int ef_sm_cfg_check(const ef_smooth_cfg_t *c)
+static int sm_cfg_check(const ef_smooth_cfg_t *c)
 {
     if (!c->g2 || (c->smooth_degree != 5 && c->smooth_degree != 3))
         return EF_ERR_ARG;
@@ -79,10 +79,10 @@ int ef_smooth_init(ef_smooth_t *s, const ef_smooth_cfg_t *cfg, ef_vec3_t start)
 {
     if (!s || !cfg)
         return EF_ERR_ARG;
-    int rc = ef_sm_cfg_check(cfg);
+    int rc = sm_cfg_check(cfg);
     if (rc != EF_OK)
         return rc;
-    if (!ef_sm_v3_ok(start))
+    if (!sm_v3_ok(start))
         return EF_ERR_NONFINITE;
     /* Field by field: the struct is large and a compound-literal zero would put a copy
      * of it on the stack. */
@@ -99,16 +99,16 @@ int ef_smooth_init(ef_smooth_t *s, const ef_smooth_cfg_t *cfg, ef_vec3_t start)
 }
 
 /* Newest staged move, or NULL. */
-static ef_move_t *ef_sm_stage_last(ef_smooth_t *s)
+static ef_move_t *sm_stage_last(ef_smooth_t *s)
 {
     return s->sn ? &s->stage[(s->sh + s->sn - 1) % EF_SMOOTH_STAGE] : (ef_move_t *)0;
 }
 
 /* Append a move to the stage (caller checked room); snap its start onto the previous
  * move's end so the chain is exactly continuous (they agree to rounding already). */
-static void ef_sm_stage(ef_smooth_t *s, const ef_move_t *m)
+static void sm_stage(ef_smooth_t *s, const ef_move_t *m)
 {
-    ef_move_t *prev = ef_sm_stage_last(s);
+    ef_move_t *prev = sm_stage_last(s);
     if (m->length < EF_SM_MIN_MOVE) {
         /* A remnant below float32 resolution (e.g. what two blends leave of a line, to
          * rounding): not a move a planner or drive can time. The move before it is
@@ -136,16 +136,16 @@ static void ef_sm_stage(ef_smooth_t *s, const ef_move_t *m)
 
 /* A built, measured move the planner and a drive can take: control points within
  * EF_MAX_COORD and not shorter than the planner accepts (every builder measures already). */
-static int ef_sm_move_ok(const ef_move_t *m)
+static int sm_move_ok(const ef_move_t *m)
 {
     for (int i = 0; i <= m->degree && i < 6; i++)
-        if (!ef_sm_v3_ok(m->b[i]))
+        if (!sm_v3_ok(m->b[i]))
             return 0;
     return m->length >= EF_SM_MIN_MOVE;
 }
 
 /* Fill the measured fields of a move built from control points; 0 on success. */
-static int ef_sm_finish_move(ef_move_t *m, uint8_t kind, float feed, uint32_t tag)
+static int sm_finish_move(ef_move_t *m, uint8_t kind, float feed, uint32_t tag)
 {
     m->kind = kind;
     m->feed = feed;
@@ -154,21 +154,20 @@ static int ef_sm_finish_move(ef_move_t *m, uint8_t kind, float feed, uint32_t ta
 }
 
 /* A straight move a -> b. */
-static int ef_sm_line_move(ef_move_t *m, ef_vec3_t a, ef_vec3_t b, float feed, uint32_t tag)
+static int sm_line_move(ef_move_t *m, ef_vec3_t a, ef_vec3_t b, float feed, uint32_t tag)
 {
     ef_move_t zero = {0};
     *m = zero;
     m->b[0] = a;
     m->b[1] = b;
     m->degree = 1;
-    return ef_sm_finish_move(m, EF_MOVE_LINE, feed, tag);
+    return sm_finish_move(m, EF_MOVE_LINE, feed, tag);
 }
 
 /* A smooth-section move between two frames on a line primitive a-b; its deviation from
  * the chord is measured. Returns an ef_err code (the caller falls back to a line). */
-static int ef_sm_smooth_move(ef_smooth_t *s, ef_move_t *m, const ef_frame_t *f0,
-                             const ef_frame_t *f1, ef_vec3_t a, ef_vec3_t b, float feed,
-                             uint32_t tag)
+static int sm_smooth_move(ef_smooth_t *s, ef_move_t *m, const ef_frame_t *f0, const ef_frame_t *f1,
+                          ef_vec3_t a, ef_vec3_t b, float feed, uint32_t tag)
 {
     ef_endpoint_t e0 = ef_frame_endpoint(f0), e1 = ef_frame_endpoint(f1);
     ef_seg_t seg;
@@ -190,7 +189,7 @@ static int ef_sm_smooth_move(ef_smooth_t *s, ef_move_t *m, const ef_frame_t *f0,
         ef_vec3_t p;
         float t = (float)i / (float)EF_BLEND_DEV_SAMPLES;
         ef_bezier_eval(m->b, m->degree, t, 0, &p);
-        dmax = ef_maxf(dmax, ef_sm_dist_seg(p, a, b));
+        dmax = ef_maxf(dmax, sm_dist_seg(p, a, b));
     }
     float d2 = 0.0f;
     int n = m->degree;
@@ -200,26 +199,26 @@ static int ef_sm_smooth_move(ef_smooth_t *s, ef_move_t *m, const ef_frame_t *f0,
     }
     float h = 1.0f / (float)EF_BLEND_DEV_SAMPLES;
     m->dev = dmax + (float)(n * (n - 1)) * d2 * h * h * 0.125f;
-    return ef_sm_finish_move(m, EF_MOVE_SMOOTH, feed, tag);
+    return sm_finish_move(m, EF_MOVE_SMOOTH, feed, tag);
 }
 
 /* The fall-back for a piece no curve can represent: its chord a-b, with exact stops at
  * both ends (the tangents differ there), the previous move marked too while it is still
  * staged (the stage holds the newest move back for this). */
-static int ef_sm_chord_stop(ef_smooth_t *s, ef_move_t *m, ef_vec3_t a, ef_vec3_t b,
-                            const ef_prim_t *pr)
+static int sm_chord_stop(ef_smooth_t *s, ef_move_t *m, ef_vec3_t a, ef_vec3_t b,
+                         const ef_prim_t *pr)
 {
-    ef_move_t *prev = ef_sm_stage_last(s);
+    ef_move_t *prev = sm_stage_last(s);
     if (prev)
         prev->flags |= EF_MOVE_STOP_END;
-    int rc = ef_sm_line_move(m, a, b, pr->feed, pr->tag);
+    int rc = sm_line_move(m, a, b, pr->feed, pr->tag);
     m->flags |= EF_MOVE_STOP_END;
     s->st.stops += 2;
     return rc;
 }
 
 /* Frame on a line primitive at a point (tangent = direction, no curvature). */
-static ef_frame_t ef_sm_line_frame(ef_vec3_t p, ef_vec3_t dir)
+static ef_frame_t sm_line_frame(ef_vec3_t p, ef_vec3_t dir)
 {
     ef_frame_t f;
     f.p = p;
@@ -231,8 +230,8 @@ static ef_frame_t ef_sm_line_frame(ef_vec3_t p, ef_vec3_t dir)
 
 /* Smooth-vertex test between lines a->b and b->c (the tolerance-gated rule, ef_smooth.h);
  * on success *f is the frame of the circle through a, b, c at b. */
-static int ef_sm_smooth_gate(const ef_smooth_t *s, ef_vec3_t a, ef_vec3_t b, ef_vec3_t c, float tol,
-                             ef_frame_t *f)
+static int sm_smooth_gate(const ef_smooth_t *s, ef_vec3_t a, ef_vec3_t b, ef_vec3_t c, float tol,
+                          ef_frame_t *f)
 {
     float ml = s->cfg.micro_len;
     if (!(ml > 0.0f))
@@ -271,7 +270,7 @@ static int ef_sm_smooth_gate(const ef_smooth_t *s, ef_vec3_t a, ef_vec3_t b, ef_
 }
 
 /* Decide the vertex between held primitives a (ends there) and b (starts there). */
-static void ef_sm_decide(ef_smooth_t *s, ef_smooth_prim_t *a, ef_smooth_prim_t *b)
+static void sm_decide(ef_smooth_t *s, ef_smooth_prim_t *a, ef_smooth_prim_t *b)
 {
     a->end_kind = EF_V_STOP;
     if ((b->pr.flags & EF_PRIM_STOP_BEFORE) || !(b->pr.tol > 0.0f)) {
@@ -282,7 +281,7 @@ static void ef_sm_decide(ef_smooth_t *s, ef_smooth_prim_t *a, ef_smooth_prim_t *
     float tol = b->pr.tol - ef_maxf(a->merge_dev, b->merge_dev);
     if (a->pr.kind == EF_PRIM_LINE && b->pr.kind == EF_PRIM_LINE) {
         ef_frame_t f;
-        if (ef_sm_smooth_gate(s, a->start, a->pr.end, b->pr.end, tol, &f)) {
+        if (sm_smooth_gate(s, a->start, a->pr.end, b->pr.end, tol, &f)) {
             a->end_kind = EF_V_SMOOTH;
             a->end_smooth = 1;
             a->fe = f;
@@ -322,7 +321,7 @@ static void ef_sm_decide(ef_smooth_t *s, ef_smooth_prim_t *a, ef_smooth_prim_t *
     /* ... or loop far from the path it replaces (a huge tolerance lets the trial trims grow
      * into configurations the table clamps): a blend longer than twice the trimmed path is
      * not a rounded corner, and its speed peaks between the samples the limits rely on. */
-    if (ef_move_measure(&probe) != EF_OK || !ef_sm_move_ok(&probe) ||
+    if (ef_move_measure(&probe) != EF_OK || !sm_move_ok(&probe) ||
         !(probe.length <= 2.0f * (a->blend.trim_in + a->blend.trim_out) + EF_MIN_CHORD)) {
         s->st.stops++;
         return;
@@ -338,8 +337,7 @@ static void ef_sm_decide(ef_smooth_t *s, ef_smooth_prim_t *a, ef_smooth_prim_t *
 
 /* Arc length bounds of piece i (0-based) of n of an arc body; the last piece ends exactly
  * at the body's end, so the chain meets the next move without a rounding gap. */
-static void ef_sm_piece_bounds(const ef_smooth_prim_t *h, uint32_t i, uint32_t n, float *a,
-                               float *b)
+static void sm_piece_bounds(const ef_smooth_prim_t *h, uint32_t i, uint32_t n, float *a, float *b)
 {
     float s0 = h->trim_start, s1 = h->len - h->trim_end;
     *a = s0 + (s1 - s0) * (float)i / (float)n;
@@ -347,16 +345,15 @@ static void ef_sm_piece_bounds(const ef_smooth_prim_t *h, uint32_t i, uint32_t n
 }
 
 /* Move i (0-based) of n pieces of the oldest (arc) primitive's body. */
-static int ef_sm_arc_piece(ef_smooth_t *s, ef_smooth_prim_t *h, uint32_t i, uint32_t n,
-                           ef_move_t *m)
+static int sm_arc_piece(ef_smooth_t *s, ef_smooth_prim_t *h, uint32_t i, uint32_t n, ef_move_t *m)
 {
     float a, b;
-    ef_sm_piece_bounds(h, i, n, &a, &b);
+    sm_piece_bounds(h, i, n, &a, &b);
     return ef_blend_arc_piece(s->cfg.g2, h->start, &h->pr, a, b, m);
 }
 
 /* Pieces an arc body is split into. */
-static uint32_t ef_sm_arc_pieces(const ef_smooth_prim_t *h)
+static uint32_t sm_arc_pieces(const ef_smooth_prim_t *h)
 {
     float frac = (h->len - h->trim_start - h->trim_end) / h->len;
     float sw = ef_fabsf(h->pr.sweep) * frac;
@@ -367,14 +364,14 @@ static uint32_t ef_sm_arc_pieces(const ef_smooth_prim_t *h)
     return k ? k : 1u;
 }
 
-static int ef_sm_next_move(ef_smooth_t *s, ef_move_t *m);
+static int sm_next_move(ef_smooth_t *s, ef_move_t *m);
 
 /* The oldest primitive has no body left between its blends: go on with its end blend, or,
  * when its end is an exact stop, put that stop on the move before (the newest staged one:
  * the stage holds it back for this), so the run still ends at rest. */
-static int ef_sm_skip_body(ef_smooth_t *s, ef_smooth_prim_t *h, ef_move_t *m)
+static int sm_skip_body(ef_smooth_t *s, ef_smooth_prim_t *h, ef_move_t *m)
 {
-    ef_move_t *prev = ef_sm_stage_last(s);
+    ef_move_t *prev = sm_stage_last(s);
     if (prev && h->end_kind != EF_V_BLEND) {
         /* What is left (under EF_MIN_CHORD) is taken by the move before, which then ends
          * exactly at the primitive's end, and its stop with it. */
@@ -385,37 +382,37 @@ static int ef_sm_skip_body(ef_smooth_t *s, ef_smooth_prim_t *h, ef_move_t *m)
             prev->flags |= EF_MOVE_STOP_END;
     }
     s->emitting = EF_E_BLEND;
-    return ef_sm_next_move(s, m);
+    return sm_next_move(s, m);
 }
 
 /* Build the next move of the oldest held primitive (whose two vertices are decided) into
  * *m. Returns 1 when a move was built, 0 when the primitive had nothing more (it is then
  * popped), or a negative ef_err code. */
-static int ef_sm_next_move(ef_smooth_t *s, ef_move_t *m)
+static int sm_next_move(ef_smooth_t *s, ef_move_t *m)
 {
-    ef_smooth_prim_t *h = ef_sm_held(s, 0);
+    ef_smooth_prim_t *h = sm_held(s, 0);
     if (s->emitting == EF_E_BODY) {
         int rc;
         if (h->pr.kind == EF_PRIM_ARC) {
             if (h->len - h->trim_start - h->trim_end < EF_MIN_CHORD) {
                 /* Both blends took the whole arc: nothing of it is left between them. */
-                return ef_sm_skip_body(s, h, m);
+                return sm_skip_body(s, h, m);
             }
             if (s->arc_next == 0) {
                 /* Piece count: by sweep, then doubled until a piece is within the budget
                  * (all pieces of an arc are congruent, so the first one decides). */
                 float budget = ef_maxf(0.5f * h->pr.tol, EF_SMOOTH_ARC_TOL_MIN);
-                uint32_t n = ef_sm_arc_pieces(h);
+                uint32_t n = sm_arc_pieces(h);
                 for (int k = 0; k < EF_SMOOTH_ARC_SPLITS; k++) {
-                    if (ef_sm_arc_piece(s, h, 0, n, m) != EF_OK || m->dev <= budget)
+                    if (sm_arc_piece(s, h, 0, n, m) != EF_OK || m->dev <= budget)
                         break;
                     n *= 2u;
                 }
                 s->arc_n = n;
             }
             uint32_t n = s->arc_n;
-            rc = ef_sm_arc_piece(s, h, s->arc_next, n, m);
-            if (rc == EF_OK && !ef_sm_move_ok(m))
+            rc = sm_arc_piece(s, h, s->arc_next, n, m);
+            if (rc == EF_OK && !sm_move_ok(m))
                 rc = EF_ERR_NONFINITE;
             if (rc == EF_OK) {
                 s->st.arc_pieces++;
@@ -427,36 +424,36 @@ static int ef_sm_next_move(ef_smooth_t *s, ef_move_t *m)
                  * through at speed. */
                 ef_frame_t f0, f1;
                 float a, b;
-                ef_sm_piece_bounds(h, s->arc_next, n, &a, &b);
+                sm_piece_bounds(h, s->arc_next, n, &a, &b);
                 ef_prim_frame(h->start, &h->pr, a, &f0);
                 ef_prim_frame(h->start, &h->pr, b, &f1);
-                rc = ef_sm_chord_stop(s, m, f0.p, f1.p, &h->pr);
+                rc = sm_chord_stop(s, m, f0.p, f1.p, &h->pr);
                 if (rc == EF_OK && ++s->arc_next < n)
                     return 1;
             }
         } else {
-            ef_vec3_t dir = ef_sm_dir(h);
+            ef_vec3_t dir = sm_dir(h);
             ef_vec3_t a = ef_v3_axpy(h->start, h->trim_start, dir);
             ef_vec3_t b = ef_v3_axpy(h->pr.end, -h->trim_end, dir);
             if (h->start_smooth || h->end_smooth) {
-                ef_frame_t f0 = h->start_smooth ? h->fs : ef_sm_line_frame(a, dir);
-                ef_frame_t f1 = h->end_smooth ? h->fe : ef_sm_line_frame(b, dir);
+                ef_frame_t f0 = h->start_smooth ? h->fs : sm_line_frame(a, dir);
+                ef_frame_t f1 = h->end_smooth ? h->fe : sm_line_frame(b, dir);
                 if (h->trim_start > 0.0f)
                     f0.p = h->blend_in_end; /* exactly where the blend ended */
-                rc = ef_sm_smooth_move(s, m, &f0, &f1, h->start, h->pr.end, h->pr.feed, h->pr.tag);
-                if (rc != EF_OK || !ef_sm_move_ok(m) || m->dev > h->pr.tol - h->merge_dev) {
+                rc = sm_smooth_move(s, m, &f0, &f1, h->start, h->pr.end, h->pr.feed, h->pr.tag);
+                if (rc != EF_OK || !sm_move_ok(m) || m->dev > h->pr.tol - h->merge_dev) {
                     /* Not representable within the tolerance: the chord itself, with exact
                      * stops at both ends (tangents differ there). */
-                    rc = ef_sm_chord_stop(s, m, f0.p, f1.p, &h->pr);
+                    rc = sm_chord_stop(s, m, f0.p, f1.p, &h->pr);
                 }
             } else {
                 if (h->trim_start > 0.0f)
                     a = h->blend_in_end;
                 if (ef_v3_norm(ef_v3_sub(b, a)) < EF_MIN_CHORD) {
                     /* Both blends took the whole line: nothing straight is left. */
-                    return ef_sm_skip_body(s, h, m);
+                    return sm_skip_body(s, h, m);
                 }
-                rc = ef_sm_line_move(m, a, b, h->pr.feed, h->pr.tag);
+                rc = sm_line_move(m, a, b, h->pr.feed, h->pr.tag);
             }
         }
         if (rc != EF_OK)
@@ -480,7 +477,7 @@ static int ef_sm_next_move(ef_smooth_t *s, ef_move_t *m)
             m->flags |= EF_MOVE_BLEND_CLAMPED;
         if (h->blend.flags & EF_BLEND_TBL_CLAMPED)
             m->flags |= EF_MOVE_CLAMPED;
-        ef_smooth_prim_t *nx = ef_sm_held(s, 1);
+        ef_smooth_prim_t *nx = sm_held(s, 1);
         m->kind = EF_MOVE_BLEND;
         m->feed = ef_minf(h->pr.feed, nx->pr.feed);
         m->tag = nx->pr.tag;
@@ -495,19 +492,19 @@ static int ef_sm_next_move(ef_smooth_t *s, ef_move_t *m)
 }
 
 /* The oldest held primitive can be emitted: its end vertex is decided. */
-static int ef_sm_emittable(ef_smooth_t *s)
+static int sm_emittable(ef_smooth_t *s)
 {
-    return s->pn > 0 && ef_sm_held(s, 0)->end_kind != EF_V_OPEN;
+    return s->pn > 0 && sm_held(s, 0)->end_kind != EF_V_OPEN;
 }
 
 /* Move work along as far as the buffers allow: decided primitives into moves on the
  * stage, staged moves into the planner. The newest staged move is held back (unless it
  * ends at a stop) so a fall-back can still mark it as ending at a stop. Bounded: every
  * iteration stages or hands on one move, and both buffers are finite. */
-static int ef_sm_pump(ef_smooth_t *s)
+static int sm_pump(ef_smooth_t *s)
 {
     for (uint32_t guard = 0; guard < 2u * (EF_LOOKAHEAD + EF_SMOOTH_STAGE) + 4u; guard++) {
-        ef_move_t *last = ef_sm_stage_last(s);
+        ef_move_t *last = sm_stage_last(s);
         if (s->sn > 1 || (last && (last->flags & EF_MOVE_STOP_END))) {
             if (ef_plan_space(&s->plan) > 0) {
                 int rc = ef_plan_push(&s->plan, &s->stage[s->sh]);
@@ -518,13 +515,13 @@ static int ef_sm_pump(ef_smooth_t *s)
                 continue;
             }
         }
-        if (s->sn < EF_SMOOTH_STAGE && ef_sm_emittable(s)) {
+        if (s->sn < EF_SMOOTH_STAGE && sm_emittable(s)) {
             ef_move_t m;
-            int rc = ef_sm_next_move(s, &m);
+            int rc = sm_next_move(s, &m);
             if (rc < 0)
                 return rc;
             if (rc == 1)
-                ef_sm_stage(s, &m);
+                sm_stage(s, &m);
             if (s->emitting == EF_E_DONE || rc == 0) {
                 s->ph = (s->ph + 1) % EF_SMOOTH_PRIMS;
                 s->pn--;
@@ -541,12 +538,12 @@ static int ef_sm_pump(ef_smooth_t *s)
 /* Merge line pr (from s->pos) into the newest held line when the collinearity tolerance
  * allows (G64 Q): every inner vertex within qtol of the merged line, same direction, same
  * feed. Returns 1 when merged. */
-static int ef_sm_try_merge(ef_smooth_t *s, const ef_prim_t *pr)
+static int sm_try_merge(ef_smooth_t *s, const ef_prim_t *pr)
 {
     if (s->pn == 0 || pr->kind != EF_PRIM_LINE || !(pr->qtol > 0.0f) || !(pr->tol > 0.0f) ||
         (pr->flags & EF_PRIM_STOP_BEFORE))
         return 0;
-    ef_smooth_prim_t *h = ef_sm_held(s, s->pn - 1);
+    ef_smooth_prim_t *h = sm_held(s, s->pn - 1);
     if (h->pr.kind != EF_PRIM_LINE || h->end_kind != EF_V_OPEN || h->pr.feed != pr->feed ||
         h->nmerged >= EF_SMOOTH_MERGE_MAX)
         return 0;
@@ -559,9 +556,9 @@ static int ef_sm_try_merge(ef_smooth_t *s, const ef_prim_t *pr)
     /* Every inner vertex, old and new, within qtol of the merged chord, and within half
      * the path tolerance so the blends at the ends keep at least the other half. */
     float lim = ef_minf(pr->qtol, 0.5f * ef_minf(pr->tol, h->pr.tol));
-    float dev = ef_sm_dist_seg(h->pr.end, a, c);
+    float dev = sm_dist_seg(h->pr.end, a, c);
     for (uint32_t i = 0; i < h->nmerged; i++)
-        dev = ef_maxf(dev, ef_sm_dist_seg(h->merged[i], a, c));
+        dev = ef_maxf(dev, sm_dist_seg(h->merged[i], a, c));
     if (!(dev <= lim))
         return 0;
     h->merge_dev = dev;
@@ -581,17 +578,17 @@ int ef_smooth_push(ef_smooth_t *s, const ef_prim_t *pr)
     int rc = ef_prim_check(s->pos, pr, &len);
     if (rc != EF_OK)
         return rc;
-    rc = ef_sm_pump(s);
+    rc = sm_pump(s);
     if (rc != EF_OK)
         return rc;
-    if (ef_sm_try_merge(s, pr)) {
+    if (sm_try_merge(s, pr)) {
         s->pos = pr->end;
         s->st.prims++;
         return EF_OK;
     }
     if (s->pn >= EF_SMOOTH_PRIMS)
         return EF_ERR_FULL;
-    ef_smooth_prim_t *h = ef_sm_held(s, s->pn);
+    ef_smooth_prim_t *h = sm_held(s, s->pn);
     h->pr = *pr;
     h->start = s->pos;
     h->len = len;
@@ -604,13 +601,13 @@ int ef_smooth_push(ef_smooth_t *s, const ef_prim_t *pr)
     s->pn++;
     /* The previous primitive is now closed: the vertex before it can be decided. */
     if (s->pn >= 3) {
-        ef_smooth_prim_t *a = ef_sm_held(s, s->pn - 3), *b = ef_sm_held(s, s->pn - 2);
+        ef_smooth_prim_t *a = sm_held(s, s->pn - 3), *b = sm_held(s, s->pn - 2);
         if (a->end_kind == EF_V_OPEN)
-            ef_sm_decide(s, a, b);
+            sm_decide(s, a, b);
     }
     s->pos = pr->end;
     s->st.prims++;
-    return ef_sm_pump(s);
+    return sm_pump(s);
 }
 
 /* Decide the last open vertices as a stop at the end, and move everything on. */
@@ -619,18 +616,18 @@ int ef_smooth_finish(ef_smooth_t *s)
     if (!s)
         return EF_ERR_ARG;
     if (s->pn >= 2) {
-        ef_smooth_prim_t *a = ef_sm_held(s, s->pn - 2), *b = ef_sm_held(s, s->pn - 1);
+        ef_smooth_prim_t *a = sm_held(s, s->pn - 2), *b = sm_held(s, s->pn - 1);
         if (a->end_kind == EF_V_OPEN)
-            ef_sm_decide(s, a, b);
+            sm_decide(s, a, b);
     }
     if (s->pn >= 1) {
-        ef_smooth_prim_t *b = ef_sm_held(s, s->pn - 1);
+        ef_smooth_prim_t *b = sm_held(s, s->pn - 1);
         if (b->end_kind == EF_V_OPEN) {
             b->end_kind = EF_V_STOP;
             s->st.stops++;
         }
     }
-    return ef_sm_pump(s);
+    return sm_pump(s);
 }
 
 /* Hand out the next final move. */
@@ -638,13 +635,13 @@ int ef_smooth_pull(ef_smooth_t *s, ef_move_t *m)
 {
     if (!s || !m)
         return EF_ERR_ARG;
-    int rc = ef_sm_pump(s);
+    int rc = sm_pump(s);
     if (rc != EF_OK)
         return rc;
     rc = ef_plan_pull(&s->plan, m);
     if (rc == EF_OK) {
         s->st.moves++;
-        ef_sm_pump(s);
+        sm_pump(s);
     }
     return rc;
 }

@@ -17,13 +17,13 @@
 #define EF_FLT_EPS     1.1920929e-7f
 
 /* Finite without libm: NaN fails x == x, inf fails x - x == 0. */
-static inline int ef_prim_finite(float x)
+static inline int prim_finite(float x)
 {
     return (x == x) & (x - x == 0.0f);
 }
 
 /* Every component bounded by EF_MAX_COORD (false for NaN and inf). */
-static inline int ef_prim_v3_ok(ef_vec3_t a)
+static inline int prim_v3_ok(ef_vec3_t a)
 {
     int ox = ef_fabsf(a.x) <= EF_MAX_COORD, oy = ef_fabsf(a.y) <= EF_MAX_COORD;
     int oz = ef_fabsf(a.z) <= EF_MAX_COORD;
@@ -31,14 +31,14 @@ static inline int ef_prim_v3_ok(ef_vec3_t a)
 }
 
 /* All three components finite (no range bound), to reject NaN/inf control points. */
-static inline int ef_prim_v3_finite(ef_vec3_t a)
+static inline int prim_v3_finite(ef_vec3_t a)
 {
-    return ef_prim_finite(a.x) & ef_prim_finite(a.y) & ef_prim_finite(a.z);
+    return prim_finite(a.x) & prim_finite(a.y) & prim_finite(a.z);
 }
 
 /* sin and cos of x (|x| < 6400) with a fixed instruction count: Cody–Waite reduction to
  * [-pi/4, pi/4] and the fdlibm float kernels (error about 1 ulp on the reduced argument). */
-static void ef_sincosf(float x, float *s, float *c)
+static void prim_sincosf(float x, float *s, float *c)
 {
     float kf = ef_floorf(x * EF_TWO_OVER_PI + 0.5f);
     int k = (int)kf;
@@ -71,7 +71,7 @@ typedef struct {
 } ef_arc_geo_t;
 
 /* Fill an arc's frame (ef_arc_geo_t) from its start point, shared by check and frame. */
-static void ef_arc_geo(ef_vec3_t start, const ef_prim_t *pr, ef_arc_geo_t *g)
+static void prim_arc_geo(ef_vec3_t start, const ef_prim_t *pr, ef_arc_geo_t *g)
 {
     float aa = ef_v3_dot(pr->axis, pr->axis);
     ef_vec3_t a = ef_v3_scale(pr->axis, 1.0f / ef_sqrtf(ef_maxf(aa, 1e-30f)));
@@ -103,11 +103,10 @@ int ef_prim_check(ef_vec3_t start, const ef_prim_t *pr, float *len)
     int line = pr->kind == EF_PRIM_LINE, arc = pr->kind == EF_PRIM_ARC;
     if (!(line | arc) || (pr->flags & ~(uint32_t)EF_PRIM_STOP_BEFORE) != 0u)
         return EF_ERR_ARG;
-    int finite = ef_prim_v3_ok(start) & ef_prim_v3_ok(pr->end) & ef_prim_finite(pr->feed) &
-                 ef_prim_finite(pr->tol) & ef_prim_finite(pr->qtol);
+    int finite = prim_v3_ok(start) & prim_v3_ok(pr->end) & prim_finite(pr->feed) &
+                 prim_finite(pr->tol) & prim_finite(pr->qtol);
     if (arc)
-        finite &=
-            ef_prim_v3_ok(pr->centre) & ef_prim_v3_finite(pr->axis) & ef_prim_finite(pr->sweep);
+        finite &= prim_v3_ok(pr->centre) & prim_v3_finite(pr->axis) & prim_finite(pr->sweep);
     if (!finite)
         return EF_ERR_NONFINITE;
     if (!(pr->tol >= 0.0f) || !(pr->qtol >= 0.0f))
@@ -131,7 +130,7 @@ int ef_prim_check(ef_vec3_t start, const ef_prim_t *pr, float *len)
     if (!(asw > 0.0f) || !(asw <= EF_ARC_MAX_SWEEP))
         return EF_ERR_ARC;
     ef_arc_geo_t g;
-    ef_arc_geo(start, pr, &g);
+    prim_arc_geo(start, pr, &g);
     if (!(g.r0 >= EF_MIN_CHORD))
         return EF_ERR_DEGENERATE;
     float rtol = ef_maxf(EF_ARC_ABS_TOL, EF_ARC_REL_TOL * g.r0);
@@ -149,7 +148,7 @@ int ef_prim_check(ef_vec3_t start, const ef_prim_t *pr, float *len)
     float allow = rtol / g.r0 + 8.0f * EF_FLT_EPS * (asw + EF_TWO_PI);
     if (!(ef_fabsf(diff) <= allow))
         return EF_ERR_ARC;
-    if (!(g.len >= EF_MIN_CHORD) || !ef_prim_finite(g.len))
+    if (!(g.len >= EF_MIN_CHORD) || !prim_finite(g.len))
         return EF_ERR_DEGENERATE;
     /* Every point of the arc, not only its ends and centre, within EF_MAX_COORD: the
      * circle's reach from the centre (radius plus the helix's rise) bounds it. Without this
@@ -186,13 +185,13 @@ int ef_prim_frame(ef_vec3_t start, const ef_prim_t *pr, float s, ef_frame_t *out
         return EF_OK;
     }
     ef_arc_geo_t g;
-    ef_arc_geo(start, pr, &g);
+    prim_arc_geo(start, pr, &g);
     float len = g.len;
     float sc = ef_minf(ef_maxf(s, 0.0f), len);
     float frac = sc / ef_maxf(len, 1e-30f);
     float th = pr->sweep * frac;
     float sn, cs;
-    ef_sincosf(th, &sn, &cs);
+    prim_sincosf(th, &sn, &cs);
     ef_vec3_t rad = ef_v3_add(ef_v3_scale(g.eu, cs), ef_v3_scale(g.ev, sn)); /* outward */
     ef_vec3_t p = ef_v3_axpy(ef_v3_axpy(g.base, g.r0, rad), g.h * frac, g.a);
     /* dp/ds: (r0 sweep / len) (-sin e_u + cos e_v) + (h / len) a, unit by construction. */
@@ -225,7 +224,7 @@ static const float ef_gl16[8][2] = {
 /* Points of Bezier curves of degree 4 and 3 at t: the control points weighted by the
  * Bernstein polynomials (all positive, so no cancellation: as accurate as de Casteljau's
  * algorithm, at a fraction of its instructions). */
-static ef_vec3_t ef_mm_b4(const ef_vec3_t *p, float t)
+static ef_vec3_t prim_mm_b4(const ef_vec3_t *p, float t)
 {
     float u = 1.0f - t, t2 = t * t, u2 = u * u;
     ef_vec3_t r = ef_v3_scale(p[0], u2 * u2);
@@ -236,7 +235,7 @@ static ef_vec3_t ef_mm_b4(const ef_vec3_t *p, float t)
 }
 
 /* Cubic Bernstein evaluation, for the second hodograph in ef_move_measure(). */
-static ef_vec3_t ef_mm_b3(const ef_vec3_t *p, float t)
+static ef_vec3_t prim_mm_b3(const ef_vec3_t *p, float t)
 {
     float u = 1.0f - t;
     ef_vec3_t r = ef_v3_scale(p[0], u * u * u);
@@ -246,7 +245,7 @@ static ef_vec3_t ef_mm_b3(const ef_vec3_t *p, float t)
 }
 
 /* Degree elevation of p (degree n, n + 1 points) in place to degree n + 1. */
-static void ef_mm_elevate(ef_vec3_t *p, int n)
+static void prim_mm_elevate(ef_vec3_t *p, int n)
 {
     p[n + 1] = p[n];
     for (int i = n; i >= 1; i--) {
@@ -256,7 +255,7 @@ static void ef_mm_elevate(ef_vec3_t *p, int n)
 }
 
 /* Clear a move's measured fields and pass rc on, so failures leave no stale data. */
-static int ef_move_measure_fail(ef_move_t *m, int rc)
+static int prim_move_measure_fail(ef_move_t *m, int rc)
 {
     m->length = 0.0f;
     m->kappa_max = 0.0f;
@@ -271,12 +270,12 @@ int ef_move_measure(ef_move_t *m)
         return EF_ERR_ARG;
     int deg = m->degree;
     if (deg != 1 && deg != 3 && deg != 5)
-        return ef_move_measure_fail(m, EF_ERR_ARG);
+        return prim_move_measure_fail(m, EF_ERR_ARG);
     int finite = 1;
     for (int i = 0; i <= deg; i++)
-        finite &= ef_prim_v3_finite(m->b[i]);
+        finite &= prim_v3_finite(m->b[i]);
     if (!finite)
-        return ef_move_measure_fail(m, EF_ERR_NONFINITE);
+        return prim_move_measure_fail(m, EF_ERR_NONFINITE);
 
     if (deg == 1) {
         ef_vec3_t d = ef_v3_sub(m->b[1], m->b[0]);
@@ -285,8 +284,8 @@ int ef_move_measure(ef_move_t *m)
         m->length = l;
         m->kappa_max = 0.0f;
         m->tabs = ef_v3(ef_fabsf(d.x) * inv, ef_fabsf(d.y) * inv, ef_fabsf(d.z) * inv);
-        if (!ef_prim_finite(l))
-            return ef_move_measure_fail(m, EF_ERR_NONFINITE);
+        if (!prim_finite(l))
+            return prim_move_measure_fail(m, EF_ERR_NONFINITE);
         return EF_OK;
     }
 
@@ -300,15 +299,15 @@ int ef_move_measure(ef_move_t *m)
     for (int i = 0; i + 1 < deg; i++)
         h2[i] = ef_v3_scale(ef_v3_sub(h1[i + 1], h1[i]), (float)(deg - 1));
     if (deg == 3) {
-        ef_mm_elevate(h1, 2);
-        ef_mm_elevate(h1, 3);
-        ef_mm_elevate(h2, 1);
-        ef_mm_elevate(h2, 2);
+        prim_mm_elevate(h1, 2);
+        prim_mm_elevate(h1, 3);
+        prim_mm_elevate(h2, 1);
+        prim_mm_elevate(h2, 2);
     }
     float len = 0.0f;
     for (int i = 0; i < 8; i++) {
-        float a = ef_v3_norm(ef_mm_b4(h1, 0.5f - ef_gl16[i][0]));
-        float b = ef_v3_norm(ef_mm_b4(h1, 0.5f + ef_gl16[i][0]));
+        float a = ef_v3_norm(prim_mm_b4(h1, 0.5f - ef_gl16[i][0]));
+        float b = ef_v3_norm(prim_mm_b4(h1, 0.5f + ef_gl16[i][0]));
         len += ef_gl16[i][1] * (a + b);
     }
     float kmax = 0.0f;
@@ -316,7 +315,7 @@ int ef_move_measure(ef_move_t *m)
     ef_vec3_t tabs = ef_v3(0.0f, 0.0f, 0.0f);
     for (int i = 0; i <= EF_MOVE_SAMPLES; i++) {
         float t = (float)i * (1.0f / (float)EF_MOVE_SAMPLES);
-        ef_vec3_t d1 = ef_mm_b4(h1, t), d2 = ef_mm_b3(h2, t);
+        ef_vec3_t d1 = prim_mm_b4(h1, t), d2 = prim_mm_b3(h2, t);
         float sp = ef_v3_norm(d1);
         float isp = 1.0f / ef_maxf(sp, 1e-30f);
         float k = ef_v3_norm(ef_v3_cross(d1, d2)) * isp * isp * isp;
@@ -330,8 +329,8 @@ int ef_move_measure(ef_move_t *m)
         tabs.y = ef_maxf(tabs.y, ef_fabsf(d1.y) * w);
         tabs.z = ef_maxf(tabs.z, ef_fabsf(d1.z) * w);
     }
-    if (!ef_prim_finite(len) || !ef_prim_finite(kmax))
-        return ef_move_measure_fail(m, EF_ERR_NONFINITE);
+    if (!prim_finite(len) || !prim_finite(kmax))
+        return prim_move_measure_fail(m, EF_ERR_NONFINITE);
     m->length = len;
     m->kappa_max = kmax;
     m->tabs = tabs;

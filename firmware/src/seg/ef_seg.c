@@ -4,7 +4,7 @@
 #include "evenfeed/core/ef_err.h"
 
 /* Zero the whole segment so a failed call leaves nothing a caller could send to a drive. */
-static int ef_seg_fail(ef_seg_t *out, int rc)
+static int seg_fail(ef_seg_t *out, int rc)
 {
     ef_seg_t zero = {0};
     *out = zero;
@@ -12,8 +12,8 @@ static int ef_seg_fail(ef_seg_t *out, int rc)
 }
 
 /* Cubic control points: b1 = b0 + x1_0 t0 / 3, b2 = b3 - x1_1 t1 / 3. */
-static void ef_seg_cubic(const ef_endpoint_t *e0, const ef_endpoint_t *e1, const ef_norm_t *nm,
-                         ef_seg_t *out)
+static void seg_cubic(const ef_endpoint_t *e0, const ef_endpoint_t *e1, const ef_norm_t *nm,
+                      ef_seg_t *out)
 {
     ef_vec3_t t0 = nm->t0, t1 = nm->t1;
     out->b[0] = e0->p;
@@ -27,8 +27,8 @@ static void ef_seg_cubic(const ef_endpoint_t *e0, const ef_endpoint_t *e1, const
 }
 
 /* Quintic control points from f'(0), f''(0), f'(1), f''(1) (domain.md). */
-static void ef_seg_quintic(const ef_endpoint_t *e0, const ef_endpoint_t *e1, const ef_norm_t *nm,
-                           ef_seg_t *out)
+static void seg_quintic(const ef_endpoint_t *e0, const ef_endpoint_t *e1, const ef_norm_t *nm,
+                        ef_seg_t *out)
 {
     ef_vec3_t t0 = nm->t0, t1 = nm->t1;
     float x10 = out->dof[0], x20 = out->dof[1], x11 = out->dof[2], x21 = out->dof[3];
@@ -54,24 +54,24 @@ int ef_seg_g1_cubic(const ef_table_t *tbl, const ef_endpoint_t *e0, const ef_end
     if (!out)
         return EF_ERR_ARG;
     if (!tbl || !e0 || !e1)
-        return ef_seg_fail(out, EF_ERR_ARG);
+        return seg_fail(out, EF_ERR_ARG);
     if (tbl->kind != EF_TABLE_G1_CUBIC)
-        return ef_seg_fail(out, EF_ERR_KIND);
+        return seg_fail(out, EF_ERR_KIND);
     ef_norm_t nm;
     int rc = ef_normalize(e0, e1, 0, &nm);
     if (rc != EF_OK)
-        return ef_seg_fail(out, rc);
+        return seg_fail(out, rc);
     float d[2];
     uint32_t clamp = 0;
     rc = ef_table_lookup_g1(tbl, nm.alpha, nm.beta, d, &clamp);
     if (rc != EF_OK)
-        return ef_seg_fail(out, rc);
+        return seg_fail(out, rc);
     out->dof[0] = d[0] * nm.chord;
     out->dof[1] = d[1] * nm.chord;
     out->dof[2] = out->dof[3] = 0.0f;
     out->clamp = clamp;
     out->flags = (uint32_t)(clamp != 0) * EF_SEG_CLAMPED;
-    ef_seg_cubic(e0, e1, &nm, out);
+    seg_cubic(e0, e1, &nm, out);
     return EF_OK;
 }
 
@@ -82,23 +82,23 @@ int ef_seg_g2_quintic(const ef_table_t *tbl, const ef_endpoint_t *e0, const ef_e
     if (!out)
         return EF_ERR_ARG;
     if (!tbl || !e0 || !e1)
-        return ef_seg_fail(out, EF_ERR_ARG);
+        return seg_fail(out, EF_ERR_ARG);
     if (tbl->kind != EF_TABLE_G2_QUINTIC)
-        return ef_seg_fail(out, EF_ERR_KIND);
+        return seg_fail(out, EF_ERR_KIND);
     ef_norm_t nm;
     int rc = ef_normalize(e0, e1, 1, &nm);
     if (rc != EF_OK)
-        return ef_seg_fail(out, rc);
+        return seg_fail(out, rc);
     float c[4] = {nm.alpha, nm.beta, nm.k0, nm.k1}, d[4];
     uint32_t clamp = 0;
     rc = ef_table_lookup_g2(tbl, c, d, &clamp);
     if (rc != EF_OK)
-        return ef_seg_fail(out, rc);
+        return seg_fail(out, rc);
     for (int k = 0; k < 4; k++)
         out->dof[k] = d[k] * nm.chord;
     out->clamp = clamp;
     out->flags = (uint32_t)(clamp != 0) * EF_SEG_CLAMPED;
-    ef_seg_quintic(e0, e1, &nm, out);
+    seg_quintic(e0, e1, &nm, out);
     return EF_OK;
 }
 
@@ -109,25 +109,25 @@ int ef_seg_from_dofs(const ef_endpoint_t *e0, const ef_endpoint_t *e1, int degre
     if (!out)
         return EF_ERR_ARG;
     if (!e0 || !e1 || !dof || (degree != 3 && degree != 5))
-        return ef_seg_fail(out, EF_ERR_ARG);
+        return seg_fail(out, EF_ERR_ARG);
     int nd = degree == 3 ? 2 : 4;
     for (int k = 0; k < nd; k++)
         if (!(dof[k] == dof[k]) || !(dof[k] - dof[k] == 0.0f))
-            return ef_seg_fail(out, EF_ERR_NONFINITE);
+            return seg_fail(out, EF_ERR_NONFINITE);
     ef_norm_t nm;
     int rc = ef_normalize(e0, e1, degree == 5, &nm);
     if (rc != EF_OK)
-        return ef_seg_fail(out, rc);
+        return seg_fail(out, rc);
     float x10 = dof[0], x11 = degree == 3 ? dof[1] : dof[2];
     if (!(x10 > 0.0f) || !(x11 > 0.0f))
-        return ef_seg_fail(out, EF_ERR_ARG);
+        return seg_fail(out, EF_ERR_ARG);
     for (int k = 0; k < 4; k++)
         out->dof[k] = k < nd ? dof[k] : 0.0f;
     out->flags = 0;
     out->clamp = 0;
     if (degree == 3)
-        ef_seg_cubic(e0, e1, &nm, out);
+        seg_cubic(e0, e1, &nm, out);
     else
-        ef_seg_quintic(e0, e1, &nm, out);
+        seg_quintic(e0, e1, &nm, out);
     return EF_OK;
 }

@@ -25,7 +25,7 @@
 #endif
 
 /* Hide a float's value from the optimizer (no code). */
-static inline float ef_ct_hidef(float x)
+static inline float tl_ct_hidef(float x)
 {
 #ifdef EF_CT_FREG
     __asm__("" : EF_CT_FREG(x));
@@ -34,7 +34,7 @@ static inline float ef_ct_hidef(float x)
 }
 
 /* Hide an integer's value from the optimizer (no code). */
-static inline uint32_t ef_ct_hideu(uint32_t x)
+static inline uint32_t tl_ct_hideu(uint32_t x)
 {
 #ifdef __GNUC__
     __asm__("" : "+r"(x));
@@ -44,42 +44,42 @@ static inline uint32_t ef_ct_hideu(uint32_t x)
 
 /* min(max(x, lo), hi) as min/max instructions: the bounds are hidden so no bound can be
  * folded into a branch of its own. Same value as ef_minf(ef_maxf(x, lo), hi). */
-static inline float ef_ct_clampf(float x, float lo, float hi)
+static inline float tl_ct_clampf(float x, float lo, float hi)
 {
-    return ef_minf(ef_maxf(x, ef_ct_hidef(lo)), ef_ct_hidef(hi));
+    return ef_minf(ef_maxf(x, tl_ct_hidef(lo)), tl_ct_hidef(hi));
 }
 
 /* ef_floorf() with the 0/1 correction converted rather than branched on. */
-static inline float ef_ct_floorf(float x)
+static inline float tl_ct_floorf(float x)
 {
     float t = (float)(int)x;
-    return t - (float)ef_ct_hideu((uint32_t)(t > x));
+    return t - (float)tl_ct_hideu((uint32_t)(t > x));
 }
 
 /* Cell index and fraction of x on one axis; sets *clamped when x was outside [lo, hi]. */
-static inline uint32_t ef_axis_cell(const ef_table_axis_t *ax, float x, float *frac,
+static inline uint32_t tl_axis_cell(const ef_table_axis_t *ax, float x, float *frac,
                                     uint32_t *clamped)
 {
     *clamped = (uint32_t)((x < ax->lo) | (x > ax->hi));
-    float xc = ef_ct_clampf(x, ax->lo, ax->hi);
+    float xc = tl_ct_clampf(x, ax->lo, ax->hi);
     float g = (xc - ax->lo) * ax->inv_step;
     uint32_t i = (uint32_t)g;
     uint32_t last = ax->nodes - 2u;
     i = i < last ? i : last;
-    *frac = ef_ct_clampf(g - (float)i, 0.0f, 1.0f);
+    *frac = tl_ct_clampf(g - (float)i, 0.0f, 1.0f);
     return i;
 }
 
 /* Bring x into [lo, lo + 2 pi) for a periodic axis. */
-static float ef_wrap(float x, float lo)
+static float tl_wrap(float x, float lo)
 {
-    return x - EF_TWO_PI_F * ef_ct_floorf((x - lo) * (1.0f / EF_TWO_PI_F));
+    return x - EF_TWO_PI_F * tl_ct_floorf((x - lo) * (1.0f / EF_TWO_PI_F));
 }
 
 /* Bounded input: the folding arithmetic converts to int. */
-static float ef_bound(float x)
+static float tl_bound(float x)
 {
-    return ef_ct_clampf(x, -EF_LOOKUP_MAX_COORD, EF_LOOKUP_MAX_COORD);
+    return tl_ct_clampf(x, -EF_LOOKUP_MAX_COORD, EF_LOOKUP_MAX_COORD);
 }
 
 /*
@@ -87,13 +87,13 @@ static float ef_bound(float x)
  * mirror is (u,v) -> (-u,-v), reversal (u,v) -> (-u,v) with ends swapped, and the 2 pi
  * periods are (u,v) + (pi, +-pi); *swap says whether x1_0 and x1_1 trade places.
  */
-static void ef_fold_uv(float alpha, float beta, float *u, float *v, int *swap)
+static void tl_fold_uv(float alpha, float beta, float *u, float *v, int *swap)
 {
     float uu = 0.5f * (alpha + beta), vv = 0.5f * (alpha - beta);
-    float k = ef_ct_floorf(uu * (1.0f / EF_PI_F) + 0.5f);
+    float k = tl_ct_floorf(uu * (1.0f / EF_PI_F) + 0.5f);
     uu -= k * EF_PI_F;
     vv -= k * EF_PI_F;
-    vv -= EF_TWO_PI_F * ef_ct_floorf(vv * (1.0f / EF_TWO_PI_F) + 0.5f);
+    vv -= EF_TWO_PI_F * tl_ct_floorf(vv * (1.0f / EF_TWO_PI_F) + 0.5f);
     *swap = (uu < 0.0f) ^ (vv < 0.0f);
     *u = ef_fabsf(uu);
     *v = ef_fabsf(vv);
@@ -107,21 +107,21 @@ int ef_table_lookup_g1(const ef_table_t *tbl, float alpha, float beta, float dof
         return EF_ERR_ARG;
     if (tbl->kind != EF_TABLE_G1_CUBIC || tbl->naxes != 2 || tbl->ndof != 2)
         return EF_ERR_KIND;
-    alpha = ef_bound(alpha);
-    beta = ef_bound(beta);
+    alpha = tl_bound(alpha);
+    beta = tl_bound(beta);
     int swap = 0;
     float c[2] = {alpha, beta};
     if (tbl->symmetry == EF_SYM_G1_FOLD) {
-        ef_fold_uv(alpha, beta, &c[0], &c[1], &swap);
+        tl_fold_uv(alpha, beta, &c[0], &c[1], &swap);
     } else {
         for (int a = 0; a < 2; a++)
             if (tbl->axis[a].flags & EF_AXIS_PERIODIC)
-                c[a] = ef_wrap(c[a], tbl->axis[a].lo);
+                c[a] = tl_wrap(c[a], tbl->axis[a].lo);
     }
     float f0, f1;
     uint32_t cl0, cl1;
-    uint32_t i0 = ef_axis_cell(&tbl->axis[0], c[0], &f0, &cl0);
-    uint32_t i1 = ef_axis_cell(&tbl->axis[1], c[1], &f1, &cl1);
+    uint32_t i0 = tl_axis_cell(&tbl->axis[0], c[0], &f0, &cl0);
+    uint32_t i1 = tl_axis_cell(&tbl->axis[1], c[1], &f1, &cl1);
     const float *p = tbl->data + 2u * (i0 * tbl->axis[0].stride + i1 * tbl->axis[1].stride);
     const uint32_t s1 = 2u * tbl->axis[1].stride;
     float w00 = (1.0f - f0) * (1.0f - f1), w10 = f0 * (1.0f - f1);
@@ -147,7 +147,7 @@ int ef_table_lookup_g2(const ef_table_t *tbl, const float c[4], float dof[4], ui
         return EF_ERR_KIND;
     float x[4];
     for (int a = 0; a < 4; a++)
-        x[a] = ef_bound(c[a]);
+        x[a] = tl_bound(c[a]);
     if (tbl->symmetry == EF_SYM_G2_MIRROR) {
         float m = ef_selectf(x[0] < 0.0f, -1.0f, 1.0f);
         for (int a = 0; a < 4; a++)
@@ -156,7 +156,7 @@ int ef_table_lookup_g2(const ef_table_t *tbl, const float c[4], float dof[4], ui
     float f[4];
     uint32_t cl[4], base = 0;
     for (int a = 0; a < 4; a++)
-        base += ef_axis_cell(&tbl->axis[a], x[a], &f[a], &cl[a]) * tbl->axis[a].stride;
+        base += tl_axis_cell(&tbl->axis[a], x[a], &f[a], &cl[a]) * tbl->axis[a].stride;
     /* Tensor-product interpolation as successive lerps: along axis 0 between the 8 node
      * pairs, then axis 1, 2, 3. Each step works on whole 4-DOF rows (16 contiguous bytes),
      * which gcc vectorizes on x86; on the M4F it is plain scalar code of the same count. */

@@ -62,30 +62,30 @@ static const uint8_t ef_tbl_magic[EF_TABLE_MAGIC_LEN] = {0x45, 0x46, 0x54, 0x42,
                                                          0x0D, 0x0A, 0x1A, 0x0A};
 
 /* Little-endian reads assembled byte by byte: independent of host order and alignment. */
-static uint16_t ef_rd16(const uint8_t *p)
+static uint16_t tp_rd16(const uint8_t *p)
 {
     return (uint16_t)((uint32_t)p[0] | ((uint32_t)p[1] << 8));
 }
 
 /* 32-bit little-endian read. */
-static uint32_t ef_rd32(const uint8_t *p)
+static uint32_t tp_rd32(const uint8_t *p)
 {
     return (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) | ((uint32_t)p[3] << 24);
 }
 
 /* f64 little-endian read; the union is the C11-sanctioned way to reinterpret bits. */
-static double ef_rdf64(const uint8_t *p)
+static double tp_rdf64(const uint8_t *p)
 {
     union {
         uint64_t u;
         double d;
     } v;
-    v.u = (uint64_t)ef_rd32(p) | ((uint64_t)ef_rd32(p + 4) << 32);
+    v.u = (uint64_t)tp_rd32(p) | ((uint64_t)tp_rd32(p + 4) << 32);
     return v.d;
 }
 
 /* Finite test on the exponent bits, since the firmware has no libm isfinite(). */
-static int ef_finite64(double x)
+static int tp_finite64(double x)
 {
     union {
         double d;
@@ -96,7 +96,7 @@ static int ef_finite64(double x)
 }
 
 /* Same for float. */
-static int ef_finite32(float x)
+static int tp_finite32(float x)
 {
     union {
         float f;
@@ -107,22 +107,22 @@ static int ef_finite32(float x)
 }
 
 /* |x| without libm. */
-static double ef_abs64(double x)
+static double tp_abs64(double x)
 {
     return x < 0.0 ? -x : x;
 }
 
 /* Zero the view without memset so the firmware keeps its no-libc promise. */
-static void ef_tbl_zero(ef_table_t *t)
+static void tp_tbl_zero(ef_table_t *t)
 {
     static const ef_table_t zero;
     *t = zero;
 }
 
 /* Record where a parse failed; keeps the failure paths one line each. */
-static int ef_tbl_fail(ef_table_t *out, uint32_t *bad_offset, int code, uint32_t off)
+static int tp_tbl_fail(ef_table_t *out, uint32_t *bad_offset, int code, uint32_t off)
 {
-    ef_tbl_zero(out);
+    tp_tbl_zero(out);
     if (bad_offset) {
         *bad_offset = off;
     }
@@ -132,7 +132,7 @@ static int ef_tbl_fail(ef_table_t *out, uint32_t *bad_offset, int code, uint32_t
 /* Largest |bound| an axis of this kind may have: angles are meaningful only within one
  * turn either side of 0 (G1) or half a turn (G2); curvature beyond the endpoint limit is
  * rejected at input, so a table never needs to cover it. */
-static double ef_tbl_axis_limit(unsigned kind, unsigned axis)
+static double tp_tbl_axis_limit(unsigned kind, unsigned axis)
 {
     if (kind == EF_TABLE_G1_CUBIC) {
         return EF_TBL_2PI;
@@ -142,31 +142,31 @@ static double ef_tbl_axis_limit(unsigned kind, unsigned axis)
 
 /* inv_step is derived from the float bounds the lookup uses, so that hi maps exactly to
  * the last node; computed in double so parse and check agree bit for bit. */
-static double ef_tbl_inv_step(uint32_t nodes, float lo, float hi)
+static double tp_tbl_inv_step(uint32_t nodes, float lo, float hi)
 {
     return (double)(nodes - 1u) / ((double)hi - (double)lo);
 }
 
 /* Validate one used axis of the header and fill its view entry; returns 0 or a code. */
-static int ef_tbl_parse_axis(const uint8_t *b, unsigned kind, unsigned sym, unsigned i,
+static int tp_tbl_parse_axis(const uint8_t *b, unsigned kind, unsigned sym, unsigned i,
                              ef_table_axis_t *ax, uint32_t *off)
 {
     const uint32_t base = EF_OFF_AXES + i * EF_AXIS_BYTES;
-    const double lo = ef_rdf64(b + base + EF_AXIS_LO);
-    const double hi = ef_rdf64(b + base + EF_AXIS_HI);
-    const uint32_t nodes = ef_rd32(b + base + EF_AXIS_NODES);
-    const uint32_t flags = ef_rd32(b + base + EF_AXIS_FLAGS);
-    const double lim = ef_tbl_axis_limit(kind, i);
+    const double lo = tp_rdf64(b + base + EF_AXIS_LO);
+    const double hi = tp_rdf64(b + base + EF_AXIS_HI);
+    const uint32_t nodes = tp_rd32(b + base + EF_AXIS_NODES);
+    const uint32_t flags = tp_rd32(b + base + EF_AXIS_FLAGS);
+    const double lim = tp_tbl_axis_limit(kind, i);
     const double slack = kind == EF_TABLE_G1_CUBIC || i < 2u ? EF_TBL_ANGLE_SLACK : 0.0;
     double inv;
     float lo_f, hi_f;
 
     *off = base + EF_AXIS_LO;
-    if (!ef_finite64(lo) || lo < -(lim + slack)) {
+    if (!tp_finite64(lo) || lo < -(lim + slack)) {
         return EF_ERR_TBL_AXIS;
     }
     *off = base + EF_AXIS_HI;
-    if (!ef_finite64(hi) || !(hi > lo) || hi > lim + slack) {
+    if (!tp_finite64(hi) || !(hi > lo) || hi > lim + slack) {
         return EF_ERR_TBL_AXIS;
     }
     /* Bounds are now within +-1e3, so the float conversions below are defined. */
@@ -179,7 +179,7 @@ static int ef_tbl_parse_axis(const uint8_t *b, unsigned kind, unsigned sym, unsi
     if (nodes < 2u || nodes > EF_TABLE_MAX_AXIS_NODES) {
         return EF_ERR_TBL_AXIS;
     }
-    inv = ef_tbl_inv_step(nodes, lo_f, hi_f);
+    inv = tp_tbl_inv_step(nodes, lo_f, hi_f);
     if (!(inv <= (double)FLT_MAX)) {
         *off = base + EF_AXIS_HI; /* span too narrow for float */
         return EF_ERR_TBL_AXIS;
@@ -193,7 +193,7 @@ static int ef_tbl_parse_axis(const uint8_t *b, unsigned kind, unsigned sym, unsi
         if (kind != EF_TABLE_G1_CUBIC || sym != EF_SYM_NONE) {
             return EF_ERR_TBL_AXIS;
         }
-        if (ef_abs64((hi - lo) - EF_TBL_2PI) > EF_TBL_PERIOD_TOL) {
+        if (tp_abs64((hi - lo) - EF_TBL_2PI) > EF_TBL_PERIOD_TOL) {
             return EF_ERR_TBL_AXIS;
         }
     }
@@ -206,7 +206,7 @@ static int ef_tbl_parse_axis(const uint8_t *b, unsigned kind, unsigned sym, unsi
 }
 
 /* Reject the first nonzero byte of an unused axis, reporting the field it belongs to. */
-static int ef_tbl_unused_axis(const uint8_t *b, unsigned i, uint32_t *off)
+static int tp_tbl_unused_axis(const uint8_t *b, unsigned i, uint32_t *off)
 {
     const uint32_t base = EF_OFF_AXES + i * EF_AXIS_BYTES;
     uint32_t j;
@@ -225,7 +225,7 @@ static int ef_tbl_unused_axis(const uint8_t *b, unsigned i, uint32_t *off)
 
 /* Symmetric storage is only correct over the exact fundamental region the lookup folds
  * into; anything else would silently return DOFs for the wrong configuration. */
-static int ef_tbl_parse_region(const uint8_t *b, unsigned sym, uint32_t *off)
+static int tp_tbl_parse_region(const uint8_t *b, unsigned sym, uint32_t *off)
 {
     const uint32_t a0 = EF_OFF_AXES, a1 = EF_OFF_AXES + EF_AXIS_BYTES;
 
@@ -234,13 +234,13 @@ static int ef_tbl_parse_region(const uint8_t *b, unsigned sym, uint32_t *off)
         const uint32_t at[4] = {a0 + EF_AXIS_LO, a0 + EF_AXIS_HI, a1 + EF_AXIS_LO, a1 + EF_AXIS_HI};
         unsigned k;
         for (k = 0; k < 4u; k++) {
-            if (ef_abs64(ef_rdf64(b + at[k]) - want[k]) > EF_TBL_FOLD_TOL) {
+            if (tp_abs64(tp_rdf64(b + at[k]) - want[k]) > EF_TBL_FOLD_TOL) {
                 *off = at[k];
                 return EF_ERR_TBL_SYMMETRY;
             }
         }
     } else if (sym == EF_SYM_G2_MIRROR) {
-        if (ef_rdf64(b + a0 + EF_AXIS_LO) != 0.0) {
+        if (tp_rdf64(b + a0 + EF_AXIS_LO) != 0.0) {
             *off = a0 + EF_AXIS_LO;
             return EF_ERR_TBL_SYMMETRY;
         }
@@ -251,19 +251,19 @@ static int ef_tbl_parse_region(const uint8_t *b, unsigned sym, uint32_t *off)
 /* The optimizer bounds must describe a nonempty positive x1 range, capped so values stay
  * far from float overflow; G1 has no x2 so its bound is pinned to 0 to keep files
  * canonical. */
-static int ef_tbl_parse_bounds(const uint8_t *b, unsigned kind, ef_table_t *v, uint32_t *off)
+static int tp_tbl_parse_bounds(const uint8_t *b, unsigned kind, ef_table_t *v, uint32_t *off)
 {
-    const double x1_min = ef_rdf64(b + EF_OFF_X1_MIN);
-    const double x1_max = ef_rdf64(b + EF_OFF_X1_MAX);
-    const double x2_max = ef_rdf64(b + EF_OFF_X2_MAX);
+    const double x1_min = tp_rdf64(b + EF_OFF_X1_MIN);
+    const double x1_max = tp_rdf64(b + EF_OFF_X1_MAX);
+    const double x2_max = tp_rdf64(b + EF_OFF_X2_MAX);
 
     *off = EF_OFF_X1_MIN;
-    if (!ef_finite64(x1_min) || !(x1_min > 0.0) || !(x1_min < EF_TABLE_MAX_DOF_BOUND) ||
+    if (!tp_finite64(x1_min) || !(x1_min > 0.0) || !(x1_min < EF_TABLE_MAX_DOF_BOUND) ||
         !((float)x1_min > 0.0f)) {
         return EF_ERR_TBL_VALUE;
     }
     *off = EF_OFF_X1_MAX;
-    if (!ef_finite64(x1_max) || !(x1_max > x1_min) || !(x1_max <= EF_TABLE_MAX_DOF_BOUND) ||
+    if (!tp_finite64(x1_max) || !(x1_max > x1_min) || !(x1_max <= EF_TABLE_MAX_DOF_BOUND) ||
         !((float)x1_max > (float)x1_min)) {
         return EF_ERR_TBL_VALUE;
     }
@@ -272,7 +272,7 @@ static int ef_tbl_parse_bounds(const uint8_t *b, unsigned kind, ef_table_t *v, u
         if (x2_max != 0.0) {
             return EF_ERR_TBL_VALUE;
         }
-    } else if (!ef_finite64(x2_max) || !(x2_max >= 0.0) || !(x2_max <= EF_TABLE_MAX_DOF_BOUND)) {
+    } else if (!tp_finite64(x2_max) || !(x2_max >= 0.0) || !(x2_max <= EF_TABLE_MAX_DOF_BOUND)) {
         return EF_ERR_TBL_VALUE;
     }
     v->x1_min = (float)x1_min;
@@ -284,7 +284,7 @@ static int ef_tbl_parse_bounds(const uint8_t *b, unsigned kind, ef_table_t *v, u
 /* Smallest float >= d, for finite d >= 0 within float range. Comparing a float value with
  * it is exactly the comparison with d, without a double operation per value (soft-float
  * on a Cortex-M4F). */
-static float ef_tbl_f32_ceil(double d)
+static float tp_tbl_f32_ceil(double d)
 {
     union {
         float f;
@@ -298,7 +298,7 @@ static float ef_tbl_f32_ceil(double d)
 }
 
 /* Largest float <= d, for finite d >= 0 within float range. */
-static float ef_tbl_f32_floor(double d)
+static float tp_tbl_f32_floor(double d)
 {
     union {
         float f;
@@ -313,16 +313,16 @@ static float ef_tbl_f32_floor(double d)
 
 /* Every stored value must be finite and inside the optimizer's box (with the relative
  * slack), so a lookup can never interpolate garbage. Returns the first bad index or -1. */
-static int64_t ef_tbl_bad_value(const float *data, uint32_t count, unsigned kind, const uint8_t *b)
+static int64_t tp_tbl_bad_value(const float *data, uint32_t count, unsigned kind, const uint8_t *b)
 {
-    const float x1_lo = ef_tbl_f32_ceil(ef_rdf64(b + EF_OFF_X1_MIN) * (1.0 - EF_TBL_VALUE_REL));
-    const float x1_hi = ef_tbl_f32_floor(ef_rdf64(b + EF_OFF_X1_MAX) * (1.0 + EF_TBL_VALUE_REL));
-    const float x2_hi = ef_tbl_f32_floor(ef_rdf64(b + EF_OFF_X2_MAX) * (1.0 + EF_TBL_VALUE_REL));
+    const float x1_lo = tp_tbl_f32_ceil(tp_rdf64(b + EF_OFF_X1_MIN) * (1.0 - EF_TBL_VALUE_REL));
+    const float x1_hi = tp_tbl_f32_floor(tp_rdf64(b + EF_OFF_X1_MAX) * (1.0 + EF_TBL_VALUE_REL));
+    const float x2_hi = tp_tbl_f32_floor(tp_rdf64(b + EF_OFF_X2_MAX) * (1.0 + EF_TBL_VALUE_REL));
     uint32_t k;
 
     for (k = 0; k < count; k++) {
         const float x = data[k];
-        if (!ef_finite32(x)) {
+        if (!tp_finite32(x)) {
             return (int64_t)k;
         }
         /* G2 stores (x1_0, x2_0, x1_1, x2_1): odd slots are x2. */
@@ -354,77 +354,77 @@ int ef_table_parse(const void *blob, uint32_t len, ef_table_t *out, uint32_t *ba
     }
     if (out == NULL || b == NULL) {
         if (out) {
-            ef_tbl_zero(out);
+            tp_tbl_zero(out);
         }
         return EF_ERR_ARG;
     }
-    ef_tbl_zero(out);
+    tp_tbl_zero(out);
     if (((uintptr_t)blob & 3u) != 0u) {
         return EF_ERR_ARG; /* node values are used in place as floats */
     }
-    ef_tbl_zero(&v);
+    tp_tbl_zero(&v);
 
     if (len < EF_TABLE_MAGIC_LEN) {
-        return ef_tbl_fail(out, bad_offset, EF_ERR_TBL_TRUNCATED, len);
+        return tp_tbl_fail(out, bad_offset, EF_ERR_TBL_TRUNCATED, len);
     }
     for (i = 0; i < EF_TABLE_MAGIC_LEN; i++) {
         if (b[i] != ef_tbl_magic[i]) {
-            return ef_tbl_fail(out, bad_offset, EF_ERR_TBL_MAGIC, EF_OFF_MAGIC);
+            return tp_tbl_fail(out, bad_offset, EF_ERR_TBL_MAGIC, EF_OFF_MAGIC);
         }
     }
     if (len < EF_TABLE_HEADER_SIZE) {
-        return ef_tbl_fail(out, bad_offset, EF_ERR_TBL_TRUNCATED, len);
+        return tp_tbl_fail(out, bad_offset, EF_ERR_TBL_TRUNCATED, len);
     }
-    if (ef_rd16(b + EF_OFF_VERSION) != EF_TABLE_VERSION) {
-        return ef_tbl_fail(out, bad_offset, EF_ERR_TBL_VERSION, EF_OFF_VERSION);
+    if (tp_rd16(b + EF_OFF_VERSION) != EF_TABLE_VERSION) {
+        return tp_tbl_fail(out, bad_offset, EF_ERR_TBL_VERSION, EF_OFF_VERSION);
     }
-    if (ef_rd16(b + EF_OFF_HSIZE) != EF_TABLE_HEADER_SIZE) {
-        return ef_tbl_fail(out, bad_offset, EF_ERR_TBL_HEADER, EF_OFF_HSIZE);
+    if (tp_rd16(b + EF_OFF_HSIZE) != EF_TABLE_HEADER_SIZE) {
+        return tp_tbl_fail(out, bad_offset, EF_ERR_TBL_HEADER, EF_OFF_HSIZE);
     }
-    if (ef_rd16(b + EF_OFF_RESERVED0) != 0u) {
-        return ef_tbl_fail(out, bad_offset, EF_ERR_TBL_HEADER, EF_OFF_RESERVED0);
+    if (tp_rd16(b + EF_OFF_RESERVED0) != 0u) {
+        return tp_tbl_fail(out, bad_offset, EF_ERR_TBL_HEADER, EF_OFF_RESERVED0);
     }
-    if (ef_rd32(b + EF_OFF_RESERVED1) != 0u) {
-        return ef_tbl_fail(out, bad_offset, EF_ERR_TBL_HEADER, EF_OFF_RESERVED1);
+    if (tp_rd32(b + EF_OFF_RESERVED1) != 0u) {
+        return tp_tbl_fail(out, bad_offset, EF_ERR_TBL_HEADER, EF_OFF_RESERVED1);
     }
-    kind = ef_rd16(b + EF_OFF_KIND);
+    kind = tp_rd16(b + EF_OFF_KIND);
     if (kind != EF_TABLE_G1_CUBIC && kind != EF_TABLE_G2_QUINTIC) {
-        return ef_tbl_fail(out, bad_offset, EF_ERR_TBL_KIND, EF_OFF_KIND);
+        return tp_tbl_fail(out, bad_offset, EF_ERR_TBL_KIND, EF_OFF_KIND);
     }
-    if (ef_rd16(b + EF_OFF_VTYPE) != EF_TABLE_F32) {
-        return ef_tbl_fail(out, bad_offset, EF_ERR_TBL_VALUE_TYPE, EF_OFF_VTYPE);
+    if (tp_rd16(b + EF_OFF_VTYPE) != EF_TABLE_F32) {
+        return tp_tbl_fail(out, bad_offset, EF_ERR_TBL_VALUE_TYPE, EF_OFF_VTYPE);
     }
     naxes = b[EF_OFF_NAXES];
     ndof = b[EF_OFF_NDOF];
     if (naxes != (kind == EF_TABLE_G1_CUBIC ? 2u : 4u)) {
-        return ef_tbl_fail(out, bad_offset, EF_ERR_TBL_SHAPE, EF_OFF_NAXES);
+        return tp_tbl_fail(out, bad_offset, EF_ERR_TBL_SHAPE, EF_OFF_NAXES);
     }
     if (ndof != (kind == EF_TABLE_G1_CUBIC ? 2u : 4u)) {
-        return ef_tbl_fail(out, bad_offset, EF_ERR_TBL_SHAPE, EF_OFF_NDOF);
+        return tp_tbl_fail(out, bad_offset, EF_ERR_TBL_SHAPE, EF_OFF_NDOF);
     }
-    sym = ef_rd16(b + EF_OFF_SYMMETRY);
+    sym = tp_rd16(b + EF_OFF_SYMMETRY);
     if (sym > EF_SYM_G2_MIRROR || (sym == EF_SYM_G1_FOLD && kind != EF_TABLE_G1_CUBIC) ||
         (sym == EF_SYM_G2_MIRROR && kind != EF_TABLE_G2_QUINTIC)) {
-        return ef_tbl_fail(out, bad_offset, EF_ERR_TBL_SYMMETRY, EF_OFF_SYMMETRY);
+        return tp_tbl_fail(out, bad_offset, EF_ERR_TBL_SYMMETRY, EF_OFF_SYMMETRY);
     }
-    if (ef_rd16(b + EF_OFF_FUNCTIONAL) != EF_FUNCTIONAL_CONSTANT_SPEED) {
-        return ef_tbl_fail(out, bad_offset, EF_ERR_TBL_FUNCTIONAL, EF_OFF_FUNCTIONAL);
+    if (tp_rd16(b + EF_OFF_FUNCTIONAL) != EF_FUNCTIONAL_CONSTANT_SPEED) {
+        return tp_tbl_fail(out, bad_offset, EF_ERR_TBL_FUNCTIONAL, EF_OFF_FUNCTIONAL);
     }
-    if (ef_rd16(b + EF_OFF_QUAD) != EF_QUAD_GAUSS_LEGENDRE) {
-        return ef_tbl_fail(out, bad_offset, EF_ERR_TBL_FUNCTIONAL, EF_OFF_QUAD);
+    if (tp_rd16(b + EF_OFF_QUAD) != EF_QUAD_GAUSS_LEGENDRE) {
+        return tp_tbl_fail(out, bad_offset, EF_ERR_TBL_FUNCTIONAL, EF_OFF_QUAD);
     }
-    v.quad_nodes = ef_rd16(b + EF_OFF_QUAD_NODES);
+    v.quad_nodes = tp_rd16(b + EF_OFF_QUAD_NODES);
     if (v.quad_nodes < 1u || v.quad_nodes > 64u) {
-        return ef_tbl_fail(out, bad_offset, EF_ERR_TBL_FUNCTIONAL, EF_OFF_QUAD_NODES);
+        return tp_tbl_fail(out, bad_offset, EF_ERR_TBL_FUNCTIONAL, EF_OFF_QUAD_NODES);
     }
 
     product = 1;
     stride = 1;
     for (i = 0; i < EF_TABLE_MAX_AXES; i++) {
         if (i < naxes) {
-            rc = ef_tbl_parse_axis(b, kind, sym, i, &v.axis[i], &off);
+            rc = tp_tbl_parse_axis(b, kind, sym, i, &v.axis[i], &off);
             if (rc != EF_OK) {
-                return ef_tbl_fail(out, bad_offset, rc, off);
+                return tp_tbl_fail(out, bad_offset, rc, off);
             }
             v.axis[i].stride = stride;
             product *= v.axis[i].nodes; /* <= 4096^4 = 2^48: no overflow in 64 bits */
@@ -432,30 +432,30 @@ int ef_table_parse(const void *blob, uint32_t len, ef_table_t *out, uint32_t *ba
              * below before the view is used; the cast keeps the arithmetic defined. */
             stride = (uint32_t)(product & 0xFFFFFFFFu);
         } else {
-            rc = ef_tbl_unused_axis(b, i, &off);
+            rc = tp_tbl_unused_axis(b, i, &off);
             if (rc != EF_OK) {
-                return ef_tbl_fail(out, bad_offset, rc, off);
+                return tp_tbl_fail(out, bad_offset, rc, off);
             }
         }
     }
-    nodes = ef_rd32(b + EF_OFF_NODES);
+    nodes = tp_rd32(b + EF_OFF_NODES);
     if (product != (uint64_t)nodes) {
-        return ef_tbl_fail(out, bad_offset, EF_ERR_TBL_SHAPE, EF_OFF_NODES);
+        return tp_tbl_fail(out, bad_offset, EF_ERR_TBL_SHAPE, EF_OFF_NODES);
     }
     if (nodes > EF_TABLE_MAX_NODES) {
-        return ef_tbl_fail(out, bad_offset, EF_ERR_TBL_SIZE, EF_OFF_NODES);
+        return tp_tbl_fail(out, bad_offset, EF_ERR_TBL_SIZE, EF_OFF_NODES);
     }
-    rc = ef_tbl_parse_region(b, sym, &off);
+    rc = tp_tbl_parse_region(b, sym, &off);
     if (rc != EF_OK) {
-        return ef_tbl_fail(out, bad_offset, rc, off);
+        return tp_tbl_fail(out, bad_offset, rc, off);
     }
-    rc = ef_tbl_parse_bounds(b, kind, &v, &off);
+    rc = tp_tbl_parse_bounds(b, kind, &v, &off);
     if (rc != EF_OK) {
-        return ef_tbl_fail(out, bad_offset, rc, off);
+        return tp_tbl_fail(out, bad_offset, rc, off);
     }
-    prov_len = ef_rd32(b + EF_OFF_PROV_LEN);
+    prov_len = tp_rd32(b + EF_OFF_PROV_LEN);
     if (prov_len > EF_TABLE_MAX_PROVENANCE) {
-        return ef_tbl_fail(out, bad_offset, EF_ERR_TBL_PROVENANCE, EF_OFF_PROV_LEN);
+        return tp_tbl_fail(out, bad_offset, EF_ERR_TBL_PROVENANCE, EF_OFF_PROV_LEN);
     }
 
     /* All terms are bounded (1 KiB provenance, 2^22 x 4 x 4 data), so 64-bit sums are
@@ -464,28 +464,28 @@ int ef_table_parse(const void *blob, uint32_t len, ef_table_t *out, uint32_t *ba
     data_off = (uint64_t)EF_TABLE_HEADER_SIZE + prov_pad;
     total = data_off + 4u * (uint64_t)nodes * ndof + 4u;
     if ((uint64_t)len < total) {
-        return ef_tbl_fail(out, bad_offset, EF_ERR_TBL_TRUNCATED, len);
+        return tp_tbl_fail(out, bad_offset, EF_ERR_TBL_TRUNCATED, len);
     }
     if ((uint64_t)len > total) {
-        return ef_tbl_fail(out, bad_offset, EF_ERR_TBL_SIZE, (uint32_t)total);
+        return tp_tbl_fail(out, bad_offset, EF_ERR_TBL_SIZE, (uint32_t)total);
     }
     crc_at = len - 4u;
-    if (ef_crc32(0, b, crc_at) != ef_rd32(b + crc_at)) {
-        return ef_tbl_fail(out, bad_offset, EF_ERR_TBL_CRC, crc_at);
+    if (ef_crc32(0, b, crc_at) != tp_rd32(b + crc_at)) {
+        return tp_tbl_fail(out, bad_offset, EF_ERR_TBL_CRC, crc_at);
     }
     for (i = 0; i < prov_pad; i++) {
         const uint8_t c = b[EF_TABLE_HEADER_SIZE + i];
         const int ok = i < prov_len ? (c >= 0x20u && c <= 0x7Eu) : c == 0u;
         if (!ok) {
-            return ef_tbl_fail(out, bad_offset, EF_ERR_TBL_PROVENANCE, EF_TABLE_HEADER_SIZE + i);
+            return tp_tbl_fail(out, bad_offset, EF_ERR_TBL_PROVENANCE, EF_TABLE_HEADER_SIZE + i);
         }
     }
     /* data_off is a multiple of 8 and blob 4-aligned, so the floats are aligned; going
      * through void* states that the alignment was checked. */
     v.data = (const float *)(const void *)(b + data_off);
-    bad = ef_tbl_bad_value(v.data, nodes * ndof, kind, b);
+    bad = tp_tbl_bad_value(v.data, nodes * ndof, kind, b);
     if (bad >= 0) {
-        return ef_tbl_fail(out, bad_offset, EF_ERR_TBL_VALUE,
+        return tp_tbl_fail(out, bad_offset, EF_ERR_TBL_VALUE,
                            (uint32_t)(data_off + 4u * (uint64_t)bad));
     }
 
@@ -501,13 +501,13 @@ int ef_table_parse(const void *blob, uint32_t len, ef_table_t *out, uint32_t *ba
 }
 
 /* Bound on |axis bound| for the float view: the parser's limit plus rounding slack. */
-static int ef_tbl_check_axis(const ef_table_t *t, unsigned i)
+static int tp_tbl_check_axis(const ef_table_t *t, unsigned i)
 {
     const ef_table_axis_t *ax = &t->axis[i];
-    const double lim = ef_tbl_axis_limit(t->kind, i) + EF_TBL_CHECK_SLACK;
+    const double lim = tp_tbl_axis_limit(t->kind, i) + EF_TBL_CHECK_SLACK;
     double inv;
 
-    if (!ef_finite32(ax->lo) || !ef_finite32(ax->hi) || !ef_finite32(ax->inv_step) ||
+    if (!tp_finite32(ax->lo) || !tp_finite32(ax->hi) || !tp_finite32(ax->inv_step) ||
         !(ax->hi > ax->lo)) {
         return EF_ERR_TBL_AXIS;
     }
@@ -518,8 +518,8 @@ static int ef_tbl_check_axis(const ef_table_t *t, unsigned i)
         return EF_ERR_TBL_AXIS;
     }
     /* A stale inv_step would make the lookup index past the last node. */
-    inv = ef_tbl_inv_step(ax->nodes, ax->lo, ax->hi);
-    if (!(ef_abs64((double)ax->inv_step - inv) <= EF_TBL_CHECK_INV_REL * inv)) {
+    inv = tp_tbl_inv_step(ax->nodes, ax->lo, ax->hi);
+    if (!(tp_abs64((double)ax->inv_step - inv) <= EF_TBL_CHECK_INV_REL * inv)) {
         return EF_ERR_TBL_AXIS;
     }
     if ((ax->flags & ~EF_AXIS_PERIODIC) != 0u) {
@@ -529,7 +529,7 @@ static int ef_tbl_check_axis(const ef_table_t *t, unsigned i)
         if (t->kind != EF_TABLE_G1_CUBIC || t->symmetry != EF_SYM_NONE) {
             return EF_ERR_TBL_AXIS;
         }
-        if (ef_abs64(((double)ax->hi - (double)ax->lo) - EF_TBL_2PI) > EF_TBL_CHECK_SLACK) {
+        if (tp_abs64(((double)ax->hi - (double)ax->lo) - EF_TBL_2PI) > EF_TBL_CHECK_SLACK) {
             return EF_ERR_TBL_AXIS;
         }
     }
@@ -569,7 +569,7 @@ int ef_table_check(const ef_table_t *tbl)
             }
             continue;
         }
-        rc = ef_tbl_check_axis(tbl, i);
+        rc = tp_tbl_check_axis(tbl, i);
         if (rc != EF_OK) {
             return rc;
         }
@@ -585,7 +585,7 @@ int ef_table_check(const ef_table_t *tbl)
         const float got[4] = {tbl->axis[0].lo, tbl->axis[0].hi, tbl->axis[1].lo, tbl->axis[1].hi};
         const double want_b[4] = {0.0, EF_TBL_PI / 2.0, 0.0, EF_TBL_PI};
         for (i = 0; i < 4u; i++) {
-            if (ef_abs64((double)got[i] - want_b[i]) > EF_TBL_FOLD_TOL + EF_TBL_CHECK_SLACK) {
+            if (tp_abs64((double)got[i] - want_b[i]) > EF_TBL_FOLD_TOL + EF_TBL_CHECK_SLACK) {
                 return EF_ERR_TBL_SYMMETRY;
             }
         }

@@ -57,7 +57,7 @@ int ef_file_read(const char *path, size_t max, uint8_t **buf, size_t *len, ef_ms
 }
 
 /* write(2) until done, retrying interrupted and short writes. */
-static int ef_write_all(int fd, const uint8_t *p, size_t n)
+static int fil_write_all(int fd, const uint8_t *p, size_t n)
 {
     while (n > 0) {
         ssize_t w = write(fd, p, n);
@@ -72,7 +72,7 @@ static int ef_write_all(int fd, const uint8_t *p, size_t n)
 }
 
 /* The directory part of path as a new string ("." when there is none). */
-static char *ef_dir_of(const char *path)
+static char *fil_dir_of(const char *path)
 {
     const char *slash = strrchr(path, '/');
     if (!slash)
@@ -86,7 +86,7 @@ static char *ef_dir_of(const char *path)
  * weakens durability, never atomicity, so it is not an error. */
 void ef_file_sync_dir(const char *path)
 {
-    char *dir = ef_dir_of(path);
+    char *dir = fil_dir_of(path);
     if (!dir)
         return;
     int fd = open(dir, O_RDONLY | O_CLOEXEC);
@@ -116,7 +116,7 @@ int ef_file_write_atomic(const char *path, const uint8_t *buf, size_t len, ef_ms
         err = errno;
         rc = ef_fail(m, EF_ERR_IO, "%s: cannot create temporary file %s: %s", path, tmp,
                      strerror(err));
-    } else if (ef_write_all(fd, buf, len) != 0 || fsync(fd) != 0) {
+    } else if (fil_write_all(fd, buf, len) != 0 || fsync(fd) != 0) {
         err = errno;
         (void)close(fd);
         (void)unlink(tmp);
@@ -144,7 +144,7 @@ int ef_file_check_writable(const char *path, const char *what, ef_msg_t *m)
         return ef_fail(m, EF_ERR_ARG, "%s: empty path", what);
     if (stat(path, &st) == 0 && S_ISDIR(st.st_mode))
         return ef_fail(m, EF_ERR_IO, "%s %s: is a directory", what, path);
-    char *dir = ef_dir_of(path);
+    char *dir = fil_dir_of(path);
     if (!dir)
         return ef_fail(m, EF_ERR_NOMEM, "%s: out of memory", path);
     int rc = EF_OK;

@@ -33,7 +33,7 @@ double ef_mb_now(void)
 }
 
 /* Sleep for sec seconds (short waits between polls). */
-static void mb_sleep(double sec)
+static void mbm_sleep(double sec)
 {
     struct timespec ts = {(time_t)sec, (long)((sec - floor(sec)) * 1e9)};
     while (nanosleep(&ts, &ts) == -1 && errno == EINTR)
@@ -107,7 +107,7 @@ int ef_mb_url_parse(const char *url, ef_mb_cfg_t *c, ef_msg_t *m)
 }
 
 /* Name of a Modbus exception code. */
-static const char *mb_exc_name(int code)
+static const char *mbm_exc_name(int code)
 {
     switch (code) {
     case 1:
@@ -134,7 +134,7 @@ static const char *mb_exc_name(int code)
 }
 
 /* Name of a drive fault code. */
-static const char *mb_fault_name(int code)
+static const char *mbm_fault_name(int code)
 {
     switch (code) {
     case EF_DRV_FAULT_NONE:
@@ -155,7 +155,7 @@ static const char *mb_fault_name(int code)
 }
 
 /* Drop the connection (a fresh one carries no stale replies). */
-static void mb_disconnect(ef_mb_master_t *ms)
+static void mbm_disconnect(ef_mb_master_t *ms)
 {
     if (ms->connected)
         modbus_close(ms->ctx);
@@ -163,7 +163,7 @@ static void mb_disconnect(ef_mb_master_t *ms)
 }
 
 /* Connect once; after a reconnect the session number must be the one seen at open. */
-static int mb_connect(ef_mb_master_t *ms, ef_msg_t *m)
+static int mbm_connect(ef_mb_master_t *ms, ef_msg_t *m)
 {
     double until = ef_mb_now() + ms->c.reconnect_s;
     int again = ms->session != 0;
@@ -176,7 +176,7 @@ static int mb_connect(ef_mb_master_t *ms, ef_msg_t *m)
                            ms->c.rtu ? " slave " : ":", ms->c.rtu ? ms->c.slave : ms->c.port,
                            again ? "re" : "", modbus_strerror(errno));
         }
-        mb_sleep(0.02);
+        mbm_sleep(0.02);
     }
     ms->connected = 1;
     if (again) {
@@ -197,8 +197,8 @@ static int mb_connect(ef_mb_master_t *ms, ef_msg_t *m)
  * retried on a fresh connection (TCP) or after a flush (RTU); an exception reply is not
  * retried and its code goes to *exc. Slot writes may be retried safely: sequence numbers
  * make a repeated slot a duplicate the drive acknowledges without executing. */
-static int mb_xfer(ef_mb_master_t *ms, int write, uint16_t addr, int n, uint16_t *regs,
-                   const char *what, int *exc, ef_msg_t *m)
+static int mbm_xfer(ef_mb_master_t *ms, int write, uint16_t addr, int n, uint16_t *regs,
+                    const char *what, int *exc, ef_msg_t *m)
 {
     *exc = 0;
     if (ms->lost && write)
@@ -209,7 +209,7 @@ static int mb_xfer(ef_mb_master_t *ms, int write, uint16_t addr, int n, uint16_t
     int last_errno = 0;
     for (int attempt = 0; attempt <= ms->c.retries; attempt++) {
         if (!ms->connected) {
-            int rc = mb_connect(ms, m);
+            int rc = mbm_connect(ms, m);
             if (rc != EF_OK)
                 return rc;
         }
@@ -225,17 +225,17 @@ static int mb_xfer(ef_mb_master_t *ms, int write, uint16_t addr, int n, uint16_t
         if (e > MODBUS_ENOBASE && e <= MODBUS_ENOBASE + MODBUS_EXCEPTION_GATEWAY_TARGET) {
             *exc = e - MODBUS_ENOBASE;
             return ef_fail(m, EF_ERR_PROTO, "%s: drive answered exception %d (%s)", what, *exc,
-                           mb_exc_name(*exc));
+                           mbm_exc_name(*exc));
         }
         if (e == ETIMEDOUT)
             ms->io.timeouts++;
         if (ms->c.rtu && (e == ETIMEDOUT || e == EMBBADCRC || e == EMBBADDATA || e == EMBBADSLAVE ||
                           e == EMBMDATA || e == EMBBADEXC)) {
             /* A late or torn frame may still be on the line: let it pass, then flush. */
-            mb_sleep(0.005);
+            mbm_sleep(0.005);
             modbus_flush(ms->ctx);
         } else {
-            mb_disconnect(ms);
+            mbm_disconnect(ms);
         }
     }
     if (last_errno == ETIMEDOUT)
@@ -246,7 +246,7 @@ static int mb_xfer(ef_mb_master_t *ms, int write, uint16_t addr, int n, uint16_t
 }
 
 /* The flow-control fields, from registers read starting at address base. */
-static void mb_parse_flow(ef_mb_status_t *s, const uint16_t *r, int base)
+static void mbm_parse_flow(ef_mb_status_t *s, const uint16_t *r, int base)
 {
     s->status = r[EF_MB_REG_STATUS - base];
     s->state = r[EF_MB_REG_STATE - base];
@@ -259,11 +259,11 @@ static void mb_parse_flow(ef_mb_status_t *s, const uint16_t *r, int base)
 }
 
 /* Read the identification, control and status blocks in one transaction. */
-static int mb_poll(ef_mb_master_t *ms, ef_msg_t *m)
+static int mbm_poll(ef_mb_master_t *ms, ef_msg_t *m)
 {
     uint16_t r[0x40];
     int exc;
-    int rc = mb_xfer(ms, 0, 0, 0x40, r, "read status", &exc, m);
+    int rc = mbm_xfer(ms, 0, 0, 0x40, r, "read status", &exc, m);
     ms->io.polls++;
     ms->last_poll = ms->last_full = ef_mb_now();
     if (rc != EF_OK)
@@ -271,7 +271,7 @@ static int mb_poll(ef_mb_master_t *ms, ef_msg_t *m)
     ef_mb_status_t *s = &ms->st;
     s->session = r[EF_MB_REG_SESSION];
     s->slots = r[EF_MB_REG_SLOTS];
-    mb_parse_flow(s, r, 0);
+    mbm_parse_flow(s, r, 0);
     s->done_count = ef_mb_get_u32(r + EF_MB_REG_DONE_COUNT);
     s->rejected = r[EF_MB_REG_REJECTED];
     s->duplicates = r[EF_MB_REG_DUPLICATES];
@@ -293,21 +293,21 @@ static int mb_poll(ef_mb_master_t *ms, ef_msg_t *m)
 /* Flow-control read: the drive's state and ring counters only (14 registers; on an RTU
  * line about a quarter of the time of the whole block), with the whole block, session
  * included, at least every 100 ms. A restarted drive also shows up here: it is DISABLED
- * with an empty ring, which mb_check_fault() refuses. */
-static int mb_poll_flow(ef_mb_master_t *ms, ef_msg_t *m)
+ * with an empty ring, which mbm_check_fault() refuses. */
+static int mbm_poll_flow(ef_mb_master_t *ms, ef_msg_t *m)
 {
     if (ef_mb_now() - ms->last_full > 0.1)
-        return mb_poll(ms, m);
+        return mbm_poll(ms, m);
     uint16_t r[EF_MB_REG_TIME_MS + 2 - EF_MB_REG_STATUS];
     int exc;
     int rc =
-        mb_xfer(ms, 0, EF_MB_REG_STATUS, (int)(sizeof r / sizeof r[0]), r, "read status", &exc, m);
+        mbm_xfer(ms, 0, EF_MB_REG_STATUS, (int)(sizeof r / sizeof r[0]), r, "read status", &exc, m);
     ms->io.polls++;
     ms->last_poll = ef_mb_now();
     if (rc != EF_OK)
         return rc;
     ef_mb_status_t *s = &ms->st;
-    mb_parse_flow(s, r, EF_MB_REG_STATUS);
+    mbm_parse_flow(s, r, EF_MB_REG_STATUS);
     /* Executed count: every segment before the one executing (or all, at rest). */
     if (s->done_seq != EF_MB_DONE_NONE)
         s->done_count = s->done_seq + 1u;
@@ -315,14 +315,15 @@ static int mb_poll_flow(ef_mb_master_t *ms, ef_msg_t *m)
 }
 
 /* A fault reported in the last status ends the stream; say where it happened. */
-static int mb_check_fault(ef_mb_master_t *ms, ef_msg_t *m)
+static int mbm_check_fault(ef_mb_master_t *ms, ef_msg_t *m)
 {
     const ef_mb_status_t *s = &ms->st;
     if (s->status & EF_MB_ST_FAULT || s->state == EF_DRV_FAULT)
         return ef_fail(m, EF_ERR_DRIVE,
                        "drive fault %u (%s) at segment %u: %u of %u segments executed; the "
                        "drive stopped under control",
-                       s->fault, mb_fault_name(s->fault), s->exec_seq, s->done_count, ms->next_seq);
+                       s->fault, mbm_fault_name(s->fault), s->exec_seq, s->done_count,
+                       ms->next_seq);
     if (ms->begun && !ms->started && s->state != EF_DRV_ENABLED)
         return ef_fail(m, EF_ERR_DRIVE, "drive left ENABLED (state %u) before the start", s->state);
     if (ms->started && ms->mode == EF_MB_MODE_SEGMENT && s->state != EF_DRV_RUNNING)
@@ -333,17 +334,17 @@ static int mb_check_fault(ef_mb_master_t *ms, ef_msg_t *m)
 }
 
 /* A flow-control read that also fails on a fault or an unexpected state. */
-static int mb_poll_checked(ef_mb_master_t *ms, ef_msg_t *m)
+static int mbm_poll_checked(ef_mb_master_t *ms, ef_msg_t *m)
 {
-    int rc = mb_poll_flow(ms, m);
-    return rc == EF_OK ? mb_check_fault(ms, m) : rc;
+    int rc = mbm_poll_flow(ms, m);
+    return rc == EF_OK ? mbm_check_fault(ms, m) : rc;
 }
 
 /* Write the control word. */
-static int mb_control(ef_mb_master_t *ms, uint16_t word, const char *what, ef_msg_t *m)
+static int mbm_control(ef_mb_master_t *ms, uint16_t word, const char *what, ef_msg_t *m)
 {
     int exc;
-    return mb_xfer(ms, 1, EF_MB_REG_CONTROL, 1, &word, what, &exc, m);
+    return mbm_xfer(ms, 1, EF_MB_REG_CONTROL, 1, &word, what, &exc, m);
 }
 
 /* Connect and check that this is an evenfeed drive with a map we speak. */
@@ -368,11 +369,11 @@ int ef_mb_open(const ef_mb_cfg_t *c, ef_mb_master_t **out, ef_msg_t *m)
     modbus_set_slave(ms->ctx, c->slave);
     uint32_t sec = (uint32_t)c->timeout_s;
     modbus_set_response_timeout(ms->ctx, sec, (uint32_t)((c->timeout_s - sec) * 1e6));
-    int rc = mb_connect(ms, m);
+    int rc = mbm_connect(ms, m);
     uint16_t id[7];
     int exc;
     if (rc == EF_OK)
-        rc = mb_xfer(ms, 0, 0, 7, id, "read identification", &exc, m);
+        rc = mbm_xfer(ms, 0, 0, 7, id, "read identification", &exc, m);
     if (rc == EF_OK &&
         (id[EF_MB_REG_MAGIC] != EF_MB_MAGIC || id[EF_MB_REG_VERSION] != EF_MB_MAP_VERSION))
         rc = ef_fail(m, EF_ERR_PROTO,
@@ -400,7 +401,7 @@ void ef_mb_close(ef_mb_master_t *ms)
 {
     if (!ms)
         return;
-    mb_disconnect(ms);
+    mbm_disconnect(ms);
     modbus_free(ms->ctx);
     free(ms);
 }
@@ -410,7 +411,7 @@ int ef_mb_read_status(ef_mb_master_t *ms, ef_mb_status_t *st, ef_msg_t *m)
 {
     if (!ms)
         return ef_fail(m, EF_ERR_ARG, "no master");
-    int rc = mb_poll(ms, m);
+    int rc = mbm_poll(ms, m);
     if (st)
         *st = ms->st;
     return rc;
@@ -421,24 +422,24 @@ int ef_mb_begin(ef_mb_master_t *ms, int mode, ef_msg_t *m)
 {
     if (!ms || (mode != EF_MB_MODE_SEGMENT && mode != EF_MB_MODE_DIRECT))
         return ef_fail(m, EF_ERR_ARG, "mode must be segment or direct");
-    int rc = mb_poll(ms, m);
+    int rc = mbm_poll(ms, m);
     if (rc != EF_OK)
         return rc;
     if (ms->st.state == EF_DRV_FAULT)
         return ef_fail(m, EF_ERR_DRIVE,
                        "drive is in fault %u (%s): not enabling it; reset the fault first "
                        "(--fault-reset)",
-                       ms->st.fault, mb_fault_name(ms->st.fault));
+                       ms->st.fault, mbm_fault_name(ms->st.fault));
     if (ms->st.state != EF_DRV_DISABLED && ms->st.state != EF_DRV_ENABLED)
         return ef_fail(m, EF_ERR_DRIVE, "drive is busy (state %u): another master is streaming?",
                        ms->st.state);
     int exc;
     uint16_t cfg[2] = {(uint16_t)mode, ms->c.watchdog_ms};
-    rc = mb_xfer(ms, 1, EF_MB_REG_MODE, 2, cfg, "write mode and watchdog", &exc, m);
+    rc = mbm_xfer(ms, 1, EF_MB_REG_MODE, 2, cfg, "write mode and watchdog", &exc, m);
     if (rc == EF_OK)
-        rc = mb_control(ms, EF_MB_CTL_CLEAR | EF_MB_CTL_ENABLE, "clear and enable", m);
+        rc = mbm_control(ms, EF_MB_CTL_CLEAR | EF_MB_CTL_ENABLE, "clear and enable", m);
     if (rc == EF_OK)
-        rc = mb_poll(ms, m);
+        rc = mbm_poll(ms, m);
     if (rc != EF_OK)
         return rc;
     if (ms->st.state != EF_DRV_ENABLED || ms->st.free != ms->slots || ms->st.next_seq != 0)
@@ -457,19 +458,19 @@ int ef_mb_begin(ef_mb_master_t *ms, int mode, ef_msg_t *m)
 }
 
 /* Start executing (segment mode). */
-static int mb_start(ef_mb_master_t *ms, ef_msg_t *m)
+static int mbm_start(ef_mb_master_t *ms, ef_msg_t *m)
 {
-    int rc = mb_control(ms, EF_MB_CTL_ENABLE | EF_MB_CTL_START, "start", m);
+    int rc = mbm_control(ms, EF_MB_CTL_ENABLE | EF_MB_CTL_START, "start", m);
     if (rc == EF_OK)
         ms->started = 1;
     return rc;
 }
 
 /* Wait for free slots: poll, and while none is free, give the drive a moment. */
-static int mb_wait_credit(ef_mb_master_t *ms, ef_msg_t *m)
+static int mbm_wait_credit(ef_mb_master_t *ms, ef_msg_t *m)
 {
     for (;;) {
-        int rc = mb_poll_checked(ms, m);
+        int rc = mbm_poll_checked(ms, m);
         if (rc != EF_OK)
             return rc;
         ms->credits = ms->st.free;
@@ -477,12 +478,12 @@ static int mb_wait_credit(ef_mb_master_t *ms, ef_msg_t *m)
             return EF_OK;
         ms->io.busy++;
         if (!ms->started) {
-            rc = mb_start(ms, m);
+            rc = mbm_start(ms, m);
             if (rc != EF_OK)
                 return rc;
             continue;
         }
-        mb_sleep(0.001);
+        mbm_sleep(0.001);
     }
 }
 
@@ -521,12 +522,12 @@ int ef_mb_send(ef_mb_master_t *ms, const ef_move_t *mv, ef_msg_t *m)
         /* Look at the drive now and then even with credit left, so a fault stops the
          * stream promptly rather than when the ring fills. */
         if (ms->credits == 0 || ef_mb_now() - ms->last_poll > 0.05) {
-            rc = mb_wait_credit(ms, m);
+            rc = mbm_wait_credit(ms, m);
             if (rc != EF_OK)
                 return rc;
         }
         int exc;
-        rc = mb_xfer(ms, 1, addr, EF_MB_SLOT_WORDS, w, what, &exc, m);
+        rc = mbm_xfer(ms, 1, addr, EF_MB_SLOT_WORDS, w, what, &exc, m);
         if (rc == EF_OK)
             break;
         if (exc == EF_MB_EX_BUSY) {
@@ -537,7 +538,7 @@ int ef_mb_send(ef_mb_master_t *ms, const ef_move_t *mv, ef_msg_t *m)
             /* Say whether the refusal came from a fault. */
             ef_msg_t why, first;
             snprintf(first.text, sizeof first.text, "%s", m ? m->text : what);
-            if (mb_poll(ms, &why) == EF_OK && mb_check_fault(ms, &why) != EF_OK)
+            if (mbm_poll(ms, &why) == EF_OK && mbm_check_fault(ms, &why) != EF_OK)
                 return ef_fail(m, EF_ERR_DRIVE, "%s; %s", first.text, why.text);
         }
         return rc;
@@ -550,7 +551,7 @@ int ef_mb_send(ef_mb_master_t *ms, const ef_move_t *mv, ef_msg_t *m)
     ms->next_seq++;
     ms->credits--;
     if (!ms->started && (ms->credits == 0 || ms->next_seq >= ms->slots))
-        return mb_start(ms, m);
+        return mbm_start(ms, m);
     return EF_OK;
 }
 
@@ -560,14 +561,14 @@ int ef_mb_drain(ef_mb_master_t *ms, ef_msg_t *m)
     if (!ms || !ms->begun)
         return ef_fail(m, EF_ERR_STATE, "drive not prepared");
     if (ms->mode == EF_MB_MODE_SEGMENT && !ms->started && ms->next_seq > 0) {
-        int rc = mb_start(ms, m);
+        int rc = mbm_start(ms, m);
         if (rc != EF_OK)
             return rc;
     }
     double progress_t = ef_mb_now();
     uint32_t last_time = 0;
     for (;;) {
-        int rc = mb_poll_checked(ms, m);
+        int rc = mbm_poll_checked(ms, m);
         if (rc != EF_OK)
             return rc;
         if (!(ms->st.status & EF_MB_ST_MOVING) &&
@@ -581,7 +582,7 @@ int ef_mb_drain(ef_mb_master_t *ms, ef_msg_t *m)
                            "drive makes no progress for 2 s at segment %u (%u of %u executed)",
                            ms->st.exec_seq, ms->st.done_count, ms->next_seq);
         }
-        mb_sleep(0.002);
+        mbm_sleep(0.002);
     }
 }
 
@@ -596,7 +597,7 @@ int ef_mb_target(ef_mb_master_t *ms, const float p[3], ef_msg_t *m)
             return ef_fail(m, EF_ERR_NONFINITE, "target axis %d is not finite", i);
         ef_mb_put_f32(w + 2 * i, p[i]);
     }
-    int exc, rc = mb_xfer(ms, 1, EF_MB_REG_TARGET, EF_MB_TARGET_WORDS, w, "write target", &exc, m);
+    int exc, rc = mbm_xfer(ms, 1, EF_MB_REG_TARGET, EF_MB_TARGET_WORDS, w, "write target", &exc, m);
     if (rc == EF_OK)
         ms->io.target_writes++;
     return rc;
@@ -607,15 +608,15 @@ int ef_mb_fault_reset(ef_mb_master_t *ms, ef_msg_t *m)
 {
     if (!ms)
         return EF_ERR_ARG;
-    int rc = mb_poll(ms, m);
+    int rc = mbm_poll(ms, m);
     if (rc != EF_OK || ms->st.state != EF_DRV_FAULT)
         return rc; /* nothing to reset */
-    rc = mb_control(ms, EF_MB_CTL_FAULT_RESET, "fault reset", m);
+    rc = mbm_control(ms, EF_MB_CTL_FAULT_RESET, "fault reset", m);
     if (rc == EF_OK)
-        rc = mb_poll(ms, m);
+        rc = mbm_poll(ms, m);
     if (rc == EF_OK && ms->st.state == EF_DRV_FAULT)
         return ef_fail(m, EF_ERR_DRIVE, "drive still in fault %u (%s) after a reset", ms->st.fault,
-                       mb_fault_name(ms->st.fault));
+                       mbm_fault_name(ms->st.fault));
     return rc;
 }
 
@@ -624,7 +625,7 @@ int ef_mb_quick_stop(ef_mb_master_t *ms, ef_msg_t *m)
 {
     if (!ms)
         return EF_ERR_ARG;
-    return mb_control(ms, EF_MB_CTL_ENABLE | EF_MB_CTL_QUICK_STOP, "quick stop", m);
+    return mbm_control(ms, EF_MB_CTL_ENABLE | EF_MB_CTL_QUICK_STOP, "quick stop", m);
 }
 
 /* Disable: a moving drive stops under control first; wait (bounded) until it is at rest. */
@@ -634,7 +635,7 @@ int ef_mb_end(ef_mb_master_t *ms, ef_msg_t *m)
         return EF_ERR_ARG;
     ms->begun = 0;
     ms->started = 0;
-    int rc = mb_control(ms, 0, "disable", m);
+    int rc = mbm_control(ms, 0, "disable", m);
     if (ms->lost)
         return rc;
     /* Wait for rest even when the disable was refused: a faulted drive is stopping on its
@@ -642,14 +643,14 @@ int ef_mb_end(ef_mb_master_t *ms, ef_msg_t *m)
     double until = ef_mb_now() + 5.0;
     for (;;) {
         ef_msg_t pm;
-        int prc = mb_poll(ms, &pm);
+        int prc = mbm_poll(ms, &pm);
         if (prc != EF_OK)
             return rc != EF_OK ? rc : ef_fail(m, prc, "%s", pm.text);
         if (!(ms->st.status & (EF_MB_ST_MOVING | EF_MB_ST_STOPPING)))
             break;
         if (ef_mb_now() > until)
             return ef_fail(m, EF_ERR_TIMEOUT, "drive still moving 5 s after being disabled");
-        mb_sleep(0.002);
+        mbm_sleep(0.002);
     }
     return rc;
 }

@@ -29,7 +29,7 @@ void ef_mb_stream_cfg_default(ef_mb_stream_cfg_t *c, const ef_table_t *g2, const
 }
 
 /* Each planned move goes to the drive as one slot. */
-static int stream_move(void *user, const ef_move_t *mv, const ef_pipe_move_info_t *mi)
+static int mbs_stream_move(void *user, const ef_move_t *mv, const ef_pipe_move_info_t *mi)
 {
     (void)mi;
     stream_t *S = user;
@@ -51,8 +51,8 @@ static int stream_move(void *user, const ef_move_t *mv, const ef_pipe_move_info_
 }
 
 /* Direct mode: every setpoint is a target, written when its time comes (real time). */
-static int stream_setpoint(void *user, double t, const ef_setpoint_t *sp,
-                           const ef_pipe_move_info_t *mi)
+static int mbs_stream_setpoint(void *user, double t, const ef_setpoint_t *sp,
+                               const ef_pipe_move_info_t *mi)
 {
     (void)mi;
     stream_t *S = user;
@@ -73,7 +73,7 @@ static int stream_setpoint(void *user, double t, const ef_setpoint_t *sp,
 }
 
 /* Events (M-codes, dwells) wait until the drive has executed everything before them. */
-static int stream_event(void *user, const ef_gcode_item_t *it)
+static int mbs_stream_event(void *user, const ef_gcode_item_t *it)
 {
     stream_t *S = user;
     (void)it;
@@ -114,14 +114,14 @@ int ef_mb_stream(ef_gcode_t *r, const ef_mb_stream_cfg_t *c, ef_mb_stream_result
     ef_pipe_cfg_t pc = c->pipe;
     ef_pipe_cb_t cb;
     memset(&cb, 0, sizeof cb);
-    cb.on_move = stream_move;
-    cb.on_event = stream_event;
+    cb.on_move = mbs_stream_move;
+    cb.on_event = mbs_stream_event;
     cb.user = &S;
     if (c->mode == EF_MB_MODE_DIRECT) {
         pc.interp_modes = EF_PIPE_INTERP_UNIFORM;
         pc.step_mode = EF_STEP_UNIFORM;
         pc.period_us = (uint32_t)lrint(1e6 / c->direct_hz);
-        cb.on_setpoint = stream_setpoint;
+        cb.on_setpoint = mbs_stream_setpoint;
     }
     double t_start = ef_mb_now();
     if (rc == EF_OK) {

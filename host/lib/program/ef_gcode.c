@@ -81,46 +81,46 @@ __attribute__((format(printf, 3, 4))) static int ef_gc_err(ef_gcode_t *r, uint32
 }
 
 /* Upper-case ASCII without the locale. */
-static char ef_gc_upper(char ch)
+static char gc_upper(char ch)
 {
     return ch >= 'a' && ch <= 'z' ? (char)(ch - 'a' + 'A') : ch;
 }
 
-static int ef_gc_is_digit(char ch)
+static int gc_is_digit(char ch)
 {
     return ch >= '0' && ch <= '9';
 }
 
-static int ef_gc_is_letter(char ch)
+static int gc_is_letter(char ch)
 {
     return ch >= 'A' && ch <= 'Z';
 }
 
 /* ---- expressions ---------------------------------------------------------------------- */
 
-static int ef_gc_value(ef_gc_line_t *L, double *out);
+static int gc_value(ef_gc_line_t *L, double *out);
 
 /* The next character, or 0 at the end of the line. */
-static char ef_gc_peek(const ef_gc_line_t *L)
+static char gc_peek(const ef_gc_line_t *L)
 {
     return L->i < L->n ? L->c[L->i] : 0;
 }
 
 /* Column of the next character (one past the last at the end of the line). */
-static uint32_t ef_gc_here(const ef_gc_line_t *L)
+static uint32_t gc_here(const ef_gc_line_t *L)
 {
     return L->i < L->n ? L->col[L->i] : L->end_col;
 }
 
 /* Does the text at the cursor start with s? */
-static int ef_gc_at(const ef_gc_line_t *L, const char *s)
+static int gc_at(const ef_gc_line_t *L, const char *s)
 {
     size_t k = strlen(s);
     return L->i + k <= L->n && memcmp(L->c + L->i, s, k) == 0;
 }
 
 /* Expression results must stay finite: NaN or infinity would poison every later position. */
-static int ef_gc_finite(ef_gc_line_t *L, double v, uint32_t col, const char *what)
+static int gc_finite(ef_gc_line_t *L, double v, uint32_t col, const char *what)
 {
     if (!isfinite(v))
         return ef_gc_err(L->r, col, "%s gives a result that is not finite", what);
@@ -128,13 +128,13 @@ static int ef_gc_finite(ef_gc_line_t *L, double v, uint32_t col, const char *wha
 }
 
 /* An unsigned decimal literal: digits with at most one point (RS274NGC has no exponent). */
-static int ef_gc_number(ef_gc_line_t *L, double *out)
+static int gc_number(ef_gc_line_t *L, double *out)
 {
     char tmp[72];
     size_t k = 0, digits = 0;
     int point = 0;
-    uint32_t col = ef_gc_here(L);
-    while (L->i < L->n && (ef_gc_is_digit(L->c[L->i]) || (L->c[L->i] == '.' && !point))) {
+    uint32_t col = gc_here(L);
+    while (L->i < L->n && (gc_is_digit(L->c[L->i]) || (L->c[L->i] == '.' && !point))) {
         if (L->c[L->i] == '.')
             point = 1;
         else
@@ -151,7 +151,7 @@ static int ef_gc_number(ef_gc_line_t *L, double *out)
 }
 
 /* Index of a named parameter, or -1. */
-static int ef_gc_named_find(const ef_gcode_t *r, const char *name)
+static int gc_named_find(const ef_gcode_t *r, const char *name)
 {
     for (int k = 0; k < r->nnamed; k++)
         if (!strcmp(r->named_key[k], name))
@@ -160,11 +160,11 @@ static int ef_gc_named_find(const ef_gcode_t *r, const char *name)
 }
 
 /* After '#': either <name> or a value giving the parameter number. */
-static int ef_gc_param_ref(ef_gc_line_t *L, int *index, char *name, uint32_t col)
+static int gc_param_ref(ef_gc_line_t *L, int *index, char *name, uint32_t col)
 {
     *index = 0;
     name[0] = 0;
-    if (ef_gc_peek(L) == '<') {
+    if (gc_peek(L) == '<') {
         size_t k = 0;
         L->i++;
         while (L->i < L->n && L->c[L->i] != '>') {
@@ -182,7 +182,7 @@ static int ef_gc_param_ref(ef_gc_line_t *L, int *index, char *name, uint32_t col
         return EF_OK;
     }
     double v;
-    int rc = ef_gc_value(L, &v);
+    int rc = gc_value(L, &v);
     if (rc)
         return rc;
     double rv = floor(v + 0.5);
@@ -202,7 +202,7 @@ static const struct {
                  {"LT", 1}, {"LE", 1}, {"AND", 0}, {"OR", 0},  {"XOR", 0}};
 
 /* Apply binary operator k; errors point at the operator. */
-static int ef_gc_apply(ef_gc_line_t *L, int k, double a, double b, uint32_t col, double *out)
+static int gc_apply(ef_gc_line_t *L, int k, double a, double b, uint32_t col, double *out)
 {
     const char *s = ef_gc_ops[k].s;
     double v;
@@ -243,37 +243,37 @@ static int ef_gc_apply(ef_gc_line_t *L, int k, double a, double b, uint32_t col,
     } else {
         v = (a != 0) != (b != 0);
     }
-    int rc = ef_gc_finite(L, v, col, s);
+    int rc = gc_finite(L, v, col, s);
     *out = v;
     return rc;
 }
 
 /* Operator at the cursor, or -1. */
-static int ef_gc_op_at(const ef_gc_line_t *L)
+static int gc_op_at(const ef_gc_line_t *L)
 {
     for (int k = 0; k < (int)(sizeof ef_gc_ops / sizeof ef_gc_ops[0]); k++)
-        if (ef_gc_at(L, ef_gc_ops[k].s))
+        if (gc_at(L, ef_gc_ops[k].s))
             return k;
     return -1;
 }
 
 /* Precedence climbing; all binary operators are left-associative (as LinuxCNC). */
-static int ef_gc_expr(ef_gc_line_t *L, int min_prec, double *out)
+static int gc_expr(ef_gc_line_t *L, int min_prec, double *out)
 {
     double lhs, rhs;
-    int rc = ef_gc_value(L, &lhs);
+    int rc = gc_value(L, &lhs);
     if (rc)
         return rc;
     for (;;) {
-        int k = ef_gc_op_at(L);
+        int k = gc_op_at(L);
         if (k < 0 || ef_gc_ops[k].prec < min_prec)
             break;
-        uint32_t col = ef_gc_here(L);
+        uint32_t col = gc_here(L);
         L->i += strlen(ef_gc_ops[k].s);
-        rc = ef_gc_expr(L, ef_gc_ops[k].prec + 1, &rhs);
+        rc = gc_expr(L, ef_gc_ops[k].prec + 1, &rhs);
         if (rc)
             return rc;
-        rc = ef_gc_apply(L, k, lhs, rhs, col, &lhs);
+        rc = gc_apply(L, k, lhs, rhs, col, &lhs);
         if (rc)
             return rc;
     }
@@ -282,17 +282,17 @@ static int ef_gc_expr(ef_gc_line_t *L, int min_prec, double *out)
 }
 
 /* '[' expression ']' with the cursor on '['. */
-static int ef_gc_bracket(ef_gc_line_t *L, double *out)
+static int gc_bracket(ef_gc_line_t *L, double *out)
 {
-    uint32_t col = ef_gc_here(L);
+    uint32_t col = gc_here(L);
     L->i++;
-    int rc = ef_gc_expr(L, 0, out);
+    int rc = gc_expr(L, 0, out);
     if (rc)
         return rc;
-    if (ef_gc_peek(L) != ']') {
+    if (gc_peek(L) != ']') {
         if (L->i >= L->n)
             return ef_gc_err(L->r, col, "unbalanced brackets: '[' not closed");
-        return ef_gc_err(L->r, ef_gc_here(L), "expected an operator or ']'");
+        return ef_gc_err(L->r, gc_here(L), "expected an operator or ']'");
     }
     L->i++;
     return EF_OK;
@@ -302,14 +302,14 @@ static int ef_gc_bracket(ef_gc_line_t *L, double *out)
 #define EF_GC_D2R (3.14159265358979323846 / 180.0)
 
 /* NAME[expr], or ATAN[y]/[x], with the cursor on the name. */
-static int ef_gc_function(ef_gc_line_t *L, double *out)
+static int gc_function(ef_gc_line_t *L, double *out)
 {
     static const char *names[] = {"ATAN", "ABS", "ACOS",  "ASIN", "COS",  "EXP", "FIX",
                                   "FUP",  "LN",  "ROUND", "SIN",  "SQRT", "TAN"};
-    uint32_t col = ef_gc_here(L);
+    uint32_t col = gc_here(L);
     int f = -1;
     for (int k = 0; k < (int)(sizeof names / sizeof names[0]); k++)
-        if (ef_gc_at(L, names[k]) && L->i + strlen(names[k]) < L->n &&
+        if (gc_at(L, names[k]) && L->i + strlen(names[k]) < L->n &&
             L->c[L->i + strlen(names[k])] == '[') {
             f = k;
             break;
@@ -318,15 +318,15 @@ static int ef_gc_function(ef_gc_line_t *L, double *out)
         return ef_gc_err(L->r, col, "expected a number, parameter, '[' or function");
     L->i += strlen(names[f]);
     double a, b = 0, v;
-    int rc = ef_gc_bracket(L, &a);
+    int rc = gc_bracket(L, &a);
     if (rc)
         return rc;
     switch (f) {
     case 0:
-        if (ef_gc_peek(L) != '/' || L->i + 1 >= L->n || L->c[L->i + 1] != '[')
-            return ef_gc_err(L->r, ef_gc_here(L), "ATAN needs the form ATAN[y]/[x]");
+        if (gc_peek(L) != '/' || L->i + 1 >= L->n || L->c[L->i + 1] != '[')
+            return ef_gc_err(L->r, gc_here(L), "ATAN needs the form ATAN[y]/[x]");
         L->i++;
-        if ((rc = ef_gc_bracket(L, &b)) != 0)
+        if ((rc = gc_bracket(L, &b)) != 0)
             return rc;
         v = atan2(a, b) / EF_GC_D2R;
         break;
@@ -372,42 +372,42 @@ static int ef_gc_function(ef_gc_line_t *L, double *out)
         break;
     }
     *out = v;
-    return ef_gc_finite(L, v, col, names[f]);
+    return gc_finite(L, v, col, names[f]);
 }
 
 /* A real value: number, parameter, bracketed expression, function, with optional signs. */
-static int ef_gc_value(ef_gc_line_t *L, double *out)
+static int gc_value(ef_gc_line_t *L, double *out)
 {
-    char ch = ef_gc_peek(L);
-    uint32_t col = ef_gc_here(L);
+    char ch = gc_peek(L);
+    uint32_t col = gc_here(L);
     int rc;
     if (++L->depth > EF_GC_MAX_DEPTH)
         return ef_gc_err(L->r, col, "expression nested too deeply");
     if (ch == '-' || ch == '+') {
         L->i++;
-        rc = ef_gc_value(L, out);
+        rc = gc_value(L, out);
         if (ch == '-')
             *out = -*out;
     } else if (ch == '[') {
-        rc = ef_gc_bracket(L, out);
+        rc = gc_bracket(L, out);
     } else if (ch == '#') {
         int index;
         char name[EF_GCODE_NAME_MAX + 1];
         L->i++;
-        rc = ef_gc_param_ref(L, &index, name, col);
+        rc = gc_param_ref(L, &index, name, col);
         if (!rc && index) {
             *out = L->r->param[index];
         } else if (!rc) {
-            int k = ef_gc_named_find(L->r, name);
+            int k = gc_named_find(L->r, name);
             if (k < 0)
                 rc = ef_gc_err(L->r, col, "parameter #<%s> is not defined", name);
             else
                 *out = L->r->named_val[k];
         }
-    } else if (ef_gc_is_digit(ch) || ch == '.') {
-        rc = ef_gc_number(L, out);
-    } else if (ef_gc_is_letter(ch)) {
-        rc = ef_gc_function(L, out);
+    } else if (gc_is_digit(ch) || ch == '.') {
+        rc = gc_number(L, out);
+    } else if (gc_is_letter(ch)) {
+        rc = gc_function(L, out);
     } else if (ch == 0) {
         rc = ef_gc_err(L->r, col, "value missing at end of line");
     } else {
@@ -420,7 +420,7 @@ static int ef_gc_value(ef_gc_line_t *L, double *out)
 /* ---- lines ---------------------------------------------------------------------------- */
 
 /* Strip whitespace and comments, upper-case the rest, keep each character's column. */
-static int ef_gc_compact(ef_gcode_t *r, const char *s, size_t n, ef_gc_line_t *L)
+static int gc_compact(ef_gcode_t *r, const char *s, size_t n, ef_gc_line_t *L)
 {
     L->n = 0;
     L->i = 0;
@@ -449,7 +449,7 @@ static int ef_gc_compact(ef_gcode_t *r, const char *s, size_t n, ef_gc_line_t *L
         }
         if ((unsigned char)ch < 0x21 || (unsigned char)ch > 0x7e)
             return ef_gc_err(r, col, "unexpected byte 0x%02x", (unsigned)(unsigned char)ch);
-        L->c[L->n] = ef_gc_upper(ch);
+        L->c[L->n] = gc_upper(ch);
         L->col[L->n] = col;
         L->n++;
     }
@@ -458,7 +458,7 @@ static int ef_gc_compact(ef_gcode_t *r, const char *s, size_t n, ef_gc_line_t *L
 }
 
 /* G or M value: an integer or one decimal (G59.1, G90.1); anything else is malformed. */
-static int ef_gc_code(ef_gc_line_t *L, char letter, double v, uint32_t col, int *code)
+static int gc_code(ef_gc_line_t *L, char letter, double v, uint32_t col, int *code)
 {
     double t = v * 10.0, rt = floor(t + 0.5);
     if (fabs(t - rt) > 1e-4 || rt < 0 || rt > 99990)
@@ -468,7 +468,7 @@ static int ef_gc_code(ef_gc_line_t *L, char letter, double v, uint32_t col, int 
 }
 
 /* Read the words and assignments of a compacted line. */
-static int ef_gc_words(ef_gc_line_t *L)
+static int gc_words(ef_gc_line_t *L)
 {
     int rc;
     L->nw = 0;
@@ -484,18 +484,18 @@ static int ef_gc_words(ef_gc_line_t *L)
                                  EF_GC_MAX_ASSIGN);
             ef_gc_assign_t *a = &L->as[L->nas];
             L->i++;
-            if ((rc = ef_gc_param_ref(L, &a->index, a->name, col)) != 0)
+            if ((rc = gc_param_ref(L, &a->index, a->name, col)) != 0)
                 return rc;
-            if (ef_gc_peek(L) != '=')
-                return ef_gc_err(L->r, ef_gc_here(L), "expected '=' in parameter assignment");
+            if (gc_peek(L) != '=')
+                return ef_gc_err(L->r, gc_here(L), "expected '=' in parameter assignment");
             L->i++;
-            if ((rc = ef_gc_value(L, &a->v)) != 0)
+            if ((rc = gc_value(L, &a->v)) != 0)
                 return rc;
             a->col = col;
             L->nas++;
             continue;
         }
-        if (!ef_gc_is_letter(ch))
+        if (!gc_is_letter(ch))
             return ef_gc_err(L->r, col, "expected a word letter, found '%c'", ch);
         if (strchr("ABCUVW", ch))
             return ef_gc_err(L->r, col, "axis word '%c' not supported (X Y Z only)", ch);
@@ -507,7 +507,7 @@ static int ef_gc_words(ef_gc_line_t *L)
         if (L->i >= L->n)
             return ef_gc_err(L->r, col, "word '%c' has no value", ch);
         double v;
-        if ((rc = ef_gc_value(L, &v)) != 0)
+        if ((rc = gc_value(L, &v)) != 0)
             return rc;
         if (ch == 'N')
             continue; /* line numbers carry no meaning for the path */
@@ -519,7 +519,7 @@ static int ef_gc_words(ef_gc_line_t *L)
         w->col = col;
         w->code = 0;
         if (ch == 'G' || ch == 'M') {
-            if ((rc = ef_gc_code(L, ch, v, col, &w->code)) != 0)
+            if ((rc = gc_code(L, ch, v, col, &w->code)) != 0)
                 return rc;
         } else if (L->letter[ch - 'A']) {
             return ef_gc_err(L->r, col, "second %c word on one line", ch);
@@ -532,14 +532,14 @@ static int ef_gc_words(ef_gc_line_t *L)
 }
 
 /* The word for a letter, or NULL. */
-static const ef_gc_word_t *ef_gc_get(const ef_gc_line_t *L, char letter)
+static const ef_gc_word_t *gc_get(const ef_gc_line_t *L, char letter)
 {
     int k = L->letter[letter - 'A'];
     return k ? &L->w[k - 1] : NULL;
 }
 
 /* Group and action of a G code (value x 10). */
-static void ef_gc_gclass(int code, int *group, int *action)
+static void gc_gclass(int code, int *group, int *action)
 {
     *action = GA_MODAL;
     switch (code) {
@@ -624,7 +624,7 @@ static void ef_gc_gclass(int code, int *group, int *action)
 }
 
 /* Why a G code is refused, for the message. */
-static const char *ef_gc_why(int code)
+static const char *gc_why(int code)
 {
     if (code >= 730 && code <= 890)
         return "canned cycle";
@@ -648,7 +648,7 @@ static const char *ef_gc_why(int code)
 }
 
 /* Format a G/M code: G1, G59.1. */
-static void ef_gc_fmt_code(char *buf, size_t n, char letter, int code)
+static void gc_fmt_code(char *buf, size_t n, char letter, int code)
 {
     if (code % 10)
         snprintf(buf, n, "%c%d.%d", letter, code / 10, code % 10);
@@ -657,19 +657,19 @@ static void ef_gc_fmt_code(char *buf, size_t n, char letter, int code)
 }
 
 /* Append one word to an event text ("T1 M6"). */
-static void ef_gc_append(char *text, size_t n, const ef_gc_word_t *w)
+static void gc_append(char *text, size_t n, const ef_gc_word_t *w)
 {
     char tmp[40];
     size_t len = strlen(text);
     if (w->letter == 'G' || w->letter == 'M')
-        ef_gc_fmt_code(tmp, sizeof tmp, w->letter, w->code);
+        gc_fmt_code(tmp, sizeof tmp, w->letter, w->code);
     else
         snprintf(tmp, sizeof tmp, "%c%.6g", w->letter, w->v);
     snprintf(text + len, n - len, "%s%s", len ? " " : "", tmp);
 }
 
 /* A fresh queue item of a kind. */
-static ef_gcode_item_t *ef_gc_push(ef_gcode_t *r, int kind, uint32_t col)
+static ef_gcode_item_t *gc_push(ef_gcode_t *r, int kind, uint32_t col)
 {
     ef_gcode_item_t *it = &r->queue[r->qlen++];
     memset(it, 0, sizeof *it);
@@ -681,7 +681,7 @@ static ef_gcode_item_t *ef_gc_push(ef_gcode_t *r, int kind, uint32_t col)
 }
 
 /* Coordinates must be finite and within range before they become positions. */
-static int ef_gc_coord_ok(ef_gcode_t *r, double v, uint32_t col, const char *what)
+static int gc_coord_ok(ef_gcode_t *r, double v, uint32_t col, const char *what)
 {
     if (!isfinite(v) || fabs(v) > EF_GCODE_MAX_COORD)
         return ef_gc_err(r, col, "%s %.6g mm outside +-%g mm", what, v, EF_GCODE_MAX_COORD);
@@ -689,7 +689,7 @@ static int ef_gc_coord_ok(ef_gcode_t *r, double v, uint32_t col, const char *wha
 }
 
 /* Plane axes: first and second in-plane axis, normal, and the offset letters of each. */
-static void ef_gc_plane_axes(int plane, int *a, int *b, int *nrm, char *la, char *lb, char *ln)
+static void gc_plane_axes(int plane, int *a, int *b, int *nrm, char *la, char *lb, char *ln)
 {
     if (plane == 18) {
         *a = 2, *b = 0, *nrm = 1, *la = 'K', *lb = 'I', *ln = 'J';
@@ -703,14 +703,14 @@ static void ef_gc_plane_axes(int plane, int *a, int *b, int *nrm, char *la, char
 #define EF_GC_TWO_PI (2.0 * 3.14159265358979323846)
 
 /* Build an arc item from the current position to end; errors point at col. */
-static int ef_gc_arc(ef_gcode_t *r, const ef_gc_line_t *L, const double end[3], int g3,
-                     double scale, uint32_t col)
+static int gc_arc(ef_gcode_t *r, const ef_gc_line_t *L, const double end[3], int g3, double scale,
+                  uint32_t col)
 {
     int a, b, nrm;
     char la, lb, ln;
-    ef_gc_plane_axes(r->plane, &a, &b, &nrm, &la, &lb, &ln);
-    const ef_gc_word_t *wa = ef_gc_get(L, la), *wb = ef_gc_get(L, lb), *wn = ef_gc_get(L, ln),
-                       *wr = ef_gc_get(L, 'R'), *wp = ef_gc_get(L, 'P');
+    gc_plane_axes(r->plane, &a, &b, &nrm, &la, &lb, &ln);
+    const ef_gc_word_t *wa = gc_get(L, la), *wb = gc_get(L, lb), *wn = gc_get(L, ln),
+                       *wr = gc_get(L, 'R'), *wp = gc_get(L, 'P');
     const char *gname = g3 ? "G3" : "G2";
     double c[3] = {r->cur[0], r->cur[1], r->cur[2]};
     double sa = r->cur[a], sb = r->cur[b], ea = end[a], eb = end[b];
@@ -728,7 +728,7 @@ static int ef_gc_arc(ef_gcode_t *r, const ef_gc_line_t *L, const double end[3], 
         return ef_gc_err(r, wr->col, "%s with both R and %c%c offsets", gname, la, lb);
     if (wr) {
         double R = wr->v * scale, h2, h;
-        if ((rc = ef_gc_coord_ok(r, R, wr->col, "arc radius")) != 0)
+        if ((rc = gc_coord_ok(r, R, wr->col, "arc radius")) != 0)
             return rc;
         if (chord <= EF_GCODE_ZERO_LEN)
             return ef_gc_err(r, wr->col,
@@ -752,14 +752,14 @@ static int ef_gc_arc(ef_gcode_t *r, const ef_gc_line_t *L, const double end[3], 
         if (!wa && !wb)
             return ef_gc_err(r, col, "%s needs %c%c offsets or R", gname, la, lb);
         double oa = wa ? wa->v * scale : 0, ob = wb ? wb->v * scale : 0;
-        if (wa && (rc = ef_gc_coord_ok(r, oa, wa->col, "arc centre offset")) != 0)
+        if (wa && (rc = gc_coord_ok(r, oa, wa->col, "arc centre offset")) != 0)
             return rc;
-        if (wb && (rc = ef_gc_coord_ok(r, ob, wb->col, "arc centre offset")) != 0)
+        if (wb && (rc = gc_coord_ok(r, ob, wb->col, "arc centre offset")) != 0)
             return rc;
         c[a] = r->arc_absolute ? oa : sa + oa;
         c[b] = r->arc_absolute ? ob : sb + ob;
-        if ((rc = ef_gc_coord_ok(r, c[a], col, "arc centre")) != 0 ||
-            (rc = ef_gc_coord_ok(r, c[b], col, "arc centre")) != 0)
+        if ((rc = gc_coord_ok(r, c[a], col, "arc centre")) != 0 ||
+            (rc = gc_coord_ok(r, c[b], col, "arc centre")) != 0)
             return rc;
         radius = hypot(sa - c[a], sb - c[b]);
         double r1 = hypot(ea - c[a], eb - c[b]);
@@ -784,7 +784,7 @@ static int ef_gc_arc(ef_gcode_t *r, const ef_gc_line_t *L, const double end[3], 
         sweep = fabs(sweep);
     }
     sweep += (turns - 1) * EF_GC_TWO_PI;
-    ef_gcode_item_t *it = ef_gc_push(r, EF_GC_ARC, col);
+    ef_gcode_item_t *it = gc_push(r, EF_GC_ARC, col);
     memcpy(it->start, r->cur, sizeof it->start);
     memcpy(it->end, end, sizeof it->end);
     memcpy(it->centre, c, sizeof it->centre);
@@ -798,11 +798,11 @@ static int ef_gc_arc(ef_gcode_t *r, const ef_gc_line_t *L, const double end[3], 
 }
 
 /* Carry out one read line: modal settings, events, tolerance, motion, stop. */
-static int ef_gc_execute(ef_gcode_t *r, ef_gc_line_t *L)
+static int gc_execute(ef_gcode_t *r, ef_gc_line_t *L)
 {
     const ef_gc_word_t *grp[GR_COUNT] = {0};
     const ef_gc_word_t *mgrp[10] = {0};
-    const ef_gc_word_t *stop = NULL, *wf = ef_gc_get(L, 'F');
+    const ef_gc_word_t *stop = NULL, *wf = gc_get(L, 'F');
     char pre[128] = "", post[128] = "";
     uint32_t pre_col = 0, post_col = 0;
     int rc, action, group;
@@ -812,20 +812,20 @@ static int ef_gc_execute(ef_gcode_t *r, ef_gc_line_t *L)
     for (int k = 0; k < L->nw; k++) {
         const ef_gc_word_t *w = &L->w[k];
         if (w->letter == 'G') {
-            ef_gc_gclass(w->code, &group, &action);
-            ef_gc_fmt_code(name, sizeof name, 'G', w->code);
+            gc_gclass(w->code, &group, &action);
+            gc_fmt_code(name, sizeof name, 'G', w->code);
             if (action == GA_UNSUPPORTED)
-                return ef_gc_err(r, w->col, "unsupported %s (%s)", name, ef_gc_why(w->code));
+                return ef_gc_err(r, w->col, "unsupported %s (%s)", name, gc_why(w->code));
             if (grp[group]) {
                 char other[16];
-                ef_gc_fmt_code(other, sizeof other, 'G', grp[group]->code);
+                gc_fmt_code(other, sizeof other, 'G', grp[group]->code);
                 return ef_gc_err(r, w->col, "%s and %s on one line are in the same modal group",
                                  other, name);
             }
             grp[group] = w;
         } else if (w->letter == 'M') {
             int c = w->code, mg = -1;
-            ef_gc_fmt_code(name, sizeof name, 'M', c);
+            gc_fmt_code(name, sizeof name, 'M', c);
             if (c % 10 || c > 1990 || c == 470 || c == 980 || c == 990)
                 return ef_gc_err(r, w->col, "unsupported %s", name);
             if (c == 0 || c == 10 || c == 20 || c == 300 || c == 600)
@@ -838,7 +838,7 @@ static int ef_gc_execute(ef_gcode_t *r, ef_gc_line_t *L)
                 mg = 8; /* M7 and M8 may share a line (both coolants on): only M9 is checked */
             if (mg >= 0 && mgrp[mg]) {
                 char other[16];
-                ef_gc_fmt_code(other, sizeof other, 'M', mgrp[mg]->code);
+                gc_fmt_code(other, sizeof other, 'M', mgrp[mg]->code);
                 return ef_gc_err(r, w->col, "%s and %s on one line are in the same modal group",
                                  other, name);
             }
@@ -872,7 +872,7 @@ static int ef_gc_execute(ef_gcode_t *r, ef_gc_line_t *L)
     int motion = r->motion;
     if (grp[GR_MOTION])
         motion = motion_word ? grp[GR_MOTION]->code / 10 + 1 : 0;
-    const ef_gc_word_t *axis[3] = {ef_gc_get(L, 'X'), ef_gc_get(L, 'Y'), ef_gc_get(L, 'Z')};
+    const ef_gc_word_t *axis[3] = {gc_get(L, 'X'), gc_get(L, 'Y'), gc_get(L, 'Z')};
     const ef_gc_word_t *first_axis = NULL;
     for (int k = 0; k < 3; k++)
         if (axis[k] && (!first_axis || axis[k]->col < first_axis->col))
@@ -887,14 +887,14 @@ static int ef_gc_execute(ef_gcode_t *r, ef_gc_line_t *L)
         return ef_gc_err(r, grp[GR_NONMODAL]->col, "G53 needs G0 or G1");
     static const char arc_letters[] = "IJKR";
     for (int k = 0; k < 4; k++) {
-        const ef_gc_word_t *w = ef_gc_get(L, arc_letters[k]);
+        const ef_gc_word_t *w = gc_get(L, arc_letters[k]);
         if (w && !arc) {
             if ((motion == 3 || motion == 4) && !first_axis)
                 return ef_gc_err(r, w->col, "%s with no X, Y or Z word", motion == 3 ? "G2" : "G3");
             return ef_gc_err(r, w->col, "%c word with no G2/G3 arc", arc_letters[k]);
         }
     }
-    const ef_gc_word_t *wp = ef_gc_get(L, 'P'), *wq = ef_gc_get(L, 'Q');
+    const ef_gc_word_t *wp = gc_get(L, 'P'), *wq = gc_get(L, 'Q');
     if (wp && !g4 && !g64 && !arc)
         return ef_gc_err(r, wp->col, "P word with no G4, G64 or G2/G3 arc");
     if (wq && !g64)
@@ -909,13 +909,13 @@ static int ef_gc_execute(ef_gcode_t *r, ef_gc_line_t *L)
         const ef_gc_word_t *w = &L->w[k];
         int is_pre = 0;
         if (w->letter == 'G') {
-            ef_gc_gclass(w->code, &group, &action);
+            gc_gclass(w->code, &group, &action);
             is_pre = action == GA_EVENT && w->code != 530;
         } else if (w->letter == 'M') {
             if (w->code == 20 || w->code == 300) {
                 stop = w;
             } else if (w->code == 0 || w->code == 10 || w->code == 600) {
-                ef_gc_append(post, sizeof post, w);
+                gc_append(post, sizeof post, w);
                 post_col = post_col ? post_col : w->col;
             } else {
                 is_pre = 1;
@@ -924,12 +924,12 @@ static int ef_gc_execute(ef_gcode_t *r, ef_gc_line_t *L)
             is_pre = 1;
         }
         if (is_pre) {
-            ef_gc_append(pre, sizeof pre, w);
+            gc_append(pre, sizeof pre, w);
             pre_col = pre_col ? pre_col : w->col;
         }
     }
     if (pre[0]) {
-        ef_gcode_item_t *it = ef_gc_push(r, EF_GC_EVENT, pre_col);
+        ef_gcode_item_t *it = gc_push(r, EF_GC_EVENT, pre_col);
         snprintf(it->text, sizeof it->text, "%s", pre);
     }
     /* Accepted words with no effect on the path: one note each, the first time only. */
@@ -939,28 +939,28 @@ static int ef_gc_execute(ef_gcode_t *r, ef_gc_line_t *L)
         for (int j = 0; j < (int)(sizeof ignored / sizeof ignored[0]); j++)
             if (w->letter == 'G' && w->code == ignored[j] && !(r->ignored_seen & (1u << j))) {
                 r->ignored_seen |= 1u << j;
-                ef_gcode_item_t *it = ef_gc_push(r, EF_GC_IGNORED, w->col);
-                ef_gc_fmt_code(it->text, sizeof it->text, 'G', w->code);
+                ef_gcode_item_t *it = gc_push(r, EF_GC_IGNORED, w->col);
+                gc_fmt_code(it->text, sizeof it->text, 'G', w->code);
             }
     }
     if (L->block_delete && !(r->ignored_seen & (1u << 8))) {
         r->ignored_seen |= 1u << 8;
-        ef_gcode_item_t *it = ef_gc_push(r, EF_GC_IGNORED, 1);
+        ef_gcode_item_t *it = gc_push(r, EF_GC_IGNORED, 1);
         snprintf(it->text, sizeof it->text, "/ (block delete is off: such lines are read)");
     }
     if (grp[GR_PATH]) {
-        ef_gcode_item_t *it = ef_gc_push(r, EF_GC_TOLERANCE, grp[GR_PATH]->col);
+        ef_gcode_item_t *it = gc_push(r, EF_GC_TOLERANCE, grp[GR_PATH]->col);
         it->path_mode = g64 ? EF_GC_PATH_BLEND : EF_GC_PATH_EXACT;
         if (wp && g64) {
             it->p_tol = wp->v * scale;
-            if ((rc = ef_gc_coord_ok(r, it->p_tol, wp->col, "G64 P")) != 0)
+            if ((rc = gc_coord_ok(r, it->p_tol, wp->col, "G64 P")) != 0)
                 return rc;
             if (it->p_tol < 0)
                 return ef_gc_err(r, wp->col, "G64 P tolerance must not be negative");
         }
         if (wq) {
             it->q_tol = wq->v * scale;
-            if ((rc = ef_gc_coord_ok(r, it->q_tol, wq->col, "G64 Q")) != 0)
+            if ((rc = gc_coord_ok(r, it->q_tol, wq->col, "G64 Q")) != 0)
                 return rc;
             if (it->q_tol < 0)
                 return ef_gc_err(r, wq->col, "G64 Q tolerance must not be negative");
@@ -977,7 +977,7 @@ static int ef_gc_execute(ef_gcode_t *r, ef_gc_line_t *L)
             if (axis[k]) {
                 double v = axis[k]->v * scale;
                 end[k] = r->absolute || g53 ? v : r->cur[k] + v;
-                if ((rc = ef_gc_coord_ok(r, end[k], axis[k]->col, "coordinate")) != 0)
+                if ((rc = gc_coord_ok(r, end[k], axis[k]->col, "coordinate")) != 0)
                     return rc;
             }
         }
@@ -985,7 +985,7 @@ static int ef_gc_execute(ef_gcode_t *r, ef_gc_line_t *L)
             return ef_gc_err(r, col, "feed move with no feed rate (F missing or zero)");
         if (g53) {
             /* Machine coordinates are unknown here: pass the move on, keep the position. */
-            ef_gcode_item_t *it = ef_gc_push(r, EF_GC_EVENT, grp[GR_NONMODAL]->col);
+            ef_gcode_item_t *it = gc_push(r, EF_GC_EVENT, grp[GR_NONMODAL]->col);
             char tmp[64];
             snprintf(it->text, sizeof it->text, "G53 G%d", motion - 1);
             for (int k = 0; k < 3; k++)
@@ -994,7 +994,7 @@ static int ef_gc_execute(ef_gcode_t *r, ef_gc_line_t *L)
                     strncat(it->text, tmp, sizeof it->text - strlen(it->text) - 1);
                 }
         } else if (motion == 3 || motion == 4) {
-            if ((rc = ef_gc_arc(r, L, end, motion == 4, scale, col)) != 0)
+            if ((rc = gc_arc(r, L, end, motion == 4, scale, col)) != 0)
                 return rc;
             memcpy(r->cur, end, sizeof end);
         } else {
@@ -1002,11 +1002,11 @@ static int ef_gc_execute(ef_gcode_t *r, ef_gc_line_t *L)
                               (end[1] - r->cur[1]) * (end[1] - r->cur[1]) +
                               (end[2] - r->cur[2]) * (end[2] - r->cur[2]));
             int zero = len <= EF_GCODE_ZERO_LEN;
-            ef_gcode_item_t *it = ef_gc_push(r,
-                                             zero          ? EF_GC_ZERO_MOVE
-                                             : motion == 1 ? EF_GC_RAPID
-                                                           : EF_GC_LINE,
-                                             col);
+            ef_gcode_item_t *it = gc_push(r,
+                                          zero          ? EF_GC_ZERO_MOVE
+                                          : motion == 1 ? EF_GC_RAPID
+                                                        : EF_GC_LINE,
+                                          col);
             memcpy(it->start, r->cur, sizeof it->start);
             memcpy(it->end, zero ? r->cur : end, sizeof it->end);
             if (motion == 2)
@@ -1018,12 +1018,12 @@ static int ef_gc_execute(ef_gcode_t *r, ef_gc_line_t *L)
         }
     }
     if (post[0]) {
-        ef_gcode_item_t *it = ef_gc_push(r, EF_GC_EVENT, post_col);
+        ef_gcode_item_t *it = gc_push(r, EF_GC_EVENT, post_col);
         snprintf(it->text, sizeof it->text, "%s", post);
     }
     if (stop) {
-        ef_gcode_item_t *it = ef_gc_push(r, EF_GC_END, stop->col);
-        ef_gc_fmt_code(it->text, sizeof it->text, 'M', stop->code);
+        ef_gcode_item_t *it = gc_push(r, EF_GC_END, stop->col);
+        gc_fmt_code(it->text, sizeof it->text, 'M', stop->code);
         r->end_item = *it;
         r->ended = 1;
     }
@@ -1035,7 +1035,7 @@ static int ef_gc_execute(ef_gcode_t *r, ef_gc_line_t *L)
             r->param[a->index] = a->v;
             continue;
         }
-        int j = ef_gc_named_find(r, a->name);
+        int j = gc_named_find(r, a->name);
         if (j < 0) {
             if (r->nnamed >= EF_GCODE_NNAMED)
                 return ef_gc_err(r, a->col, "more than %d named parameters", EF_GCODE_NNAMED);
@@ -1048,7 +1048,7 @@ static int ef_gc_execute(ef_gcode_t *r, ef_gc_line_t *L)
 }
 
 /* Read the next source line into the queue. */
-static int ef_gc_line(ef_gcode_t *r)
+static int gc_line(ef_gcode_t *r)
 {
     ef_gc_line_t *line = malloc(sizeof *line); /* about 25 kB: kept off the stack */
     if (!line)
@@ -1061,10 +1061,10 @@ static int ef_gc_line(ef_gcode_t *r)
     r->line++;
     r->qhead = r->qlen = 0;
     line->r = r;
-    int rc = ef_gc_compact(r, s, n, line);
+    int rc = gc_compact(r, s, n, line);
     if (!rc && line->n == 1 && line->c[0] == '%') {
         if (r->line_seen || r->percent) {
-            ef_gcode_item_t *it = ef_gc_push(r, EF_GC_END, line->col[0]);
+            ef_gcode_item_t *it = gc_push(r, EF_GC_END, line->col[0]);
             snprintf(it->text, sizeof it->text, "%%");
             r->end_item = *it;
             r->ended = 1;
@@ -1073,9 +1073,9 @@ static int ef_gc_line(ef_gcode_t *r)
         }
     } else if (!rc && line->n) {
         r->line_seen = 1;
-        rc = ef_gc_words(line);
+        rc = gc_words(line);
         if (!rc)
-            rc = ef_gc_execute(r, line);
+            rc = gc_execute(r, line);
     }
     free(line);
     if (rc)
@@ -1161,14 +1161,14 @@ int ef_gcode_next(ef_gcode_t *r, ef_gcode_item_t *it, ef_msg_t *m)
         }
         if (r->pos >= r->len) {
             r->qhead = r->qlen = 0;
-            ef_gcode_item_t *e = ef_gc_push(r, EF_GC_END, 1);
+            ef_gcode_item_t *e = gc_push(r, EF_GC_END, 1);
             e->line = r->line ? r->line : 1;
             snprintf(e->text, sizeof e->text, "end of text");
             r->end_item = *e;
             r->ended = 1;
             break;
         }
-        ef_gc_line(r);
+        gc_line(r);
     }
     if (r->err) {
         if (m)

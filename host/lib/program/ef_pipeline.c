@@ -121,7 +121,7 @@ int ef_pipe_item_prim(const ef_gcode_item_t *it, double rapid_speed, ef_prim_t *
 }
 
 /* What is known about the primitive with this tag (newest first). */
-static ef_pipe_move_info_t ef_pipe_tag_info(const ef_pipe_t *P, uint32_t tag)
+static ef_pipe_move_info_t pipe_tag_info(const ef_pipe_t *P, uint32_t tag)
 {
     uint32_t n = P->ntags < EF_PIPE_TAGS ? P->ntags : EF_PIPE_TAGS;
     for (uint32_t k = 0; k < n; k++) {
@@ -134,20 +134,20 @@ static ef_pipe_move_info_t ef_pipe_tag_info(const ef_pipe_t *P, uint32_t tag)
 }
 
 /* What is remembered about move seq for its setpoints; NULL once overwritten. */
-static const ef_pipe_seq_t *ef_pipe_seq_info(const ef_pipe_t *P, uint32_t seq)
+static const ef_pipe_seq_t *pipe_seq_info(const ef_pipe_t *P, uint32_t seq)
 {
     const ef_pipe_seq_t *s = &P->seqs[seq % EF_PIPE_SEQS];
     return s->valid && s->seq == seq ? s : NULL;
 }
 
 /* A callback's nonzero result ends the run. */
-static int ef_pipe_cb_fail(ef_msg_t *m, int rc, const char *what)
+static int pipe_cb_fail(ef_msg_t *m, int rc, const char *what)
 {
     return ef_fail(m, rc < 0 ? rc : EF_ERR_ARG, "%s callback stopped the run (%d)", what, rc);
 }
 
 /* One servo period of interpolator k: setpoint, feed fluctuation, callback. */
-static int ef_pipe_step(ef_pipe_t *P, int k, ef_msg_t *m)
+static int pipe_step(ef_pipe_t *P, int k, ef_msg_t *m)
 {
     ef_setpoint_t sp;
     int rc = ef_interp_process(&P->ip[k], P->cfg->period_us, NULL, &sp);
@@ -161,7 +161,7 @@ static int ef_pipe_step(ef_pipe_t *P, int k, ef_msg_t *m)
     double dt = P->cfg->period_us * 1e-6;
     double t = (double)P->tick[k] * dt;
     fl->end_time = t;
-    const ef_pipe_seq_t *si = ef_pipe_seq_info(P, sp.seq);
+    const ef_pipe_seq_t *si = pipe_seq_info(P, sp.seq);
     if (P->have_prev[k] && P->prev[k].moving && sp.moving && si) {
         double dx = (double)sp.p.x - P->prev[k].p.x, dy = (double)sp.p.y - P->prev[k].p.y;
         double dz = (double)sp.p.z - P->prev[k].p.z;
@@ -184,15 +184,15 @@ static int ef_pipe_step(ef_pipe_t *P, int k, ef_msg_t *m)
         ef_pipe_move_info_t none = {P->tol, P->st.units, 0};
         rc = P->cb.on_setpoint(P->cb.user, t, &sp, si ? &si->mi : &none);
         if (rc)
-            return ef_pipe_cb_fail(m, rc, "setpoint");
+            return pipe_cb_fail(m, rc, "setpoint");
     }
     return EF_OK;
 }
 
 /* A move pulled from the smoother: statistics, callback, interpolators. */
-static int ef_pipe_move(ef_pipe_t *P, const ef_move_t *mv, ef_msg_t *m)
+static int pipe_move(ef_pipe_t *P, const ef_move_t *mv, ef_msg_t *m)
 {
-    ef_pipe_move_info_t mi = ef_pipe_tag_info(P, mv->tag);
+    ef_pipe_move_info_t mi = pipe_tag_info(P, mv->tag);
     ef_pipe_stats_t *st = &P->st;
     st->moves++;
     if (mv->kind >= 1 && mv->kind <= 4)
@@ -220,14 +220,14 @@ static int ef_pipe_move(ef_pipe_t *P, const ef_move_t *mv, ef_msg_t *m)
     if (P->cb.on_move) {
         int rc = P->cb.on_move(P->cb.user, mv, &mi);
         if (rc)
-            return ef_pipe_cb_fail(m, rc, "move");
+            return pipe_cb_fail(m, rc, "move");
     }
     for (int k = 0; k < 2; k++) {
         if (!(P->cfg->interp_modes & (1u << k)))
             continue;
         int rc;
         while ((rc = ef_interp_push(&P->ip[k], mv)) == EF_ERR_FULL) {
-            rc = ef_pipe_step(P, k, m);
+            rc = pipe_step(P, k, m);
             if (rc)
                 return rc;
         }
@@ -240,14 +240,14 @@ static int ef_pipe_move(ef_pipe_t *P, const ef_move_t *mv, ef_msg_t *m)
 }
 
 /* Pull every final move; *n counts them. */
-static int ef_pipe_pull(ef_pipe_t *P, uint32_t *n, ef_msg_t *m)
+static int pipe_pull(ef_pipe_t *P, uint32_t *n, ef_msg_t *m)
 {
     ef_move_t mv;
     int rc;
     while ((rc = ef_smooth_pull(&P->sm, &mv)) == EF_OK) {
         if (n)
             ++*n;
-        rc = ef_pipe_move(P, &mv, m);
+        rc = pipe_move(P, &mv, m);
         if (rc)
             return rc;
     }
@@ -257,12 +257,12 @@ static int ef_pipe_pull(ef_pipe_t *P, uint32_t *n, ef_msg_t *m)
 }
 
 /* Exact stop: finish the smoother, emit every move, run the interpolators to rest. */
-static int ef_pipe_drain(ef_pipe_t *P, ef_msg_t *m)
+static int pipe_drain(ef_pipe_t *P, ef_msg_t *m)
 {
     int rc = ef_smooth_finish(&P->sm);
     if (rc)
         return ef_fail(m, rc, "smoother finish: %s", ef_err_str(rc));
-    rc = ef_pipe_pull(P, NULL, m);
+    rc = pipe_pull(P, NULL, m);
     if (rc)
         return rc;
     for (int k = 0; k < 2; k++) {
@@ -275,7 +275,7 @@ static int ef_pipe_drain(ef_pipe_t *P, ef_msg_t *m)
              n++) {
             if (n > budget)
                 return ef_fail(m, EF_ERR_STATE, "interpolator did not come to rest");
-            rc = ef_pipe_step(P, k, m);
+            rc = pipe_step(P, k, m);
             if (rc)
                 return rc;
         }
@@ -286,7 +286,7 @@ static int ef_pipe_drain(ef_pipe_t *P, ef_msg_t *m)
 }
 
 /* Count a note and pass it to the note callback as "file:line:col: text". */
-static int ef_pipe_note(ef_pipe_t *P, const ef_gcode_item_t *it, const char *text, ef_msg_t *m)
+static int pipe_note(ef_pipe_t *P, const ef_gcode_item_t *it, const char *text, ef_msg_t *m)
 {
     P->st.notes++;
     if (!P->cb.on_note)
@@ -295,11 +295,11 @@ static int ef_pipe_note(ef_pipe_t *P, const ef_gcode_item_t *it, const char *tex
     snprintf(buf, sizeof buf, "%s:%u:%u: %s", P->r->name, (unsigned)it->line, (unsigned)it->col,
              text);
     int rc = P->cb.on_note(P->cb.user, it, buf);
-    return rc ? ef_pipe_cb_fail(m, rc, "note") : EF_OK;
+    return rc ? pipe_cb_fail(m, rc, "note") : EF_OK;
 }
 
 /* A path item: convert, push (draining while the smoother is full). */
-static int ef_pipe_prim(ef_pipe_t *P, const ef_gcode_item_t *it, ef_msg_t *m)
+static int pipe_prim(ef_pipe_t *P, const ef_gcode_item_t *it, ef_msg_t *m)
 {
     ef_prim_t pr;
     int rc = ef_pipe_item_prim(it, P->cfg->rapid_speed, &pr);
@@ -325,7 +325,7 @@ static int ef_pipe_prim(ef_pipe_t *P, const ef_gcode_item_t *it, ef_msg_t *m)
         if (rc != EF_ERR_FULL)
             break;
         uint32_t n = 0;
-        rc = ef_pipe_pull(P, &n, m);
+        rc = pipe_pull(P, &n, m);
         if (rc)
             return rc;
         if (!n && tries > 0)
@@ -340,12 +340,12 @@ static int ef_pipe_prim(ef_pipe_t *P, const ef_gcode_item_t *it, ef_msg_t *m)
         snprintf(txt, sizeof txt, "%s move of %.3g mm too short to represent, skipped",
                  rapid ? "G0" : "G1", sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
         P->ntags--;
-        return ef_pipe_note(P, it, txt, m);
+        return pipe_note(P, it, txt, m);
     }
     if (rc) {
         P->ntags--;
         ef_msg_t dm;
-        int rc2 = ef_pipe_drain(P, &dm); /* controlled stop at the last accepted end */
+        int rc2 = pipe_drain(P, &dm); /* controlled stop at the last accepted end */
         if (rc2)
             return ef_fail(m, rc2, "%s:%u: %s; then %s", P->r->name, (unsigned)it->line,
                            ef_err_str(rc), dm.text);
@@ -359,11 +359,11 @@ static int ef_pipe_prim(ef_pipe_t *P, const ef_gcode_item_t *it, ef_msg_t *m)
     if (!(pr.flags & EF_PRIM_STOP_BEFORE) && P->tol > P->st.tol_max)
         P->st.tol_max = P->tol;
     P->stop_next = rapid;
-    return ef_pipe_pull(P, NULL, m);
+    return pipe_pull(P, NULL, m);
 }
 
 /* Reject a bad configuration with a message before anything is allocated. */
-static int ef_pipe_check_cfg(const ef_pipe_cfg_t *c, const ef_pipe_cb_t *cb, ef_msg_t *m)
+static int pipe_check_cfg(const ef_pipe_cfg_t *c, const ef_pipe_cb_t *cb, ef_msg_t *m)
 {
     if (!c->g2)
         return ef_fail(m, EF_ERR_ARG, "pipeline: no G2 table");
@@ -389,7 +389,7 @@ static int ef_pipe_check_cfg(const ef_pipe_cfg_t *c, const ef_pipe_cb_t *cb, ef_
 }
 
 /* The item loop; the caller frees P. */
-static int ef_pipe_loop(ef_pipe_t *P, ef_msg_t *m)
+static int pipe_loop(ef_pipe_t *P, ef_msg_t *m)
 {
     ef_gcode_item_t it;
     ef_msg_t gm = {{0}};
@@ -398,7 +398,7 @@ static int ef_pipe_loop(ef_pipe_t *P, ef_msg_t *m)
         int rc = ef_gcode_next(P->r, &it, &gm);
         if (rc) {
             ef_msg_t dm;
-            int rc2 = ef_pipe_drain(P, &dm); /* controlled stop */
+            int rc2 = pipe_drain(P, &dm); /* controlled stop */
             if (rc2)
                 return ef_fail(m, rc2, "%s; then %s", gm.text, dm.text);
             return ef_fail(m, rc, "%s", gm.text);
@@ -407,23 +407,23 @@ static int ef_pipe_loop(ef_pipe_t *P, ef_msg_t *m)
         if (P->cb.on_item) {
             rc = P->cb.on_item(P->cb.user, &it);
             if (rc)
-                return ef_pipe_cb_fail(m, rc, "item");
+                return pipe_cb_fail(m, rc, "item");
         }
         switch (it.kind) {
         case EF_GC_RAPID:
         case EF_GC_LINE:
         case EF_GC_ARC:
-            rc = ef_pipe_prim(P, &it, m);
+            rc = pipe_prim(P, &it, m);
             break;
         case EF_GC_ZERO_MOVE:
             P->st.zero_moves++;
             snprintf(txt, sizeof txt, "zero-length %s move (end = start), skipped",
                      it.text[0] ? it.text : "G0/G1");
-            rc = ef_pipe_note(P, &it, txt, m);
+            rc = pipe_note(P, &it, txt, m);
             break;
         case EF_GC_IGNORED:
             snprintf(txt, sizeof txt, "%s ignored", it.text);
-            rc = ef_pipe_note(P, &it, txt, m);
+            rc = pipe_note(P, &it, txt, m);
             break;
         case EF_GC_TOLERANCE:
             if (it.path_mode == EF_GC_PATH_EXACT) {
@@ -436,7 +436,7 @@ static int ef_pipe_loop(ef_pipe_t *P, ef_msg_t *m)
             break;
         case EF_GC_EVENT:
         case EF_GC_END:
-            rc = ef_pipe_drain(P, m);
+            rc = pipe_drain(P, m);
             if (rc)
                 return rc;
             if (it.kind == EF_GC_END)
@@ -445,7 +445,7 @@ static int ef_pipe_loop(ef_pipe_t *P, ef_msg_t *m)
             if (P->cb.on_event) {
                 rc = P->cb.on_event(P->cb.user, &it);
                 if (rc)
-                    rc = ef_pipe_cb_fail(m, rc, "event");
+                    rc = pipe_cb_fail(m, rc, "event");
             }
             break;
         default:
@@ -464,7 +464,7 @@ int ef_pipe_run(ef_gcode_t *r, const ef_pipe_cfg_t *cfg, const ef_pipe_cb_t *cb,
         memset(st, 0, sizeof *st);
     if (!r || !cfg)
         return ef_fail(m, EF_ERR_ARG, "pipeline: NULL reader or configuration");
-    int rc = ef_pipe_check_cfg(cfg, cb, m);
+    int rc = pipe_check_cfg(cfg, cb, m);
     if (rc)
         return rc;
     ef_pipe_t *P = calloc(1, sizeof *P);
@@ -502,7 +502,7 @@ int ef_pipe_run(ef_gcode_t *r, const ef_pipe_cfg_t *cfg, const ef_pipe_cb_t *cb,
         }
     }
     if (!rc)
-        rc = ef_pipe_loop(P, m);
+        rc = pipe_loop(P, m);
     P->st.sm = ef_smooth_stats(&P->sm);
     if (st)
         *st = P->st;

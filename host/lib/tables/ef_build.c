@@ -43,7 +43,7 @@ void ef_build_node_config(const ef_tfile_t *t, uint32_t node, double cfg[EF_TABL
 }
 
 /* Float value kept inside [lo, hi], which float rounding could otherwise cross. */
-static float ef_build_clampf(double v, double lo, double hi)
+static float bld_clampf(double v, double lo, double hi)
 {
     float f = (float)v;
     if (f < (float)lo)
@@ -70,14 +70,13 @@ void ef_build_store(ef_tfile_t *t, uint32_t node, const double *dof)
     const int g2 = t->view.kind == EF_TABLE_G2_QUINTIC;
     for (int k = 0; k < t->view.ndof; k++) {
         int is_x2 = g2 && (k == 1 || k == 3);
-        v[k] = is_x2 ? ef_build_clampf(dof[k], -t->x2_max, t->x2_max)
-                     : ef_build_clampf(dof[k], t->x1_min, t->x1_max);
+        v[k] = is_x2 ? bld_clampf(dof[k], -t->x2_max, t->x2_max)
+                     : bld_clampf(dof[k], t->x1_min, t->x1_max);
     }
 }
 
 /* Optimize one node at chord 1 and store its DOFs; warm is the previous node's, or NULL. */
-static int ef_build_node(ef_tfile_t *t, uint32_t node, const double *warm, double *dof_out,
-                         ef_msg_t *m)
+static int bld_node(ef_tfile_t *t, uint32_t node, const double *warm, double *dof_out, ef_msg_t *m)
 {
     double cfg[EF_TABLE_MAX_AXES];
     ef_build_node_config(t, node, cfg);
@@ -109,14 +108,14 @@ typedef struct {
 } ef_cpu_job_t;
 
 /* Worker: rows row_begin + index, + threads, ...; each row in order so warm starts are fixed. */
-static void *ef_cpu_worker(void *arg)
+static void *bld_cpu_worker(void *arg)
 {
     ef_cpu_job_t *j = arg;
     const uint32_t n0 = j->t->view.axis[0].nodes;
     for (uint32_t row = j->row_begin; row < j->row_end; row += j->stride) {
         double prev[EF_TABLE_MAX_DOF];
         for (uint32_t i = 0; i < n0; i++) {
-            j->job.rc = ef_build_node(j->t, row * n0 + i, i ? prev : NULL, prev, &j->job.msg);
+            j->job.rc = bld_node(j->t, row * n0 + i, i ? prev : NULL, prev, &j->job.msg);
             if (j->job.rc != EF_OK)
                 return NULL;
         }
@@ -125,8 +124,8 @@ static void *ef_cpu_worker(void *arg)
 }
 
 /* CPU backend: threads over the rows of [row_begin, row_end); first failure by thread order. */
-static int ef_cpu_solve_rows(void *ctx, ef_tfile_t *t, uint32_t row_begin, uint32_t row_end,
-                             ef_msg_t *m)
+static int bld_cpu_solve_rows(void *ctx, ef_tfile_t *t, uint32_t row_begin, uint32_t row_end,
+                              ef_msg_t *m)
 {
     const ef_cpu_ctx_t *c = ctx;
     ef_cpu_job_t job[64];
@@ -135,11 +134,11 @@ static int ef_cpu_solve_rows(void *ctx, ef_tfile_t *t, uint32_t row_begin, uint3
                                 .row_begin = row_begin + (uint32_t)i,
                                 .row_end = row_end,
                                 .stride = (uint32_t)c->threads};
-    return ef_parallel_run(job, sizeof job[0], c->threads, ef_cpu_worker, "build", NULL, m);
+    return ef_parallel_run(job, sizeof job[0], c->threads, bld_cpu_worker, "build", NULL, m);
 }
 
 /* Release the CPU backend's context. */
-static void ef_cpu_close(void *ctx)
+static void bld_cpu_close(void *ctx)
 {
     free(ctx);
 }
@@ -154,8 +153,8 @@ int ef_build_backend_cpu(ef_build_backend_t *b, int threads)
         return EF_ERR_NOMEM;
     c->threads = threads;
     *b = (ef_build_backend_t){.name = "cpu",
-                              .solve_rows = ef_cpu_solve_rows,
-                              .close = ef_cpu_close,
+                              .solve_rows = bld_cpu_solve_rows,
+                              .close = bld_cpu_close,
                               .ctx = c,
                               .chunk_nodes = 4096};
     return EF_OK;
@@ -178,8 +177,8 @@ typedef struct {
 
 /* Common checks of ef_build_check() and ef_build_run(): the shard, the spec record, the
  * paths. Fills the header a journal of this build has. */
-static int ef_build_prepare(const ef_tfile_t *t, const char *backend, const ef_build_opts_t *o,
-                            ef_efile_hdr_t *h, ef_msg_t *m)
+static int bld_prepare(const ef_tfile_t *t, const char *backend, const ef_build_opts_t *o,
+                       ef_efile_hdr_t *h, ef_msg_t *m)
 {
     memset(h, 0, sizeof *h);
     if (!t || !t->values || !o || t->view.axis[0].nodes == 0)
@@ -202,7 +201,7 @@ static int ef_build_prepare(const ef_tfile_t *t, const char *backend, const ef_b
 
 /* The bytes [p, p + n) are all zero: what a crash between a record's write and its fsync
  * can leave (the file grew, the data never landed), unlike a flipped bit. */
-static int ef_all_zero(const uint8_t *p, size_t n)
+static int bld_all_zero(const uint8_t *p, size_t n)
 {
     for (size_t i = 0; i < n; i++)
         if (p[i])
@@ -211,7 +210,7 @@ static int ef_all_zero(const uint8_t *p, size_t n)
 }
 
 /* Refuse a damaged journal, saying how to get past it. */
-static int ef_journal_corrupt(ef_msg_t *m, int code, const char *path, const char *detail)
+static int bld_journal_corrupt(ef_msg_t *m, int code, const char *path, const char *detail)
 {
     return ef_fail(m, code,
                    "%s: corrupt build journal (%s); it cannot be resumed: delete it or "
@@ -222,8 +221,8 @@ static int ef_journal_corrupt(ef_msg_t *m, int code, const char *path, const cha
 /* Check a journal image against this build and collect its records (values into t when t
  * is not NULL). A record cut short at the end of the file (a crash mid-append) is dropped,
  * anything else that fails a check refuses the journal. */
-static int ef_journal_scan(const char *path, const uint8_t *buf, size_t len,
-                           const ef_efile_hdr_t *want, ef_tfile_t *t, ef_jstate_t *js, ef_msg_t *m)
+static int bld_journal_scan(const char *path, const uint8_t *buf, size_t len,
+                            const ef_efile_hdr_t *want, ef_tfile_t *t, ef_jstate_t *js, ef_msg_t *m)
 {
     ef_efile_hdr_t h;
     ef_msg_t sub = {{0}};
@@ -265,41 +264,41 @@ static int ef_journal_scan(const char *path, const uint8_t *buf, size_t len,
             break; /* torn record header */
         const uint32_t r0 = ef_le_get32(r + 4), r1 = ef_le_get32(r + 8);
         if (memcmp(r, ef_jrec_tag, 4) || ef_le_get32(r + 12) != ef_crc32(0, r, 12)) {
-            if (ef_all_zero(r, left))
+            if (bld_all_zero(r, left))
                 break;
             snprintf(detail, sizeof detail, "record %u at offset %zu: bad record header", rec, off);
-            return ef_journal_corrupt(m, EF_ERR_TBL_CRC, path, detail);
+            return bld_journal_corrupt(m, EF_ERR_TBL_CRC, path, detail);
         }
         if (r0 >= r1 || r0 < rb || r1 > re) {
             snprintf(detail, sizeof detail,
                      "record %u at offset %zu: rows %u..%u outside the build's rows %u..%u", rec,
                      off, r0, r1 - 1, rb, re - 1);
-            return ef_journal_corrupt(m, EF_ERR_TBL_HEADER, path, detail);
+            return bld_journal_corrupt(m, EF_ERR_TBL_HEADER, path, detail);
         }
         const size_t nval = (size_t)(r1 - r0) * per_row, need = EF_JREC_HEAD + 4 * nval + 4;
         if (left < need)
             break; /* torn record body */
         const uint8_t *v = r + EF_JREC_HEAD;
         if (ef_le_get32(v + 4 * nval) != ef_crc32(0, v, (uint32_t)(4 * nval))) {
-            if (off + need == len && ef_all_zero(v, 4 * nval + 4))
+            if (off + need == len && bld_all_zero(v, 4 * nval + 4))
                 break;
             snprintf(detail, sizeof detail,
                      "record %u at offset %zu (rows %u..%u): values CRC "
                      "mismatch",
                      rec, off, r0, r1 - 1);
-            return ef_journal_corrupt(m, EF_ERR_TBL_CRC, path, detail);
+            return bld_journal_corrupt(m, EF_ERR_TBL_CRC, path, detail);
         }
         for (uint32_t row = r0; row < r1; row++)
             if (js->done[row - rb]) {
                 snprintf(detail, sizeof detail, "record %u at offset %zu: row %u recorded twice",
                          rec, off, row);
-                return ef_journal_corrupt(m, EF_ERR_TBL_HEADER, path, detail);
+                return bld_journal_corrupt(m, EF_ERR_TBL_HEADER, path, detail);
             }
         const size_t bad = ef_values_check(&want->spec, v, NULL, nval);
         if (bad < nval) {
             snprintf(detail, sizeof detail, "record %u: value at offset %zu out of bounds", rec,
                      off + EF_JREC_HEAD + 4 * bad);
-            return ef_journal_corrupt(m, EF_ERR_TBL_VALUE, path, detail);
+            return bld_journal_corrupt(m, EF_ERR_TBL_VALUE, path, detail);
         }
         if (t) {
             float *dst = t->values + (size_t)r0 * per_row;
@@ -319,7 +318,7 @@ static int ef_journal_scan(const char *path, const uint8_t *buf, size_t len,
 
 /* --fresh deletes only what is recognizably a journal: a mistyped --journal must not cost
  * the user an unrelated file. EF_OK when path is absent or starts with the journal magic. */
-static int ef_journal_deletable(const char *path, ef_msg_t *m)
+static int bld_journal_deletable(const char *path, ef_msg_t *m)
 {
     uint8_t head[8];
     int fd = open(path, O_RDONLY | O_CLOEXEC);
@@ -338,7 +337,7 @@ static int ef_journal_deletable(const char *path, ef_msg_t *m)
 }
 
 /* Largest journal a build can have: header, and at most one record per row. */
-static size_t ef_journal_max(const ef_efile_hdr_t *h)
+static size_t bld_journal_max(const ef_efile_hdr_t *h)
 {
     const size_t rows = h->row_end - h->row_begin;
     return EF_EFILE_MAX_HEADER +
@@ -350,7 +349,7 @@ int ef_build_check(const ef_tfile_t *t, const char *backend, const ef_build_opts
                    ef_build_plan_t *plan, ef_msg_t *m)
 {
     ef_efile_hdr_t h;
-    int rc = ef_build_prepare(t, backend, o, &h, m);
+    int rc = bld_prepare(t, backend, o, &h, m);
     if (rc != EF_OK)
         return rc;
     ef_build_plan_t p = {.rows = h.spec.rows,
@@ -359,18 +358,18 @@ int ef_build_check(const ef_tfile_t *t, const char *backend, const ef_build_opts
                          .n0 = h.spec.axis_nodes[0]};
     struct stat st;
     if (o->journal && o->fresh)
-        rc = ef_journal_deletable(o->journal, m);
+        rc = bld_journal_deletable(o->journal, m);
     if (rc == EF_OK && o->journal && !o->fresh && stat(o->journal, &st) == 0) {
         uint8_t *buf;
         size_t len;
         ef_jstate_t js = {.done = calloc(h.row_end - h.row_begin, 1)};
         if (!js.done)
             return ef_fail(m, EF_ERR_NOMEM, "build: out of memory");
-        rc = ef_file_read(o->journal, ef_journal_max(&h), &buf, &len, m);
+        rc = ef_file_read(o->journal, bld_journal_max(&h), &buf, &len, m);
         if (rc == EF_ERR_TBL_SIZE)
-            rc = ef_journal_corrupt(m, rc, o->journal, "larger than any journal of this build");
+            rc = bld_journal_corrupt(m, rc, o->journal, "larger than any journal of this build");
         if (rc == EF_OK) {
-            rc = ef_journal_scan(o->journal, buf, len, &h, NULL, &js, m);
+            rc = bld_journal_scan(o->journal, buf, len, &h, NULL, &js, m);
             free(buf);
         }
         free(js.done);
@@ -385,13 +384,13 @@ int ef_build_check(const ef_tfile_t *t, const char *backend, const ef_build_opts
 
 /* Open (or create) the journal, lock it against a second build, load what it holds into t
  * and cut off a torn last record; *fd is left positioned for appending. */
-static int ef_journal_open(const char *path, int fresh, const ef_efile_hdr_t *h, ef_tfile_t *t,
-                           ef_jstate_t *js, int *fd_out, ef_msg_t *m)
+static int bld_journal_open(const char *path, int fresh, const ef_efile_hdr_t *h, ef_tfile_t *t,
+                            ef_jstate_t *js, int *fd_out, ef_msg_t *m)
 {
     int err;
     *fd_out = -1;
     if (fresh) {
-        int rc = ef_journal_deletable(path, m);
+        int rc = bld_journal_deletable(path, m);
         if (rc != EF_OK)
             return rc;
         if (unlink(path) != 0 && errno != ENOENT) {
@@ -424,11 +423,11 @@ static int ef_journal_open(const char *path, int fresh, const ef_efile_hdr_t *h,
     }
     uint8_t *buf;
     size_t len;
-    int rc = ef_file_read(path, ef_journal_max(h), &buf, &len, m);
+    int rc = ef_file_read(path, bld_journal_max(h), &buf, &len, m);
     if (rc == EF_ERR_TBL_SIZE)
-        rc = ef_journal_corrupt(m, rc, path, "larger than any journal of this build");
+        rc = bld_journal_corrupt(m, rc, path, "larger than any journal of this build");
     if (rc == EF_OK) {
-        rc = ef_journal_scan(path, buf, len, h, t, js, m);
+        rc = bld_journal_scan(path, buf, len, h, t, js, m);
         free(buf);
     }
     if (rc == EF_OK && js->valid_len < len &&
@@ -451,8 +450,8 @@ static int ef_journal_open(const char *path, int fresh, const ef_efile_hdr_t *h,
 
 /* Append one chunk's record and make it durable before the chunk counts as done; a failed
  * append is cut off again so the journal stays a sequence of whole records. */
-static int ef_journal_append(int fd, const char *path, const ef_tfile_t *t, uint32_t r0,
-                             uint32_t r1, size_t *jlen, ef_msg_t *m)
+static int bld_journal_append(int fd, const char *path, const ef_tfile_t *t, uint32_t r0,
+                              uint32_t r1, size_t *jlen, ef_msg_t *m)
 {
     const size_t per_row = (size_t)t->view.axis[0].nodes * t->view.ndof;
     const size_t nval = (size_t)(r1 - r0) * per_row, n = EF_JREC_HEAD + 4 * nval + 4;
@@ -493,8 +492,8 @@ static int ef_journal_append(int fd, const char *path, const ef_tfile_t *t, uint
 }
 
 /* First invalid value among nodes [n_begin, n_end) of t, or SIZE_MAX if all are good. */
-static size_t ef_build_bad_value(const ef_spec_rec_t *s, const ef_tfile_t *t, uint32_t n_begin,
-                                 uint32_t n_end)
+static size_t bld_bad_value(const ef_spec_rec_t *s, const ef_tfile_t *t, uint32_t n_begin,
+                            uint32_t n_end)
 {
     const size_t nval = (size_t)(n_end - n_begin) * t->view.ndof;
     const size_t bad = ef_values_check(s, NULL, t->values + (size_t)n_begin * t->view.ndof, nval);
@@ -511,7 +510,7 @@ int ef_build_run(ef_tfile_t *t, ef_build_backend_t *b, const ef_build_opts_t *o,
         return ef_fail(m, EF_ERR_ARG, "build: bad table or backend");
     const char *bname = b->name && *b->name ? b->name : "unnamed";
     ef_efile_hdr_t h;
-    int rc = ef_build_prepare(t, bname, o, &h, m);
+    int rc = bld_prepare(t, bname, o, &h, m);
     if (rc != EF_OK)
         return rc;
     const uint32_t rb = h.row_begin, re = h.row_end, n0 = t->view.axis[0].nodes;
@@ -522,7 +521,7 @@ int ef_build_run(ef_tfile_t *t, ef_build_backend_t *b, const ef_build_opts_t *o,
     int fd = -1;
     size_t jlen = 0;
     if (o->journal) {
-        rc = ef_journal_open(o->journal, o->fresh, &h, t, &js, &fd, m);
+        rc = bld_journal_open(o->journal, o->fresh, &h, t, &js, &fd, m);
         if (rc != EF_OK) {
             free(js.done);
             return rc;
@@ -547,14 +546,14 @@ int ef_build_run(ef_tfile_t *t, ef_build_backend_t *b, const ef_build_opts_t *o,
         ef_msg_t sub = {{0}};
         rc = b->solve_rows(b->ctx, t, r, e, &sub);
         if (rc == EF_OK) {
-            size_t bad = ef_build_bad_value(&h.spec, t, r * n0, e * n0);
+            size_t bad = bld_bad_value(&h.spec, t, r * n0, e * n0);
             if (bad != SIZE_MAX)
                 rc = ef_fail(&sub, EF_ERR_TBL_VALUE,
                              "node %zu DOF %zu: value non-finite or out of bounds (%.9g)",
                              bad / ndof, bad % ndof, (double)t->values[bad]);
         }
         if (rc == EF_OK && fd >= 0)
-            rc = ef_journal_append(fd, o->journal, t, r, e, &jlen, &sub);
+            rc = bld_journal_append(fd, o->journal, t, r, e, &jlen, &sub);
         if (rc != EF_OK) {
             char safe[300];
             if (fd >= 0)

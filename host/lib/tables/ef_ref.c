@@ -58,13 +58,13 @@ static const double ef_gl_rule[63][2] = {
 static const int ef_gl_off[7] = {0, 3, 9, 18, 30, 45, 63};
 
 /* Dot product. */
-static double ef_dot(ef_dvec3_t a, ef_dvec3_t b)
+static double ref_dot(ef_dvec3_t a, ef_dvec3_t b)
 {
     return a.x * b.x + a.y * b.y + a.z * b.z;
 }
 
 /* a + s b. */
-static ef_dvec3_t ef_axpy(ef_dvec3_t a, double s, ef_dvec3_t b)
+static ef_dvec3_t ref_axpy(ef_dvec3_t a, double s, ef_dvec3_t b)
 {
     ef_dvec3_t r = {a.x + s * b.x, a.y + s * b.y, a.z + s * b.z};
     return r;
@@ -124,33 +124,33 @@ int ef_ref_ctrl(ef_ref_kind_t kind, const ef_dend_t *e0, const ef_dend_t *e1, co
     switch (kind) {
     case EF_REF_G1_CUBIC:
         b[0] = e0->p;
-        b[1] = ef_axpy(e0->p, dof[0] / 3.0, e0->t);
-        b[2] = ef_axpy(e1->p, -dof[1] / 3.0, e1->t);
+        b[1] = ref_axpy(e0->p, dof[0] / 3.0, e0->t);
+        b[2] = ref_axpy(e1->p, -dof[1] / 3.0, e1->t);
         b[3] = e1->p;
         return EF_OK;
     case EF_REF_G2_QUINTIC: {
         /* f''(0) = x2 t + kappa x1^2 n: the normal part is fixed by the curvature. */
-        ef_dvec3_t dd0 = ef_axpy(ef_axpy((ef_dvec3_t){0.0, 0.0, 0.0}, dof[1], e0->t),
-                                 e0->kappa * dof[0] * dof[0], e0->n);
-        ef_dvec3_t dd1 = ef_axpy(ef_axpy((ef_dvec3_t){0.0, 0.0, 0.0}, dof[3], e1->t),
-                                 e1->kappa * dof[2] * dof[2], e1->n);
+        ef_dvec3_t dd0 = ref_axpy(ref_axpy((ef_dvec3_t){0.0, 0.0, 0.0}, dof[1], e0->t),
+                                  e0->kappa * dof[0] * dof[0], e0->n);
+        ef_dvec3_t dd1 = ref_axpy(ref_axpy((ef_dvec3_t){0.0, 0.0, 0.0}, dof[3], e1->t),
+                                  e1->kappa * dof[2] * dof[2], e1->n);
         b[0] = e0->p;
-        b[1] = ef_axpy(e0->p, dof[0] / 5.0, e0->t);
-        b[2] = ef_axpy(ef_axpy(b[1], 1.0, b[1]), -1.0, b[0]);
-        b[2] = ef_axpy(b[2], 1.0 / 20.0, dd0);
+        b[1] = ref_axpy(e0->p, dof[0] / 5.0, e0->t);
+        b[2] = ref_axpy(ref_axpy(b[1], 1.0, b[1]), -1.0, b[0]);
+        b[2] = ref_axpy(b[2], 1.0 / 20.0, dd0);
         b[5] = e1->p;
-        b[4] = ef_axpy(e1->p, -dof[2] / 5.0, e1->t);
-        b[3] = ef_axpy(ef_axpy(b[4], 1.0, b[4]), -1.0, b[5]);
-        b[3] = ef_axpy(b[3], 1.0 / 20.0, dd1);
+        b[4] = ref_axpy(e1->p, -dof[2] / 5.0, e1->t);
+        b[3] = ref_axpy(ref_axpy(b[4], 1.0, b[4]), -1.0, b[5]);
+        b[3] = ref_axpy(b[3], 1.0 / 20.0, dd1);
         return EF_OK;
     }
     case EF_REF_G1_QUARTIC:
         b[0] = e0->p;
-        b[1] = ef_axpy(e0->p, dof[0] / 4.0, e0->t);
+        b[1] = ref_axpy(e0->p, dof[0] / 4.0, e0->t);
         b[2].x = dof[2];
         b[2].y = dof[3];
         b[2].z = dof[4];
-        b[3] = ef_axpy(e1->p, -dof[1] / 4.0, e1->t);
+        b[3] = ref_axpy(e1->p, -dof[1] / 4.0, e1->t);
         b[4] = e1->p;
         return EF_OK;
     default:
@@ -162,7 +162,7 @@ int ef_ref_ctrl(ef_ref_kind_t kind, const ef_dend_t *e0, const ef_dend_t *e1, co
  * Derivatives of the degree-d Bernstein basis at t: A[k] = B'_{k,d}(t), C[k] = B''_{k,d}(t)
  * for k = 0..d, from the degree d-1 and d-2 bases built by the triangle scheme.
  */
-static void ef_basis_derivs(double t, int d, double *A, double *C)
+static void ref_basis_derivs(double t, int d, double *A, double *C)
 {
     double bern[EF_REF_MAX_DEGREE + 1], bern2[EF_REF_MAX_DEGREE + 1];
     const double s = 1.0 - t;
@@ -199,30 +199,30 @@ static double ef_basis_tab[63][2][EF_REF_MAX_DEGREE + 1];
 static pthread_once_t ef_basis_once = PTHREAD_ONCE_INIT;
 
 /* Fill ef_basis_tab (run once). */
-static void ef_basis_init(void)
+static void ref_basis_init(void)
 {
     for (int d = 2; d <= EF_REF_MAX_DEGREE; d++)
         for (int j = ef_gl_off[d - 2]; j < ef_gl_off[d - 1]; j++)
-            ef_basis_derivs(ef_gl_rule[j][0], d, ef_basis_tab[j][0], ef_basis_tab[j][1]);
+            ref_basis_derivs(ef_gl_rule[j][0], d, ef_basis_tab[j][0], ef_basis_tab[j][1]);
 }
 
 /* C^2 of a Bezier curve; control points are taken relative to b[0] so that a segment far
  * from the origin loses no digits in f' and f''. */
-static double ef_c2_ctrl(const ef_dvec3_t *b, int d)
+static double ref_c2_ctrl(const ef_dvec3_t *b, int d)
 {
     double c2 = 0.0;
     if (d < 2)
         return 0.0; /* a line segment has f'' = 0 */
-    pthread_once(&ef_basis_once, ef_basis_init);
+    pthread_once(&ef_basis_once, ref_basis_init);
     for (int j = ef_gl_off[d - 2]; j < ef_gl_off[d - 1]; j++) {
         const double *A = ef_basis_tab[j][0], *C = ef_basis_tab[j][1];
         ef_dvec3_t fp = {0.0, 0.0, 0.0}, fpp = {0.0, 0.0, 0.0};
         for (int k = 1; k <= d; k++) {
-            const ef_dvec3_t r = ef_axpy(b[k], -1.0, b[0]);
-            fp = ef_axpy(fp, A[k], r);
-            fpp = ef_axpy(fpp, C[k], r);
+            const ef_dvec3_t r = ref_axpy(b[k], -1.0, b[0]);
+            fp = ref_axpy(fp, A[k], r);
+            fpp = ref_axpy(fpp, C[k], r);
         }
-        const double g = ef_dot(fp, fpp), h = ef_dot(fp, fp);
+        const double g = ref_dot(fp, fpp), h = ref_dot(fp, fp);
         c2 += ef_gl_rule[j][1] * g * g * h;
     }
     return c2;
@@ -233,7 +233,7 @@ double ef_ref_functional(const ef_dvec3_t *b, int degree)
 {
     if (!b || degree < 1 || degree > EF_REF_MAX_DEGREE)
         return NAN;
-    return sqrt(ef_c2_ctrl(b, degree));
+    return sqrt(ref_c2_ctrl(b, degree));
 }
 
 /* Most nonzero entries of db_k/dx_i over the kinds (quintic: 6) and of d2b_k/dx_i^2 (2). */
@@ -255,7 +255,7 @@ typedef struct {
 } ef_model_t;
 
 /* Append one Jacobian entry db_k/dx_i = v. */
-static void ef_jac(ef_model_t *md, int k, int i, ef_dvec3_t v)
+static void ref_jac(ef_model_t *md, int k, int i, ef_dvec3_t v)
 {
     md->jk[md->nj] = k;
     md->ji[md->nj] = i;
@@ -264,8 +264,8 @@ static void ef_jac(ef_model_t *md, int k, int i, ef_dvec3_t v)
 }
 
 /* Build the model of a segment at the DOFs (the derivatives of ef_ref_ctrl's formulas). */
-static int ef_model(ef_ref_kind_t kind, const ef_dend_t *e0, const ef_dend_t *e1, const double *dof,
-                    ef_model_t *md)
+static int ref_model(ef_ref_kind_t kind, const ef_dend_t *e0, const ef_dend_t *e1,
+                     const double *dof, ef_model_t *md)
 {
     const ef_dvec3_t zero = {0.0, 0.0, 0.0};
     memset(md, 0, sizeof *md); /* unused entries defined, for the compiler and for debuggers */
@@ -276,33 +276,33 @@ static int ef_model(ef_ref_kind_t kind, const ef_dend_t *e0, const ef_dend_t *e1
     md->n = ef_ref_ndof(kind);
     md->nj = md->nj2 = 0;
     for (int k = md->d; k >= 0; k--)
-        md->b[k] = ef_axpy(md->b[k], -1.0, md->b[0]);
+        md->b[k] = ref_axpy(md->b[k], -1.0, md->b[0]);
     switch (kind) {
     case EF_REF_G1_CUBIC:
-        ef_jac(md, 1, 0, ef_axpy(zero, 1.0 / 3.0, e0->t));
-        ef_jac(md, 2, 1, ef_axpy(zero, -1.0 / 3.0, e1->t));
+        ref_jac(md, 1, 0, ref_axpy(zero, 1.0 / 3.0, e0->t));
+        ref_jac(md, 2, 1, ref_axpy(zero, -1.0 / 3.0, e1->t));
         break;
     case EF_REF_G2_QUINTIC:
-        ef_jac(md, 1, 0, ef_axpy(zero, 0.2, e0->t));
-        ef_jac(md, 2, 0, ef_axpy(ef_axpy(zero, 0.4, e0->t), 0.1 * e0->kappa * dof[0], e0->n));
-        ef_jac(md, 2, 1, ef_axpy(zero, 0.05, e0->t));
-        ef_jac(md, 4, 2, ef_axpy(zero, -0.2, e1->t));
-        ef_jac(md, 3, 2, ef_axpy(ef_axpy(zero, -0.4, e1->t), 0.1 * e1->kappa * dof[2], e1->n));
-        ef_jac(md, 3, 3, ef_axpy(zero, 0.05, e1->t));
+        ref_jac(md, 1, 0, ref_axpy(zero, 0.2, e0->t));
+        ref_jac(md, 2, 0, ref_axpy(ref_axpy(zero, 0.4, e0->t), 0.1 * e0->kappa * dof[0], e0->n));
+        ref_jac(md, 2, 1, ref_axpy(zero, 0.05, e0->t));
+        ref_jac(md, 4, 2, ref_axpy(zero, -0.2, e1->t));
+        ref_jac(md, 3, 2, ref_axpy(ref_axpy(zero, -0.4, e1->t), 0.1 * e1->kappa * dof[2], e1->n));
+        ref_jac(md, 3, 3, ref_axpy(zero, 0.05, e1->t));
         md->sk[0] = 2;
         md->si[0] = 0;
-        md->sv[0] = ef_axpy(zero, 0.1 * e0->kappa, e0->n);
+        md->sv[0] = ref_axpy(zero, 0.1 * e0->kappa, e0->n);
         md->sk[1] = 3;
         md->si[1] = 2;
-        md->sv[1] = ef_axpy(zero, 0.1 * e1->kappa, e1->n);
+        md->sv[1] = ref_axpy(zero, 0.1 * e1->kappa, e1->n);
         md->nj2 = 2;
         break;
     default: /* EF_REF_G1_QUARTIC: ef_ref_ctrl already rejected unknown kinds */
-        ef_jac(md, 1, 0, ef_axpy(zero, 0.25, e0->t));
-        ef_jac(md, 3, 1, ef_axpy(zero, -0.25, e1->t));
-        ef_jac(md, 2, 2, (ef_dvec3_t){1.0, 0.0, 0.0});
-        ef_jac(md, 2, 3, (ef_dvec3_t){0.0, 1.0, 0.0});
-        ef_jac(md, 2, 4, (ef_dvec3_t){0.0, 0.0, 1.0});
+        ref_jac(md, 1, 0, ref_axpy(zero, 0.25, e0->t));
+        ref_jac(md, 3, 1, ref_axpy(zero, -0.25, e1->t));
+        ref_jac(md, 2, 2, (ef_dvec3_t){1.0, 0.0, 0.0});
+        ref_jac(md, 2, 3, (ef_dvec3_t){0.0, 1.0, 0.0});
+        ref_jac(md, 2, 4, (ef_dvec3_t){0.0, 0.0, 1.0});
         break;
     }
     return EF_OK;
@@ -319,7 +319,7 @@ static int ef_model(ef_ref_kind_t kind, const ef_dend_t *e0, const ef_dend_t *e1
  * likewise with B''_k), giving grad_i = sum w (U.a_i + V.c_i) and
  * H_ij = sum w [(a_i, c_i)' Phi (a_j, c_j) + (U.a_ii + V.c_ii) delta_ij].
  */
-static double ef_eval(const ef_model_t *md, double *grad, double *hess)
+static double ref_eval(const ef_model_t *md, double *grad, double *hess)
 {
     const int d = md->d, n = md->n;
     const ef_dvec3_t zero = {0.0, 0.0, 0.0};
@@ -333,54 +333,54 @@ static double ef_eval(const ef_model_t *md, double *grad, double *hess)
             hess[i] = 0.0;
     if (d < 2)
         return 0.0;
-    pthread_once(&ef_basis_once, ef_basis_init);
+    pthread_once(&ef_basis_once, ref_basis_init);
     for (int j = ef_gl_off[d - 2]; j < ef_gl_off[d - 1]; j++) {
         const double w = ef_gl_rule[j][1];
         const double *A = ef_basis_tab[j][0], *C = ef_basis_tab[j][1];
         ef_dvec3_t a = zero, c = zero;
         for (int k = 1; k <= d; k++) {
-            a = ef_axpy(a, A[k], md->b[k]);
-            c = ef_axpy(c, C[k], md->b[k]);
+            a = ref_axpy(a, A[k], md->b[k]);
+            c = ref_axpy(c, C[k], md->b[k]);
         }
-        const double g = ef_dot(a, c), h = ef_dot(a, a);
+        const double g = ref_dot(a, c), h = ref_dot(a, a);
         c2 += w * g * g * h;
         if (!grad && !hess)
             continue;
 
-        const ef_dvec3_t U = ef_axpy(ef_axpy(zero, 2.0 * g * h, c), 2.0 * g * g, a);
-        const ef_dvec3_t V = ef_axpy(zero, 2.0 * g * h, a);
+        const ef_dvec3_t U = ref_axpy(ref_axpy(zero, 2.0 * g * h, c), 2.0 * g * g, a);
+        const ef_dvec3_t V = ref_axpy(zero, 2.0 * g * h, a);
         ef_dvec3_t ai[EF_REF_MAX_DOF], ci[EF_REF_MAX_DOF];
         for (int i = 0; i < n; i++)
             ai[i] = ci[i] = zero;
         for (int e = 0; e < md->nj; e++) {
-            ai[md->ji[e]] = ef_axpy(ai[md->ji[e]], A[md->jk[e]], md->jv[e]);
-            ci[md->ji[e]] = ef_axpy(ci[md->ji[e]], C[md->jk[e]], md->jv[e]);
+            ai[md->ji[e]] = ref_axpy(ai[md->ji[e]], A[md->jk[e]], md->jv[e]);
+            ci[md->ji[e]] = ref_axpy(ci[md->ji[e]], C[md->jk[e]], md->jv[e]);
         }
         if (grad)
             for (int i = 0; i < n; i++)
-                grad[i] += w * (ef_dot(U, ai[i]) + ef_dot(V, ci[i]));
+                grad[i] += w * (ref_dot(U, ai[i]) + ref_dot(V, ci[i]));
         if (!hess)
             continue;
 
         ef_dvec3_t P[EF_REF_MAX_DOF], Q[EF_REF_MAX_DOF];
         for (int i = 0; i < n; i++) {
             /* P = phi_aa a_i + phi_ac c_i,  Q = phi_ca a_i + phi_cc c_i. */
-            const double a_ai = ef_dot(a, ai[i]), c_ai = ef_dot(c, ai[i]);
-            const double a_ci = ef_dot(a, ci[i]);
-            ef_dvec3_t p = ef_axpy(zero, 2.0 * h * (c_ai + a_ci) + 4.0 * g * a_ai, c);
-            p = ef_axpy(p, 4.0 * g * (c_ai + a_ci), a);
-            p = ef_axpy(p, 2.0 * g * g, ai[i]);
-            P[i] = ef_axpy(p, 2.0 * g * h, ci[i]);
-            ef_dvec3_t q = ef_axpy(zero, 2.0 * h * (c_ai + a_ci) + 4.0 * g * a_ai, a);
-            Q[i] = ef_axpy(q, 2.0 * g * h, ai[i]);
+            const double a_ai = ref_dot(a, ai[i]), c_ai = ref_dot(c, ai[i]);
+            const double a_ci = ref_dot(a, ci[i]);
+            ef_dvec3_t p = ref_axpy(zero, 2.0 * h * (c_ai + a_ci) + 4.0 * g * a_ai, c);
+            p = ref_axpy(p, 4.0 * g * (c_ai + a_ci), a);
+            p = ref_axpy(p, 2.0 * g * g, ai[i]);
+            P[i] = ref_axpy(p, 2.0 * g * h, ci[i]);
+            ef_dvec3_t q = ref_axpy(zero, 2.0 * h * (c_ai + a_ci) + 4.0 * g * a_ai, a);
+            Q[i] = ref_axpy(q, 2.0 * g * h, ai[i]);
         }
         for (int i = 0; i < n; i++)
             for (int k = i; k < n; k++)
-                hess[i * n + k] += w * (ef_dot(ai[i], P[k]) + ef_dot(ci[i], Q[k]));
+                hess[i * n + k] += w * (ref_dot(ai[i], P[k]) + ref_dot(ci[i], Q[k]));
         for (int e = 0; e < md->nj2; e++) {
             const ef_dvec3_t s2 = md->sv[e];
             hess[md->si[e] * (n + 1)] +=
-                w * (A[md->sk[e]] * ef_dot(U, s2) + C[md->sk[e]] * ef_dot(V, s2));
+                w * (A[md->sk[e]] * ref_dot(U, s2) + C[md->sk[e]] * ref_dot(V, s2));
         }
     }
     if (hess)
@@ -395,9 +395,9 @@ double ef_ref_objective_hess(ef_ref_kind_t kind, const ef_dend_t *e0, const ef_d
                              const double *dof, double *grad, double *hess)
 {
     ef_model_t md;
-    if (ef_model(kind, e0, e1, dof, &md) != EF_OK)
+    if (ref_model(kind, e0, e1, dof, &md) != EF_OK)
         return NAN;
-    return ef_eval(&md, grad, hess);
+    return ref_eval(&md, grad, hess);
 }
 
 /* C^2 as a function of the DOFs, with the gradient. */

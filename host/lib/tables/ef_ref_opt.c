@@ -74,31 +74,31 @@ void ef_ref_opts_default(ef_ref_opts_t *o)
 }
 
 /* Clamp into [lo, hi]. */
-static double ef_clamp(double v, double lo, double hi)
+static double opt_clamp(double v, double lo, double hi)
 {
     return v < lo ? lo : (v > hi ? hi : v);
 }
 
 /* Objective with gradient on the normalized problem. */
-static double ef_opt_f(const ef_prob_t *p, const double *x, double *g)
+static double opt_f(const ef_prob_t *p, const double *x, double *g)
 {
     return ef_ref_objective(p->kind, &p->e0, &p->e1, x, g);
 }
 
 /* Norm of the projected-gradient step x - P(x - g): zero exactly at a KKT point. */
-static double ef_opt_pg(const ef_prob_t *p, const double *x, const double *g)
+static double opt_pg(const ef_prob_t *p, const double *x, const double *g)
 {
     double s = 0.0;
     for (int i = 0; i < p->n; i++) {
-        const double r = x[i] - ef_clamp(x[i] - g[i], p->lo[i], p->hi[i]);
+        const double r = x[i] - opt_clamp(x[i] - g[i], p->lo[i], p->hi[i]);
         s += r * r;
     }
     return sqrt(s);
 }
 
 /* Exact Hessian (and gradient) at x, unpacked into a square array. */
-static void ef_opt_hess(const ef_prob_t *p, const double *x, double *g,
-                        double h[EF_REF_MAX_DOF][EF_REF_MAX_DOF])
+static void opt_hess(const ef_prob_t *p, const double *x, double *g,
+                     double h[EF_REF_MAX_DOF][EF_REF_MAX_DOF])
 {
     double flat[EF_REF_MAX_DOF * EF_REF_MAX_DOF];
     ef_ref_objective_hess(p->kind, &p->e0, &p->e1, x, g, flat);
@@ -112,8 +112,8 @@ static void ef_opt_hess(const ef_prob_t *p, const double *x, double *g,
  * EF_OPT_JACOBI_SWEEPS sweeps): eigenvalues end on a's diagonal, eigenvectors in v's
  * columns. Jacobi is simple, branch-light and exact enough for m <= 5.
  */
-static void ef_opt_eigen(double a[EF_REF_MAX_DOF][EF_REF_MAX_DOF], int m,
-                         double v[EF_REF_MAX_DOF][EF_REF_MAX_DOF])
+static void opt_eigen(double a[EF_REF_MAX_DOF][EF_REF_MAX_DOF], int m,
+                      double v[EF_REF_MAX_DOF][EF_REF_MAX_DOF])
 {
     for (int i = 0; i < m; i++)
         for (int j = 0; j < m; j++)
@@ -160,8 +160,8 @@ static void ef_opt_eigen(double a[EF_REF_MAX_DOF][EF_REF_MAX_DOF], int m,
  * the projected gradient met tol, or the Newton model predicted a change below the rounding
  * of C^2 and the gradient could not be halved any more (the numerical floor).
  */
-static double ef_opt_local(const ef_prob_t *p, double *x, int max_iter, double tol, int *iters,
-                           int *conv)
+static double opt_local(const ef_prob_t *p, double *x, int max_iter, double tol, int *iters,
+                        int *conv)
 {
     const int n = p->n;
     double g[EF_REF_MAX_DOF], f;
@@ -169,9 +169,9 @@ static double ef_opt_local(const ef_prob_t *p, double *x, int max_iter, double t
 
     *conv = 0;
     for (int i = 0; i < n; i++)
-        x[i] = ef_clamp(x[i], p->lo[i], p->hi[i]);
-    f = ef_opt_f(p, x, g);
-    double pg = isfinite(f) ? ef_opt_pg(p, x, g) : INFINITY;
+        x[i] = opt_clamp(x[i], p->lo[i], p->hi[i]);
+    f = opt_f(p, x, g);
+    double pg = isfinite(f) ? opt_pg(p, x, g) : INFINITY;
     for (it = 0; it < max_iter && isfinite(f); it++) {
         if (pg <= tol * fmax(1.0, f)) {
             *conv = 1;
@@ -188,11 +188,11 @@ static double ef_opt_local(const ef_prob_t *p, double *x, int max_iter, double t
 
         double h[EF_REF_MAX_DOF][EF_REF_MAX_DOF], hf[EF_REF_MAX_DOF][EF_REF_MAX_DOF];
         double ev[EF_REF_MAX_DOF][EF_REF_MAX_DOF], d[EF_REF_MAX_DOF], lmax = 0.0;
-        ef_opt_hess(p, x, g, h);
+        opt_hess(p, x, g, h);
         for (int a = 0; a < m; a++)
             for (int b = 0; b < m; b++)
                 hf[a][b] = h[fi[a]][fi[b]];
-        ef_opt_eigen(hf, m, ev);
+        opt_eigen(hf, m, ev);
         for (int a = 0; a < m; a++)
             lmax = fmax(lmax, fabs(hf[a][a]));
         /* Saddle-free Newton on the free set: each eigen-direction scaled by 1/|lambda|, so
@@ -218,7 +218,7 @@ static double ef_opt_local(const ef_prob_t *p, double *x, int max_iter, double t
         for (int ls = 0; ls < EF_OPT_LS_MAX && !accepted && !floor_reached; ls++, step *= 0.5) {
             double dx[EF_REF_MAX_DOF], lin = 0.0, quad = 0.0;
             for (int i = 0; i < n; i++) {
-                xn[i] = ef_clamp(x[i] + step * d[i], p->lo[i], p->hi[i]);
+                xn[i] = opt_clamp(x[i] + step * d[i], p->lo[i], p->hi[i]);
                 dx[i] = xn[i] - x[i];
                 lin += g[i] * dx[i];
             }
@@ -227,20 +227,20 @@ static double ef_opt_local(const ef_prob_t *p, double *x, int max_iter, double t
                     quad += dx[i] * h[i][j] * dx[j];
             /* The quadratic model's change: negative for descent and for negative curvature. */
             const double pred = lin + 0.5 * quad;
-            fn = ef_opt_f(p, xn, gn);
+            fn = opt_f(p, xn, gn);
             if (!isfinite(fn))
                 continue;
             if (ls == 0 && fabs(pred) <= EF_OPT_NOISE * fabs(f)) {
                 /* The full step's predicted change is below the rounding of C^2 (which near
                  * C = 0 is far above 1 ulp), so values cannot judge it; the gradient can:
                  * take it while it halves the projected gradient, else stop here. */
-                pgn = ef_opt_pg(p, xn, gn);
+                pgn = opt_pg(p, xn, gn);
                 accepted = fn <= f + EF_OPT_NOISE * fabs(f) && pgn < 0.5 * pg;
                 floor_reached = !accepted;
             } else {
                 accepted = pred < 0.0 && fn <= f + 1e-4 * pred;
                 if (accepted)
-                    pgn = ef_opt_pg(p, xn, gn);
+                    pgn = opt_pg(p, xn, gn);
             }
         }
         if (floor_reached)
@@ -261,7 +261,7 @@ static double ef_opt_local(const ef_prob_t *p, double *x, int max_iter, double t
 }
 
 /* Nonzero when every component is finite. */
-static int ef_opt_finite3(ef_dvec3_t v)
+static int opt_finite3(ef_dvec3_t v)
 {
     return isfinite(v.x) && isfinite(v.y) && isfinite(v.z);
 }
@@ -276,15 +276,15 @@ typedef struct {
 } ef_grid_t;
 
 /* Copy a node list into one grid axis, clamped into [lo, hi] (its first node is lo). */
-static void ef_opt_axis(ef_grid_t *gr, int k, const double *v, int len, double lo, double hi)
+static void opt_axis(ef_grid_t *gr, int k, const double *v, int len, double lo, double hi)
 {
     gr->len[k] = len;
     for (int i = 0; i < len; i++)
-        gr->node[k][i] = ef_clamp(v[i], lo, hi);
+        gr->node[k][i] = opt_clamp(v[i], lo, hi);
 }
 
 /* Unit vector, or the zero vector when v is shorter than 1e-9. */
-static ef_dvec3_t ef_opt_unit(ef_dvec3_t v)
+static ef_dvec3_t opt_unit(ef_dvec3_t v)
 {
     const double l = sqrt(v.x * v.x + v.y * v.y + v.z * v.z);
     if (!(l >= 1e-9))
@@ -293,14 +293,14 @@ static ef_dvec3_t ef_opt_unit(ef_dvec3_t v)
 }
 
 /* Component of a normal to the unit vector u. */
-static ef_dvec3_t ef_opt_perp(ef_dvec3_t a, ef_dvec3_t u)
+static ef_dvec3_t opt_perp(ef_dvec3_t a, ef_dvec3_t u)
 {
     const double au = a.x * u.x + a.y * u.y + a.z * u.z;
     return (ef_dvec3_t){a.x - au * u.x, a.y - au * u.y, a.z - au * u.z};
 }
 
 /* The screening grid of a kind (node lists in docs/optimizer.md). */
-static void ef_opt_grid(const ef_prob_t *p, ef_grid_t *gr)
+static void opt_grid(const ef_prob_t *p, ef_grid_t *gr)
 {
     static const double x1c[8] = {0.0, 0.2, 0.4, 0.7, 1.0, 1.4, 2.0, 3.0};
     static const double x1q[5] = {0.0, 0.3, 0.7, 1.2, 2.0};
@@ -315,34 +315,34 @@ static void ef_opt_grid(const ef_prob_t *p, ef_grid_t *gr)
     case EF_REF_G1_CUBIC:
         gr->dims = 2;
         for (int k = 0; k < 2; k++)
-            ef_opt_axis(gr, k, x1c, 8, p->lo[k], p->hi[k]);
+            opt_axis(gr, k, x1c, 8, p->lo[k], p->hi[k]);
         break;
     case EF_REF_G2_QUINTIC:
         gr->dims = 4;
         for (int k = 0; k < 4; k += 2) {
-            ef_opt_axis(gr, k, x1q, 5, p->lo[k], p->hi[k]);
-            ef_opt_axis(gr, k + 1, x2q, 7, p->lo[k + 1], p->hi[k + 1]);
+            opt_axis(gr, k, x1q, 5, p->lo[k], p->hi[k]);
+            opt_axis(gr, k + 1, x2q, 7, p->lo[k + 1], p->hi[k + 1]);
         }
         break;
     default: { /* EF_REF_G1_QUARTIC: axes 2..4 are offsets, clamped when mapped */
         gr->dims = 5;
         for (int k = 0; k < 2; k++)
-            ef_opt_axis(gr, k, x1q, 5, p->lo[k], p->hi[k]);
-        ef_opt_axis(gr, 2, off_u, 3, -INFINITY, INFINITY);
-        ef_opt_axis(gr, 3, off_v, 5, -INFINITY, INFINITY);
-        ef_opt_axis(gr, 4, off_w, 3, -INFINITY, INFINITY);
+            opt_axis(gr, k, x1q, 5, p->lo[k], p->hi[k]);
+        opt_axis(gr, 2, off_u, 3, -INFINITY, INFINITY);
+        opt_axis(gr, 3, off_v, 5, -INFINITY, INFINITY);
+        opt_axis(gr, 4, off_w, 3, -INFINITY, INFINITY);
         /* Frame: u along the chord, v across it in the plane the tangents lean into (the
          * larger of the sum and the difference of their normal parts), w = u x v. */
         const ef_dvec3_t u = p->e1.p;
-        const ef_dvec3_t a = ef_opt_perp(p->e0.t, u), b = ef_opt_perp(p->e1.t, u);
+        const ef_dvec3_t a = opt_perp(p->e0.t, u), b = opt_perp(p->e1.t, u);
         const ef_dvec3_t sum = {a.x + b.x, a.y + b.y, a.z + b.z};
         const ef_dvec3_t dif = {a.x - b.x, a.y - b.y, a.z - b.z};
-        ef_dvec3_t v = ef_opt_unit(sum.x * sum.x + sum.y * sum.y + sum.z * sum.z >=
-                                           dif.x * dif.x + dif.y * dif.y + dif.z * dif.z
-                                       ? sum
-                                       : dif);
+        ef_dvec3_t v = opt_unit(sum.x * sum.x + sum.y * sum.y + sum.z * sum.z >=
+                                        dif.x * dif.x + dif.y * dif.y + dif.z * dif.z
+                                    ? sum
+                                    : dif);
         if (v.x == 0.0 && v.y == 0.0 && v.z == 0.0) /* tangents along the chord */
-            v = ef_opt_unit(ef_opt_perp(
+            v = opt_unit(opt_perp(
                 fabs(u.x) > 0.6 ? (ef_dvec3_t){0.0, 1.0, 0.0} : (ef_dvec3_t){1.0, 0.0, 0.0}, u));
         gr->u = u;
         gr->v = v;
@@ -354,7 +354,7 @@ static void ef_opt_grid(const ef_prob_t *p, ef_grid_t *gr)
 }
 
 /* DOFs of grid point number idx (mixed radix, axis 0 fastest), clamped into the box. */
-static void ef_opt_grid_point(const ef_prob_t *p, const ef_grid_t *gr, int idx, double *x)
+static void opt_grid_point(const ef_prob_t *p, const ef_grid_t *gr, int idx, double *x)
 {
     double c[EF_REF_MAX_DOF];
     for (int k = 0; k < gr->dims; k++) {
@@ -369,14 +369,14 @@ static void ef_opt_grid_point(const ef_prob_t *p, const ef_grid_t *gr, int idx, 
         x[4] = gr->mid.z + c[2] * gr->u.z + c[3] * gr->v.z + c[4] * gr->w.z;
     }
     for (int k = 0; k < p->n; k++)
-        x[k] = ef_clamp(x[k], p->lo[k], p->hi[k]);
+        x[k] = opt_clamp(x[k], p->lo[k], p->hi[k]);
 }
 
 /*
  * Starts from the screening grid: the EF_OPT_KEEP lowest grid points that no axis neighbour
  * undercuts (ties broken by index, so clamped duplicates count once). Returns how many.
  */
-static int ef_opt_grid_starts(const ef_prob_t *p, const ef_grid_t *gr, double st[][EF_REF_MAX_DOF])
+static int opt_grid_starts(const ef_prob_t *p, const ef_grid_t *gr, double st[][EF_REF_MAX_DOF])
 {
     double val[EF_OPT_GRID_MAX], keepv[EF_OPT_KEEP];
     int keep[EF_OPT_KEEP], nk = 0, total = 1;
@@ -385,8 +385,8 @@ static int ef_opt_grid_starts(const ef_prob_t *p, const ef_grid_t *gr, double st
         total *= gr->len[k];
     for (int i = 0; i < total; i++) {
         double x[EF_REF_MAX_DOF];
-        ef_opt_grid_point(p, gr, i, x);
-        val[i] = ef_opt_f(p, x, NULL);
+        opt_grid_point(p, gr, i, x);
+        val[i] = opt_f(p, x, NULL);
         if (!isfinite(val[i]))
             val[i] = INFINITY;
     }
@@ -423,7 +423,7 @@ static int ef_opt_grid_starts(const ef_prob_t *p, const ef_grid_t *gr, double st
             nk++;
     }
     for (int q = 0; q < nk; q++)
-        ef_opt_grid_point(p, gr, keep[q], st[q]);
+        opt_grid_point(p, gr, keep[q], st[q]);
     return nk;
 }
 
@@ -433,7 +433,7 @@ static int ef_opt_grid_starts(const ef_prob_t *p, const ef_grid_t *gr, double st
  * out of the plane (quartic; the last finds optima that leave the plane of planar data,
  * which a start in the plane cannot reach by symmetry). Returns how many.
  */
-static int ef_opt_fixed_starts(const ef_prob_t *p, const ef_grid_t *gr, double st[][EF_REF_MAX_DOF])
+static int opt_fixed_starts(const ef_prob_t *p, const ef_grid_t *gr, double st[][EF_REF_MAX_DOF])
 {
     static const double x1s[3] = {0.3, 1.0, 2.0};
     static const double x2s[3] = {-2.0, 0.0, 2.0};
@@ -520,11 +520,11 @@ int ef_ref_optimize(ef_ref_kind_t kind, const ef_dend_t *e0, const ef_dend_t *e1
     const ef_dend_t *ends[2] = {e0, e1};
     for (int k = 0; k < 2; k++) {
         const ef_dend_t *e = ends[k];
-        if (!ef_opt_finite3(e->p))
+        if (!opt_finite3(e->p))
             return ef_fail(m, EF_ERR_NONFINITE, "ef_ref_optimize: e%d.p not finite", k);
-        if (!ef_opt_finite3(e->t))
+        if (!opt_finite3(e->t))
             return ef_fail(m, EF_ERR_NONFINITE, "ef_ref_optimize: e%d.t not finite", k);
-        if (kind == EF_REF_G2_QUINTIC && !ef_opt_finite3(e->n))
+        if (kind == EF_REF_G2_QUINTIC && !opt_finite3(e->n))
             return ef_fail(m, EF_ERR_NONFINITE, "ef_ref_optimize: e%d.n not finite", k);
         if (kind == EF_REF_G2_QUINTIC && !isfinite(e->kappa))
             return ef_fail(m, EF_ERR_NONFINITE, "ef_ref_optimize: e%d.kappa not finite", k);
@@ -582,9 +582,9 @@ int ef_ref_optimize(ef_ref_kind_t kind, const ef_dend_t *e0, const ef_dend_t *e1
         ns = 1;
     }
     ef_grid_t gr;
-    ef_opt_grid(&p, &gr);
-    ns += ef_opt_fixed_starts(&p, &gr, st + ns);
-    ns += ef_opt_grid_starts(&p, &gr, st + ns);
+    opt_grid(&p, &gr);
+    ns += opt_fixed_starts(&p, &gr, st + ns);
+    ns += opt_grid_starts(&p, &gr, st + ns);
 
     double best[EF_REF_MAX_DOF] = {0.0}, bestf = INFINITY;
     int bestconv = 0;
@@ -594,7 +594,7 @@ int ef_ref_optimize(ef_ref_kind_t kind, const ef_dend_t *e0, const ef_dend_t *e1
         int it, conv;
         for (int i = 0; i < n; i++)
             x[i] = st[k][i];
-        const double f = ef_opt_local(&p, x, o->max_iter, o->tol, &it, &conv);
+        const double f = opt_local(&p, x, o->max_iter, o->tol, &it, &conv);
         iters += it;
         /* Starts that reach the same minimum differ only by rounding there; among such
          * near-ties prefer one that met the stopping test. */

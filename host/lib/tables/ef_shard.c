@@ -29,13 +29,13 @@ static const uint8_t ef_magic_table[8] = {0x45, 0x46, 0x54, 0x42, 0x0D, 0x0A, 0x
     ((size_t)EF_EFILE_MAX_HEADER + 4u * (size_t)EF_TABLE_MAX_NODES * EF_TABLE_MAX_DOF + 4u)
 
 /* Bitwise double equality: a spec is equal only if it encodes to the same bytes. */
-static int ef_same_f64(double a, double b)
+static int shd_same_f64(double a, double b)
 {
     return memcmp(&a, &b, sizeof a) == 0;
 }
 
 /* Printable ASCII only: names and provenance appear in messages and in table files. */
-static int ef_printable(const char *s, size_t n)
+static int shd_printable(const char *s, size_t n)
 {
     for (size_t i = 0; i < n; i++)
         if (s[i] < 0x20 || s[i] > 0x7e)
@@ -47,7 +47,7 @@ static int ef_printable(const char *s, size_t n)
 int ef_spec_from_table(const ef_tfile_t *t, const char *backend, ef_spec_rec_t *s, ef_msg_t *m)
 {
     size_t blen = backend ? strlen(backend) : 0;
-    if (!t || !s || blen == 0 || blen > EF_SPEC_MAX_BACKEND || !ef_printable(backend, blen))
+    if (!t || !s || blen == 0 || blen > EF_SPEC_MAX_BACKEND || !shd_printable(backend, blen))
         return ef_fail(m, EF_ERR_ARG,
                        "build: backend name '%s' is empty, longer than %u or "
                        "not printable",
@@ -76,9 +76,9 @@ int ef_spec_from_table(const ef_tfile_t *t, const char *backend, ef_spec_rec_t *
 }
 
 /* Append a formatted piece to a bounded buffer; output past the end is dropped. */
-static void ef_cat(char *out, size_t size, const char *fmt, ...)
+static void shd_cat(char *out, size_t size, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
-static void ef_cat(char *out, size_t size, const char *fmt, ...)
+static void shd_cat(char *out, size_t size, const char *fmt, ...)
 {
     size_t n = strlen(out);
     if (n + 1 >= size)
@@ -96,12 +96,12 @@ int ef_spec_diff(const ef_spec_rec_t *a, const ef_spec_rec_t *b, char *out, size
     out[0] = '\0';
 #define EF_DIFF_U(field, label)                                                                    \
     if (a->field != b->field) {                                                                    \
-        ef_cat(out, size, "%s%s %lu vs %lu", n++ ? "; " : "", label, (unsigned long)a->field,      \
-               (unsigned long)b->field);                                                           \
+        shd_cat(out, size, "%s%s %lu vs %lu", n++ ? "; " : "", label, (unsigned long)a->field,     \
+                (unsigned long)b->field);                                                          \
     }
 #define EF_DIFF_D(field, label)                                                                    \
-    if (!ef_same_f64(a->field, b->field)) {                                                        \
-        ef_cat(out, size, "%s%s %.17g vs %.17g", n++ ? "; " : "", label, a->field, b->field);      \
+    if (!shd_same_f64(a->field, b->field)) {                                                       \
+        shd_cat(out, size, "%s%s %.17g vs %.17g", n++ ? "; " : "", label, a->field, b->field);     \
     }
     EF_DIFF_U(kind, "kind")
     EF_DIFF_U(symmetry, "symmetry")
@@ -126,15 +126,15 @@ int ef_spec_diff(const ef_spec_rec_t *a, const ef_spec_rec_t *b, char *out, size
 #undef EF_DIFF_U
 #undef EF_DIFF_D
     if (strcmp(a->backend, b->backend))
-        ef_cat(out, size, "%sbackend '%s' vs '%s'", n++ ? "; " : "", a->backend, b->backend);
+        shd_cat(out, size, "%sbackend '%s' vs '%s'", n++ ? "; " : "", a->backend, b->backend);
     if (a->prov_len != b->prov_len || memcmp(a->prov, b->prov, a->prov_len)) {
         /* Provenance strings are long: show where they part. */
         uint32_t k = 0;
         while (k < a->prov_len && k < b->prov_len && a->prov[k] == b->prov[k])
             k++;
         uint32_t from = k > 20 ? k - 20 : 0;
-        ef_cat(out, size, "%sprovenance differs at character %u ('...%.40s' vs '...%.40s')",
-               n++ ? "; " : "", k, a->prov + from, b->prov + from);
+        shd_cat(out, size, "%sprovenance differs at character %u ('...%.40s' vs '...%.40s')",
+                n++ ? "; " : "", k, a->prov + from, b->prov + from);
     }
     return n;
 }
@@ -159,7 +159,7 @@ void ef_spec_to_tfile(const ef_spec_rec_t *s, ef_tfile_spec_t *ts)
 }
 
 /* Spec record bytes; returns the length (EF_SPEC_FIXED + backend + provenance). */
-static size_t ef_spec_encode(const ef_spec_rec_t *s, uint8_t *p)
+static size_t shd_spec_encode(const ef_spec_rec_t *s, uint8_t *p)
 {
     const size_t blen = strlen(s->backend);
     memset(p, 0, EF_SPEC_FIXED);
@@ -190,7 +190,7 @@ static size_t ef_spec_encode(const ef_spec_rec_t *s, uint8_t *p)
 /* Decode a spec record of exactly len bytes; 0 if it is self-consistent, -1 if not. Full
  * validity as a table is ef_tfile_create()'s business; this only keeps the numbers sane
  * enough to size buffers and index rows. */
-static int ef_spec_decode(const uint8_t *p, size_t len, ef_spec_rec_t *s)
+static int shd_spec_decode(const uint8_t *p, size_t len, ef_spec_rec_t *s)
 {
     memset(s, 0, sizeof *s);
     if (len < EF_SPEC_FIXED)
@@ -224,14 +224,14 @@ static int ef_spec_decode(const uint8_t *p, size_t len, ef_spec_rec_t *s)
     s->prov_len = plen;
     if ((s->naxes != 2 && s->naxes != 4) || s->ndof != s->naxes || s->axis_nodes[0] < 2 ||
         s->nodes == 0 || s->nodes > EF_TABLE_MAX_NODES || product != s->nodes ||
-        s->rows != s->nodes / s->axis_nodes[0] || !ef_printable(s->backend, blen) ||
-        !ef_printable(s->prov, plen))
+        s->rows != s->nodes / s->axis_nodes[0] || !shd_printable(s->backend, blen) ||
+        !shd_printable(s->prov, plen))
         return -1;
     return 0;
 }
 
 /* Rows of shard index/count over rows (count 0: all); caller has checked the ranges. */
-static void ef_shard_range(uint32_t rows, uint32_t index, uint32_t count, uint32_t *b, uint32_t *e)
+static void shd_range(uint32_t rows, uint32_t index, uint32_t count, uint32_t *b, uint32_t *e)
 {
     if (count == 0) {
         *b = 0;
@@ -288,9 +288,9 @@ int ef_build_shard_rows(const ef_tfile_t *t, const ef_build_shard_t *s, uint32_t
                            "--shard %u/%u: the table has only %u rows (a row is the %u nodes "
                            "along axis 0), so it splits into at most %u shards",
                            s->index, s->count, rows, t->view.axis[0].nodes, rows);
-        ef_shard_range(rows, s->index, s->count, row_begin, row_end);
+        shd_range(rows, s->index, s->count, row_begin, row_end);
     } else {
-        ef_shard_range(rows, 0, 0, row_begin, row_end);
+        shd_range(rows, 0, 0, row_begin, row_end);
     }
     return EF_OK;
 }
@@ -301,7 +301,7 @@ size_t ef_efile_put_header(uint8_t *buf, const uint8_t magic[8], const ef_efile_
     memset(buf, 0, EF_EFILE_PREFIX);
     memcpy(buf, magic, 8);
     ef_le_put16(buf + 8, EF_EFILE_VERSION);
-    const size_t slen = ef_spec_encode(&h->spec, buf + EF_EFILE_PREFIX);
+    const size_t slen = shd_spec_encode(&h->spec, buf + EF_EFILE_PREFIX);
     ef_le_put32(buf + 12, (uint32_t)slen);
     ef_le_put32(buf + 16, h->index);
     ef_le_put32(buf + 20, h->count);
@@ -313,7 +313,7 @@ size_t ef_efile_put_header(uint8_t *buf, const uint8_t magic[8], const ef_efile_
 }
 
 /* What a file is, by its magic, for messages that refuse it. */
-static const char *ef_efile_kind(const uint8_t *buf, size_t len)
+static const char *shd_efile_kind(const uint8_t *buf, size_t len)
 {
     if (len < 8)
         return NULL;
@@ -332,7 +332,7 @@ int ef_efile_get_header(const char *path, const uint8_t *buf, size_t len, const 
 {
     memset(h, 0, sizeof *h);
     if (len < 8 || memcmp(buf, magic, 8)) {
-        const char *is = ef_efile_kind(buf, len);
+        const char *is = shd_efile_kind(buf, len);
         if (len < 8 && !is)
             return ef_fail(m, EF_ERR_TBL_TRUNCATED, "%s: not a %s (%zu bytes, too short)", path,
                            what, len);
@@ -361,7 +361,7 @@ int ef_efile_get_header(const char *path, const uint8_t *buf, size_t len, const 
                        "%s: %s corrupt: header CRC (offset %zu) stored %08" PRIx32
                        ", computed %08" PRIx32,
                        path, what, hlen - 4, stored, crc);
-    if (ef_spec_decode(buf + EF_EFILE_PREFIX, slen, &h->spec) != 0)
+    if (shd_spec_decode(buf + EF_EFILE_PREFIX, slen, &h->spec) != 0)
         return ef_fail(m, EF_ERR_TBL_HEADER, "%s: %s has an inconsistent table spec (offset %u)",
                        path, what, EF_EFILE_PREFIX);
     h->index = ef_le_get32(buf + 16);
@@ -374,7 +374,7 @@ int ef_efile_get_header(const char *path, const uint8_t *buf, size_t len, const 
                              ? h->index == 0
                              : h->index >= 1 && h->index <= h->count && h->count <= h->spec.rows;
     if (shard_ok)
-        ef_shard_range(h->spec.rows, h->index, h->count, &b, &e);
+        shd_range(h->spec.rows, h->index, h->count, &b, &e);
     if (!shard_ok || b != h->row_begin || e != h->row_end)
         return ef_fail(m, EF_ERR_TBL_HEADER,
                        "%s: %s fields 'shard' / 'rows' (offset 16) inconsistent: shard %u/%u, "
@@ -448,8 +448,8 @@ int ef_shard_write(const ef_tfile_t *t, const char *backend, const ef_build_shar
 }
 
 /* Read and fully check one shard file; *values points into *buf (little-endian floats). */
-static int ef_shard_load(const char *path, uint8_t **buf, ef_efile_hdr_t *h, const uint8_t **values,
-                         size_t *nval, ef_msg_t *m)
+static int shd_load(const char *path, uint8_t **buf, ef_efile_hdr_t *h, const uint8_t **values,
+                    size_t *nval, ef_msg_t *m)
 {
     size_t len;
     int rc = ef_file_read(path, EF_SHARD_MAX_FILE, buf, &len, m);
@@ -506,7 +506,7 @@ int ef_shard_merge(const char *const *paths, uint32_t npaths, ef_tfile_t *out, e
         size_t nval = 0;
         free(buf);
         buf = NULL;
-        rc = ef_shard_load(paths[k], &buf, h, &vals, &nval, m);
+        rc = shd_load(paths[k], &buf, h, &vals, &nval, m);
         if (rc != EF_OK)
             break;
         if (k == 0) {
@@ -559,10 +559,10 @@ int ef_shard_merge(const char *const *paths, uint32_t npaths, ef_tfile_t *out, e
             if (seen[i])
                 continue;
             uint32_t b, e;
-            ef_shard_range(first->spec.rows, i + 1, first->count, &b, &e);
+            shd_range(first->spec.rows, i + 1, first->count, &b, &e);
             if (missing++ < 8)
-                ef_cat(list, sizeof list, "%s%u/%u (rows %u..%u)", missing > 1 ? ", " : "", i + 1,
-                       first->count, b, e - 1);
+                shd_cat(list, sizeof list, "%s%u/%u (rows %u..%u)", missing > 1 ? ", " : "", i + 1,
+                        first->count, b, e - 1);
         }
         if (missing)
             rc = ef_fail(m, EF_ERR_ARG, "%u of %u shards missing: %s%s", missing, first->count,

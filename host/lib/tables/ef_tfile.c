@@ -66,7 +66,7 @@ typedef struct {
 } ef_tf_hdr_t;
 
 /* Field lookup by any byte inside it, so corrupted multi-byte fields are named too. */
-static const ef_tf_field_t *ef_tf_field_at(uint32_t offset)
+static const ef_tf_field_t *tf_field_at(uint32_t offset)
 {
     size_t i;
     for (i = 0; i < EF_TF_NFIELDS; i++) {
@@ -80,14 +80,14 @@ static const ef_tf_field_t *ef_tf_field_at(uint32_t offset)
 /* Public name lookup; past the header the layout depends on the file, hence "body". */
 const char *ef_tfile_field_name(uint32_t offset)
 {
-    const ef_tf_field_t *f = ef_tf_field_at(offset);
+    const ef_tf_field_t *f = tf_field_at(offset);
     return f ? f->name : "body";
 }
 
 /* Turn a parser failure into one line naming the field, its offset and the bad value,
  * reading only bytes that exist. */
-static int ef_tf_report(ef_msg_t *m, int code, const char *who, const uint8_t *b, size_t len,
-                        uint32_t off)
+static int tf_report(ef_msg_t *m, int code, const char *who, const uint8_t *b, size_t len,
+                     uint32_t off)
 {
     const char *what = ef_err_str(code);
     const ef_tf_field_t *f;
@@ -100,7 +100,7 @@ static int ef_tf_report(ef_msg_t *m, int code, const char *who, const uint8_t *b
     if (code == EF_ERR_TBL_SIZE && off >= EF_TABLE_HEADER_SIZE) {
         return ef_fail(m, code, "%s: %s: %zu bytes, header implies %" PRIu32, who, what, len, off);
     }
-    f = ef_tf_field_at(off);
+    f = tf_field_at(off);
     if (f != NULL && len >= (size_t)f->off + f->size) {
         const uint8_t *p = b + f->off;
         if (f->type == 'd') {
@@ -155,7 +155,7 @@ static int ef_tf_report(ef_msg_t *m, int code, const char *who, const uint8_t *b
 }
 
 /* Write the 160-byte header; unused axes come out zero because hdr holds zeros there. */
-static void ef_tf_put_header(uint8_t *p, const ef_tf_hdr_t *h)
+static void tf_put_header(uint8_t *p, const ef_tf_hdr_t *h)
 {
     static const uint8_t magic[EF_TABLE_MAGIC_LEN] = {0x45, 0x46, 0x54, 0x42,
                                                       0x0D, 0x0A, 0x1A, 0x0A};
@@ -190,7 +190,7 @@ static void ef_tf_put_header(uint8_t *p, const ef_tf_hdr_t *h)
 /* Build a complete file image. values NULL fills a valid placeholder (x1 = x1_min, x2 = 0)
  * so a spec can be validated end to end without the caller's values existing yet. The
  * header must already have passed the header-only parse, which bounds the size. */
-static int ef_tf_image(const ef_tf_hdr_t *h, const float *values, uint8_t **blob, size_t *len)
+static int tf_image(const ef_tf_hdr_t *h, const float *values, uint8_t **blob, size_t *len)
 {
     const size_t prov_pad = (size_t)EF_TF_PAD8(h->prov_len);
     const size_t data_off = EF_TABLE_HEADER_SIZE + prov_pad;
@@ -201,7 +201,7 @@ static int ef_tf_image(const ef_tf_hdr_t *h, const float *values, uint8_t **blob
     if (p == NULL) {
         return EF_ERR_NOMEM;
     }
-    ef_tf_put_header(p, h);
+    tf_put_header(p, h);
     memset(p + EF_TABLE_HEADER_SIZE, 0, prov_pad);
     if (h->prov_len) {
         memcpy(p + EF_TABLE_HEADER_SIZE, h->prov, h->prov_len);
@@ -224,8 +224,8 @@ static int ef_tf_image(const ef_tf_hdr_t *h, const float *values, uint8_t **blob
 /* Validate hdr the parser's way: header alone first (it must stop at the size check,
  * which proves every header field good and bounds the allocation), then the whole image.
  * On success *blob and *len hold the image and *view the parsed view into it. */
-static int ef_tf_validate(const ef_tf_hdr_t *h, const float *values, const char *who,
-                          uint8_t **blob, size_t *len, ef_table_t *view, ef_msg_t *m)
+static int tf_validate(const ef_tf_hdr_t *h, const float *values, const char *who, uint8_t **blob,
+                       size_t *len, ef_table_t *view, ef_msg_t *m)
 {
     union {
         uint8_t b[EF_TABLE_HEADER_SIZE];
@@ -236,26 +236,26 @@ static int ef_tf_validate(const ef_tf_hdr_t *h, const float *values, const char 
 
     *blob = NULL;
     *len = 0;
-    ef_tf_put_header(hdr.b, h);
+    tf_put_header(hdr.b, h);
     rc = ef_table_parse(hdr.b, EF_TABLE_HEADER_SIZE, view, &off);
     if (rc != EF_ERR_TBL_TRUNCATED) {
         if (rc == EF_OK) { /* cannot happen: data and CRC are missing */
             rc = EF_ERR_TBL_SIZE;
         }
-        return ef_tf_report(m, rc, who, hdr.b, EF_TABLE_HEADER_SIZE, off);
+        return tf_report(m, rc, who, hdr.b, EF_TABLE_HEADER_SIZE, off);
     }
     if ((uint64_t)h->values != (uint64_t)h->nodes * h->ndof) {
         return ef_fail(m, EF_ERR_TBL_SHAPE,
                        "%s: %" PRIu32 " values for %" PRIu32 " nodes x %u DOFs", who, h->values,
                        h->nodes, (unsigned)h->ndof);
     }
-    rc = ef_tf_image(h, values, blob, len);
+    rc = tf_image(h, values, blob, len);
     if (rc != EF_OK) {
         return ef_fail(m, rc, "%s: out of memory for a %" PRIu32 "-node table", who, h->nodes);
     }
     rc = ef_table_parse(*blob, (uint32_t)*len, view, &off);
     if (rc != EF_OK) {
-        rc = ef_tf_report(m, rc, who, *blob, *len, off);
+        rc = tf_report(m, rc, who, *blob, *len, off);
         free(*blob);
         *blob = NULL;
         *len = 0;
@@ -264,7 +264,7 @@ static int ef_tf_validate(const ef_tf_hdr_t *h, const float *values, const char 
 }
 
 /* Header values of an existing table; the view holds the integers, the table the doubles. */
-static void ef_tf_hdr_from_table(const ef_tfile_t *t, ef_tf_hdr_t *h)
+static void tf_hdr_from_table(const ef_tfile_t *t, ef_tf_hdr_t *h)
 {
     unsigned i;
 
@@ -357,7 +357,7 @@ int ef_tfile_create(ef_tfile_t *t, const ef_tfile_spec_t *spec, ef_msg_t *m)
         h.values = h.nodes * h.ndof;
     }
 
-    rc = ef_tf_validate(&h, NULL, who, &blob, &len, &view, m);
+    rc = tf_validate(&h, NULL, who, &blob, &len, &view, m);
     if (rc != EF_OK) {
         if (rc == EF_ERR_TBL_SHAPE && product == 0xFFFFFFFFu) {
             /* The parser saw a saturated count; the real problem is the size. */
@@ -456,8 +456,8 @@ int ef_tfile_serialize(const ef_tfile_t *t, uint8_t **blob, size_t *len, ef_msg_
     if (t == NULL || blob == NULL || len == NULL || t->values == NULL) {
         return ef_fail(m, EF_ERR_ARG, "ef_tfile_serialize: NULL argument or table without values");
     }
-    ef_tf_hdr_from_table(t, &h);
-    return ef_tf_validate(&h, t->values, "table", blob, len, &view, m);
+    tf_hdr_from_table(t, &h);
+    return tf_validate(&h, t->values, "table", blob, len, &view, m);
 }
 
 /* Readers see the old file or the complete new one: the image goes to a temporary file
@@ -478,7 +478,7 @@ int ef_tfile_write(const ef_tfile_t *t, const char *path, ef_msg_t *m)
 }
 
 /* Read exactly n bytes unless the file ends first; returns bytes read or -1. */
-static ssize_t ef_tf_read_all(int fd, uint8_t *p, size_t n)
+static ssize_t tf_read_all(int fd, uint8_t *p, size_t n)
 {
     size_t got = 0;
     while (got < n) {
@@ -545,7 +545,7 @@ int ef_tfile_load(const char *path, ef_tfile_t *t, ef_msg_t *m)
         (void)close(fd);
         return ef_fail(m, EF_ERR_NOMEM, "%s: out of memory for %zu bytes", path, size);
     }
-    got = ef_tf_read_all(fd, buf, size);
+    got = tf_read_all(fd, buf, size);
     err = errno;
     (void)close(fd);
     if (got < 0) {
@@ -555,7 +555,7 @@ int ef_tfile_load(const char *path, ef_tfile_t *t, ef_msg_t *m)
     /* A file that shrank since fstat is parsed as read and reported truncated. */
     rc = ef_table_parse(buf, (uint32_t)got, &view, &off);
     if (rc != EF_OK) {
-        rc = ef_tf_report(m, rc, path, buf, (size_t)got, off);
+        rc = tf_report(m, rc, path, buf, (size_t)got, off);
         free(buf);
         return rc;
     }

@@ -29,7 +29,7 @@ static const char *const ef_emit_keywords[] = {
 
 /* A name that is not an identifier would make the output fail to compile far from the
  * cause; reject it here instead. Locale-independent on purpose. */
-static int ef_emit_is_identifier(const char *s)
+static int emit_is_identifier(const char *s)
 {
     size_t i, n = strlen(s);
 
@@ -54,14 +54,14 @@ static int ef_emit_is_identifier(const char *s)
 
 /* %a prints the exact binary value; the float->double widening is exact, and the 'f'
  * suffix reads it back as the same float, so values survive bit for bit. */
-static void ef_emit_float(FILE *out, float v)
+static void emit_float(FILE *out, float v)
 {
     fprintf(out, "%af", (double)v);
 }
 
 /* Escape what C would misread inside a string: quote, backslash, and '?' because "??x"
  * is a trigraph in ISO C (gcc -std=c11 honours them). Input is printable ASCII only. */
-static void ef_emit_string(FILE *out, const char *s, uint32_t n)
+static void emit_string(FILE *out, const char *s, uint32_t n)
 {
     uint32_t i;
 
@@ -83,13 +83,13 @@ static void ef_emit_string(FILE *out, const char *s, uint32_t n)
 }
 
 /* Names used in the header comment, so a reader knows what the table is without the file. */
-static const char *ef_emit_kind_name(unsigned kind)
+static const char *emit_kind_name(unsigned kind)
 {
     return kind == EF_TABLE_G1_CUBIC ? "G1 cubic" : "G2 quintic";
 }
 
 /* Symmetry name for the header comment. */
-static const char *ef_emit_sym_name(unsigned sym)
+static const char *emit_sym_name(unsigned sym)
 {
     return sym == EF_SYM_G1_FOLD     ? "G1 fold (u, v)"
            : sym == EF_SYM_G2_MIRROR ? "G2 mirror (alpha >= 0)"
@@ -110,7 +110,7 @@ int ef_tfile_emit_c(const ef_tfile_t *t, const char *name, FILE *out, ef_msg_t *
     if (t == NULL || name == NULL || out == NULL) {
         return ef_fail(m, EF_ERR_ARG, "ef_tfile_emit_c: NULL argument");
     }
-    if (!ef_emit_is_identifier(name)) {
+    if (!emit_is_identifier(name)) {
         return ef_fail(m, EF_ERR_ARG, "ef_tfile_emit_c: '%.*s' is not a C identifier",
                        (int)EF_EMIT_MAX_NAME, name);
     }
@@ -135,7 +135,7 @@ int ef_tfile_emit_c(const ef_tfile_t *t, const char *name, FILE *out, ef_msg_t *
             " * file's CRC and the parser's value checks.\n"
             " *\n"
             " * Table: %s, symmetry %s, %u nodes x %u DOFs; file CRC-32 %08lx.\n",
-            "ef_tfile_emit_c()", ef_emit_kind_name(v.kind), ef_emit_sym_name(v.symmetry),
+            "ef_tfile_emit_c()", emit_kind_name(v.kind), emit_sym_name(v.symmetry),
             (unsigned)v.nodes, (unsigned)v.ndof, (unsigned long)crc);
     for (i = 0; i < v.naxes; i++) {
         fprintf(out, " * Axis %u: [%.17g, %.17g], %u nodes%s.\n", i, t->lo[i], t->hi[i],
@@ -152,11 +152,11 @@ int ef_tfile_emit_c(const ef_tfile_t *t, const char *name, FILE *out, ef_msg_t *
             name, name, (unsigned long)count);
     for (k = 0; k < count; k++) {
         fputs(k % EF_EMIT_PER_LINE == 0 ? "\n    " : " ", out);
-        ef_emit_float(out, v.data[k]);
+        emit_float(out, v.data[k]);
         fputc(',', out);
     }
     fprintf(out, "\n};\n\nstatic const char %s_provenance[] =", name);
-    ef_emit_string(out, v.provenance, v.provenance_len);
+    emit_string(out, v.provenance, v.provenance_len);
     fprintf(out,
             ";\n"
             "\n"
@@ -170,20 +170,20 @@ int ef_tfile_emit_c(const ef_tfile_t *t, const char *name, FILE *out, ef_msg_t *
             name, (unsigned)v.kind, (unsigned)v.symmetry, (unsigned)v.naxes, (unsigned)v.ndof,
             (unsigned)v.quad_nodes, (unsigned long)v.nodes);
     fputs("    .x1_min = ", out);
-    ef_emit_float(out, v.x1_min);
+    emit_float(out, v.x1_min);
     fputs(",\n    .x1_max = ", out);
-    ef_emit_float(out, v.x1_max);
+    emit_float(out, v.x1_max);
     fputs(",\n    .x2_max = ", out);
-    ef_emit_float(out, v.x2_max);
+    emit_float(out, v.x2_max);
     fputs(",\n    .axis = {\n", out);
     for (i = 0; i < v.naxes; i++) {
         const ef_table_axis_t *ax = &v.axis[i];
         fprintf(out, "        [%u] = {.lo = ", i);
-        ef_emit_float(out, ax->lo);
+        emit_float(out, ax->lo);
         fputs(", .hi = ", out);
-        ef_emit_float(out, ax->hi);
+        emit_float(out, ax->hi);
         fputs(", .inv_step = ", out);
-        ef_emit_float(out, ax->inv_step);
+        emit_float(out, ax->inv_step);
         fprintf(out, ",\n               .nodes = %luu, .stride = %luu, .flags = %luu},\n",
                 (unsigned long)ax->nodes, (unsigned long)ax->stride, (unsigned long)ax->flags);
     }

@@ -19,7 +19,7 @@ typedef struct {
 } ef_verify_job_t;
 
 /* splitmix64: configuration i depends only on (seed, i), whatever the thread split. */
-static uint64_t ef_mix(uint64_t *s)
+static uint64_t ver_mix(uint64_t *s)
 {
     uint64_t z = (*s += 0x9E3779B97F4A7C15ull);
     z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
@@ -28,13 +28,13 @@ static uint64_t ef_mix(uint64_t *s)
 }
 
 /* Uniform double in [lo, hi]. */
-static double ef_uni(uint64_t *s, double lo, double hi)
+static double ver_uni(uint64_t *s, double lo, double hi)
 {
-    return lo + (hi - lo) * (double)(ef_mix(s) >> 11) * (1.0 / 9007199254740992.0);
+    return lo + (hi - lo) * (double)(ver_mix(s) >> 11) * (1.0 / 9007199254740992.0);
 }
 
 /* The user-coordinate range of axis a: folded and periodic tables cover whole circles. */
-static void ef_verify_range(const ef_table_t *t, int a, double *lo, double *hi)
+static void ver_range(const ef_table_t *t, int a, double *lo, double *hi)
 {
     *lo = t->axis[a].lo;
     *hi = t->axis[a].hi;
@@ -48,14 +48,14 @@ static void ef_verify_range(const ef_table_t *t, int a, double *lo, double *hi)
 }
 
 /* Unit vector uniform on the sphere. */
-static ef_dvec3_t ef_sphere(uint64_t *s)
+static ef_dvec3_t ver_sphere(uint64_t *s)
 {
-    double z = ef_uni(s, -1, 1), ph = ef_uni(s, -M_PI, M_PI), r = sqrt(1 - z * z);
+    double z = ver_uni(s, -1, 1), ph = ver_uni(s, -M_PI, M_PI), r = sqrt(1 - z * z);
     return (ef_dvec3_t){r * cos(ph), r * sin(ph), z};
 }
 
 /* One configuration: the firmware's segment, its C in double, and the reference optimum. */
-static int ef_verify_one(ef_verify_job_t *j, uint32_t i)
+static int ver_one(ef_verify_job_t *j, uint32_t i)
 {
     const ef_table_t *t = j->tbl;
     int g2 = t->kind == EF_TABLE_G2_QUINTIC;
@@ -66,15 +66,15 @@ static int ef_verify_one(ef_verify_job_t *j, uint32_t i)
         memset(&e0, 0, sizeof e0);
         memset(&e1, 0, sizeof e1);
         e1.p.x = 1;
-        e0.t = ef_sphere(&s);
-        e1.t = ef_sphere(&s);
+        e0.t = ver_sphere(&s);
+        e1.t = ver_sphere(&s);
         cfg[0] = acos(e0.t.x);
         cfg[1] = acos(e1.t.x);
     } else {
         for (int a = 0; a < t->naxes; a++) {
             double lo, hi;
-            ef_verify_range(t, a, &lo, &hi);
-            cfg[a] = ef_uni(&s, lo, hi);
+            ver_range(t, a, &lo, &hi);
+            cfg[a] = ver_uni(&s, lo, hi);
         }
         ef_ref_config(cfg[0], cfg[1], g2 ? cfg[2] : 0, g2 ? cfg[3] : 0, &e0, &e1);
     }
@@ -127,11 +127,11 @@ static int ef_verify_one(ef_verify_job_t *j, uint32_t i)
 }
 
 /* Worker over configurations index, index + threads, ... */
-static void *ef_verify_worker(void *arg)
+static void *ver_worker(void *arg)
 {
     ef_verify_job_t *j = arg;
     for (uint32_t i = (uint32_t)j->index; i < j->o->count; i += (uint32_t)j->threads) {
-        j->job.rc = ef_verify_one(j, i);
+        j->job.rc = ver_one(j, i);
         if (j->job.rc != EF_OK)
             break;
     }
@@ -139,20 +139,20 @@ static void *ef_verify_worker(void *arg)
 }
 
 /* qsort comparator for doubles. */
-static int ef_cmp_double(const void *a, const void *b)
+static int ver_cmp_double(const void *a, const void *b)
 {
     double x = *(const double *)a, y = *(const double *)b;
     return (x > y) - (x < y);
 }
 
 /* mean, median, p99, max of v[0..n) (sorts v). */
-static ef_stat_t ef_stats(double *v, uint32_t n)
+static ef_stat_t ver_stats(double *v, uint32_t n)
 {
     ef_stat_t st;
     double sum = 0;
     for (uint32_t i = 0; i < n; i++)
         sum += v[i];
-    qsort(v, n, sizeof *v, ef_cmp_double);
+    qsort(v, n, sizeof *v, ver_cmp_double);
     st.min = v[0];
     st.mean = sum / n;
     st.median = n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
@@ -192,8 +192,7 @@ int ef_verify_table(const ef_table_t *tbl, const ef_verify_opts_t *o, ef_verify_
                                    .x2e = x2e,
                                    .cfg = cfg};
     int started = 0;
-    int rc =
-        ef_parallel_run(job, sizeof job[0], o->threads, ef_verify_worker, "verify", &started, m);
+    int rc = ef_parallel_run(job, sizeof job[0], o->threads, ver_worker, "verify", &started, m);
     if (rc == EF_OK) {
         uint32_t worst = 0;
         for (uint32_t i = 1; i < n; i++)
@@ -205,9 +204,9 @@ int ef_verify_table(const ef_table_t *tbl, const ef_verify_opts_t *o, ef_verify_
             r->opt_misses += job[i].misses;
         }
         r->count = n;
-        r->excess = ef_stats(excess, n);
-        r->x1_err = ef_stats(x1e, n);
-        r->x2_err = ef_stats(x2e, n);
+        r->excess = ver_stats(excess, n);
+        r->x1_err = ver_stats(x1e, n);
+        r->x2_err = ver_stats(x2e, n);
     }
     clock_gettime(CLOCK_MONOTONIC, &t1);
     r->seconds = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
