@@ -12,7 +12,7 @@ if [ -n "$dups" ]; then
     echo "check_names: prefix listed twice in $table: $dups" >&2
     status=1
 fi
-for f in $(git ls-files 'firmware/src/*.c' 'host/lib/*.c' 'host/cli/*.c' 'gpu_offline/src/*.c'); do
+for f in $(find firmware/src host/lib host/cli gpu_offline/src -name '*.c' | sort); do
     # Names of static functions: a line starting "static" whose declarator is "name(".
     names=$(awk '/^static / && !/=/ { line=$0; sub(/\(.*/, "", line); n=split(line, w, /[ *]+/); if (n && line ~ /[A-Za-z0-9_]$/ && index($0, "(")) print w[n] }' "$f" | sort -u)
     [ -z "$names" ] && continue
