@@ -27,11 +27,16 @@ typedef struct {
 static inline int tm_spawn(char *const argv[], int use_stderr, tm_proc_t *p)
 {
     int fds[2];
+    p->pid = 0; /* on failure: nothing to stop (tm_stop returns -1) */
+    p->out = -1;
     if (pipe(fds) != 0)
         return -1;
     pid_t pid = fork();
-    if (pid < 0)
+    if (pid < 0) {
+        close(fds[0]);
+        close(fds[1]);
         return -1;
+    }
     if (pid == 0) {
         dup2(fds[1], use_stderr ? 2 : 1);
         close(fds[0]);

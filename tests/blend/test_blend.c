@@ -535,11 +535,13 @@ static void test_fixed(void)
     printf("\n");
 }
 
-int main(void)
+int main(int argc, char **argv)
 {
-    test_table_symmetry();
-    test_bad_input();
-    test_fixed();
-    test_random_corners();
-    return ef_test_summary();
+    static const ef_test_part_t parts[] = {
+        {"table_symmetry", test_table_symmetry},
+        {"bad_input", test_bad_input},
+        {"fixed", test_fixed},
+        {"random_corners", test_random_corners},
+    };
+    return EF_TEST_RUN(argc, argv, 1, parts);
 }

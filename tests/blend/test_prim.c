@@ -1199,14 +1199,16 @@ static void test_blend_prims_args(void)
     EF_CHECK_EQ(b.seg.degree, 0);
 }
 
-int main(void)
+int main(int argc, char **argv)
 {
-    test_check();
-    test_frame();
-    test_measure();
-    test_arc_piece();
-    test_blend_prims_args();
-    test_blend_prims();
-    test_tangent_joins();
-    return ef_test_summary();
+    static const ef_test_part_t parts[] = {
+        {"check", test_check},
+        {"frame", test_frame},
+        {"measure", test_measure},
+        {"arc_piece", test_arc_piece},
+        {"blend_prims_args", test_blend_prims_args},
+        {"blend_prims", test_blend_prims},
+        {"tangent_joins", test_tangent_joins},
+    };
+    return EF_TEST_RUN(argc, argv, 1, parts);
 }

@@ -816,8 +816,35 @@ static void part_boot(void)
     EF_CHECK(hil_err_has("boot", "node 9", "boot"));
 }
 
+/* Parts for the runner (main): the streaming modes, and the faults (named by the part). */
+static void hil_run_csp(void)
+{
+    part_stream("csp", 0);
+}
+
+static void hil_run_segment(void)
+{
+    part_stream("segment", 0);
+}
+
+static void hil_run_drop(void)
+{
+    part_stream("segment", 1);
+}
+
+static void hil_run_fault(void)
+{
+    part_fault(ef_t_part);
+}
+
+/* test_can_hil EVENFEED SRC_DIR OUT_DIR PART: one part per guest (tests/hil/can.sh). */
 int main(int argc, char **argv)
 {
+    static const ef_test_part_t parts[] = {
+        {"csp", hil_run_csp},    {"segment", hil_run_segment}, {"drop", hil_run_drop},
+        {"emcy", hil_run_fault}, {"heartbeat", hil_run_fault}, {"busoff", hil_run_fault},
+        {"boot", part_boot},     {"start", part_start},        {"masterdeath", part_masterdeath},
+    };
     if (argc < 5) {
         fprintf(stderr, "usage: test_can_hil EVENFEED SRC_DIR OUT_DIR PART\n");
         return 2;
@@ -828,24 +855,5 @@ int main(int argc, char **argv)
     g_out = argv[3];
     tm_evenfeed = g_ef;
     mkdir(g_out, 0777);
-    const char *part = argv[4];
-    if (!strcmp(part, "csp"))
-        part_stream("csp", 0);
-    else if (!strcmp(part, "segment"))
-        part_stream("segment", 0);
-    else if (!strcmp(part, "drop"))
-        part_stream("segment", 1);
-    else if (!strcmp(part, "emcy") || !strcmp(part, "heartbeat") || !strcmp(part, "busoff"))
-        part_fault(part);
-    else if (!strcmp(part, "boot"))
-        part_boot();
-    else if (!strcmp(part, "start"))
-        part_start();
-    else if (!strcmp(part, "masterdeath"))
-        part_masterdeath();
-    else {
-        fprintf(stderr, "unknown part %s\n", part);
-        return 2;
-    }
-    return ef_test_summary();
+    return EF_TEST_RUN(argc, argv, 4, parts);
 }

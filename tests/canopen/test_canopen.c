@@ -299,16 +299,9 @@ static void test_decode_bad(void)
 
 int main(int argc, char **argv)
 {
-    const char *part = argc > 1 ? argv[1] : "all";
-    int all = !strcmp(part, "all");
-    if (all || !strcmp(part, "bits"))
-        test_bits();
-    if (all || !strcmp(part, "words"))
-        test_words();
-    if (all || !strcmp(part, "codec")) {
-        test_roundtrip();
-        test_loss();
-        test_decode_bad();
-    }
-    return ef_test_summary();
+    static const ef_test_part_t parts[] = {
+        {"bits", test_bits},  {"words", test_words},      {"codec", test_roundtrip},
+        {"codec", test_loss}, {"codec", test_decode_bad},
+    };
+    return EF_TEST_RUN(argc, argv, 1, parts);
 }

@@ -498,14 +498,13 @@ static void test_lookup(void)
     EF_CHECK_EQ(s.degree, 5);
 }
 
-int main(void)
+int main(int argc, char **argv)
 {
-    test_atan2();
-    test_bezier();
-    test_functional();
-    test_normalize();
-    test_bad_input();
-    test_seg_from_dofs();
-    test_lookup();
-    return ef_test_summary();
+    static const ef_test_part_t parts[] = {
+        {"atan2", test_atan2},           {"bezier", test_bezier},
+        {"functional", test_functional}, {"normalize", test_normalize},
+        {"bad_input", test_bad_input},   {"seg_from_dofs", test_seg_from_dofs},
+        {"lookup", test_lookup},
+    };
+    return EF_TEST_RUN(argc, argv, 1, parts);
 }

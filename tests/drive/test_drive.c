@@ -993,24 +993,11 @@ static void test_mbdev(void)
 
 int main(int argc, char **argv)
 {
-    int all = argc < 2;
-    if (all || strcmp(argv[1], "codec") == 0) {
-        test_crc();
-        test_codec();
-    }
-    if (all || strcmp(argv[1], "exec") == 0) {
-        test_init_args();
-        test_chain();
-        test_push_checks();
-        test_direct();
-        test_late();
-    }
-    if (all || strcmp(argv[1], "stop") == 0) {
-        test_underrun();
-        test_following();
-        test_quick_stop();
-    }
-    if (all || strcmp(argv[1], "mbdev") == 0)
-        test_mbdev();
-    return ef_test_summary();
+    static const ef_test_part_t parts[] = {
+        {"codec", test_crc},       {"codec", test_codec},      {"exec", test_init_args},
+        {"exec", test_chain},      {"exec", test_push_checks}, {"exec", test_direct},
+        {"exec", test_late},       {"stop", test_underrun},    {"stop", test_following},
+        {"stop", test_quick_stop}, {"mbdev", test_mbdev},
+    };
+    return EF_TEST_RUN(argc, argv, 1, parts);
 }

@@ -80,9 +80,11 @@ static int ef_replay_cmp(const void *a, const void *b)
     return strcmp(*(char *const *)a, *(char *const *)b);
 }
 
-/* Every regular file in a directory, sorted by name. */
+/* Every regular file in a directory, sorted by name; a directory that gives no input (empty,
+ * or nothing in it readable) is a failure: a missing or emptied corpus must not pass. */
 static void ef_replay_dir(const char *dir, ef_replay_fn fn)
 {
+    int run0 = ef_replay_run;
     DIR *d = opendir(dir);
     struct dirent *e;
     char **names = NULL;
@@ -117,10 +119,14 @@ static void ef_replay_dir(const char *dir, ef_replay_fn fn)
         free(names[i]);
     }
     free(names);
+    if (ef_replay_run == run0) {
+        fprintf(stderr, "%s: no inputs replayed from this directory\n", dir);
+        ef_replay_failed++;
+    }
 }
 
-/* Replay every argument; fail on a broken expectation or when nothing ran (an empty corpus
- * would pass vacuously). */
+/* Replay every argument; fail on a broken expectation, on a directory that gave no input, or
+ * when nothing ran at all (an empty corpus would pass vacuously). */
 static int ef_replay_main(int argc, char **argv, ef_replay_fn fn)
 {
     if (argc < 2) {
@@ -139,6 +145,8 @@ static int ef_replay_main(int argc, char **argv, ef_replay_fn fn)
         }
     }
     printf("replayed %d inputs, %d failed\n", ef_replay_run, ef_replay_failed);
+    if (ef_replay_run == 0)
+        fprintf(stderr, "no inputs replayed\n");
     return ef_replay_failed || ef_replay_run == 0 ? EXIT_FAILURE : EXIT_SUCCESS;
 }
 

@@ -616,19 +616,9 @@ int main(int argc, char **argv)
     src_dir = argv[2];
     work_dir = argv[3];
     signal(SIGPIPE, SIG_IGN);
-    int all = argc == 4;
-    for (int i = all ? 3 : 4; i < argc; i++) {
-        const char *t = all ? "*" : argv[i];
-        if (all || !strcmp(t, "bad"))
-            test_bad();
-        if (all || !strcmp(t, "tcp"))
-            test_tcp();
-        if (all || !strcmp(t, "rtu"))
-            test_rtu();
-        if (all || !strcmp(t, "faults"))
-            test_faults();
-        if (all || !strcmp(t, "direct"))
-            test_direct();
-    }
-    return ef_test_summary();
+    static const ef_test_part_t parts[] = {
+        {"bad", test_bad},       {"tcp", test_tcp},       {"rtu", test_rtu},
+        {"faults", test_faults}, {"direct", test_direct},
+    };
+    return EF_TEST_RUN(argc, argv, 4, parts);
 }

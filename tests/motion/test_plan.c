@@ -1047,24 +1047,30 @@ static void test_bad_input(void)
 }
 
 /* Usage: test_plan [plan|interp] (no argument: both). */
+static void chain_case_0(void)
+{
+    chain_case(0);
+}
+
+static void chain_case_2000(void)
+{
+    chain_case(2000);
+}
+
 int main(int argc, char **argv)
 {
-    int plan = argc < 2 || strcmp(argv[1], "plan") == 0;
-    int interp = argc < 2 || strcmp(argv[1], "interp") == 0;
-    if (plan) {
-        test_single_line();
-        chain_case(0);
-        chain_case(2000);
-        test_window();
-        test_axis_limits();
-        test_random_streams();
-        test_incremental_bounds();
-    }
-    if (interp) {
-        test_interp_lines();
-        test_interp_underrun_wrap();
-        test_fluctuation();
-    }
-    test_bad_input();
-    return ef_test_summary();
+    static const ef_test_part_t parts[] = {
+        {"plan", test_single_line},
+        {"plan", chain_case_0},
+        {"plan", chain_case_2000},
+        {"plan", test_window},
+        {"plan", test_axis_limits},
+        {"plan", test_random_streams},
+        {"plan", test_incremental_bounds},
+        {"interp", test_interp_lines},
+        {"interp", test_interp_underrun_wrap},
+        {"interp", test_fluctuation},
+        {"bad", test_bad_input},
+    };
+    return EF_TEST_RUN(argc, argv, 1, parts);
 }

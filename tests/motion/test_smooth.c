@@ -634,25 +634,36 @@ static void test_with_interp(void)
     EF_CHECK(ef_v3_norm(ef_v3_sub(last, pr[N - 1].end)) < 1e-5f);
 }
 
+static void test_micro_circle_5(void)
+{
+    test_micro_circle(5);
+}
+
+static void test_micro_circle_3(void)
+{
+    test_micro_circle(3);
+}
+
+/* random [RUNS]: 300 runs unless told. */
+static void test_random_runs(void)
+{
+    test_random(ef_t_argc > 0 ? atoi(ef_t_argv[0]) : 300);
+}
+
 int main(int argc, char **argv)
 {
+    static const ef_test_part_t parts[] = {
+        {"square", test_square},         {"reversal", test_reversal},
+        {"collinear", test_collinear},   {"circle", test_micro_circle_5},
+        {"circle", test_micro_circle_3}, {"arcs", test_arcs},
+        {"bad", test_bad_input},         {"full", test_full},
+        {"interp", test_with_interp},    {"random [RUNS]", test_random_runs},
+    };
     setvbuf(stdout, NULL, _IOLBF, 0);
     M = calloc(MAXM, sizeof *M);
     if (!M)
         return 2;
-    const char *only = argc > 1 ? argv[1] : "";
-#define RUN(name, call)                                                                            \
-    if (!*only || !strcmp(only, name))                                                             \
-        call;
-    RUN("square", test_square());
-    RUN("reversal", test_reversal());
-    RUN("collinear", test_collinear());
-    RUN("circle", (test_micro_circle(5), test_micro_circle(3)));
-    RUN("arcs", test_arcs());
-    RUN("bad", test_bad_input());
-    RUN("full", test_full());
-    RUN("interp", test_with_interp());
-    RUN("random", test_random(argc > 2 ? atoi(argv[2]) : 300));
+    int rc = EF_TEST_RUN(argc, argv, 1, parts);
     free(M);
-    return ef_test_summary();
+    return rc;
 }

@@ -467,17 +467,19 @@ static void test_file(void)
     EF_CHECK(!strncmp(M.text, "t.ngc:1:1: ", 11));
 }
 
-int main(void)
+int main(int argc, char **argv)
 {
-    test_basic();
-    test_lexical();
-    test_zero();
-    test_units_incremental();
-    test_arcs();
-    test_r_form();
-    test_expressions();
-    test_events();
-    test_errors();
-    test_file();
-    return ef_test_summary();
+    static const ef_test_part_t parts[] = {
+        {"basic", test_basic},
+        {"lexical", test_lexical},
+        {"zero", test_zero},
+        {"units_incremental", test_units_incremental},
+        {"arcs", test_arcs},
+        {"r_form", test_r_form},
+        {"expressions", test_expressions},
+        {"events", test_events},
+        {"errors", test_errors},
+        {"file", test_file},
+    };
+    return EF_TEST_RUN(argc, argv, 1, parts);
 }

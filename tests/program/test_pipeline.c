@@ -478,16 +478,29 @@ static void test_micro(void)
     EF_CHECK_NEAR(ST.end[0], 0, 1e-3);
 }
 
-int main(void)
+/* test_bracket with each of its two degrees. */
+static void test_bracket_5(void)
 {
-    test_item_prim();
-    test_units();
-    test_tolerance_modes();
-    test_rapids_events();
-    test_notes();
-    test_refused();
-    test_micro();
     test_bracket(5);
+}
+
+static void test_bracket_3(void)
+{
     test_bracket(3);
-    return ef_test_summary();
+}
+
+int main(int argc, char **argv)
+{
+    static const ef_test_part_t parts[] = {
+        {"item_prim", test_item_prim},
+        {"units", test_units},
+        {"tolerance_modes", test_tolerance_modes},
+        {"rapids_events", test_rapids_events},
+        {"notes", test_notes},
+        {"refused", test_refused},
+        {"micro", test_micro},
+        {"bracket", test_bracket_5},
+        {"bracket", test_bracket_3},
+    };
+    return EF_TEST_RUN(argc, argv, 1, parts);
 }

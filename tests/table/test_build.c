@@ -790,23 +790,26 @@ static void test_merge_errors(void)
 }
 
 /* Every test in a fresh temporary directory, removed when all pass. */
-int main(void)
+int main(int argc, char **argv)
 {
+    static const ef_test_part_t parts[] = {
+        {"shard_arith", test_shard_arith},
+        {"resume", test_resume},
+        {"journal_mismatch", test_journal_mismatch},
+        {"journal_corrupt", test_journal_corrupt},
+        {"journal_locked", test_journal_locked},
+        {"backend_values", test_backend_values},
+        {"paths", test_paths},
+        {"merge_errors", test_merge_errors},
+        {"cpu_shards", test_cpu_shards},
+    };
     const char *base = getenv("TMPDIR");
     snprintf(tmpdir, sizeof tmpdir, "%s/test_build.XXXXXX", base && *base ? base : "/tmp");
     if (!mkdtemp(tmpdir)) {
         perror("mkdtemp");
         return 2;
     }
-    test_shard_arith();
-    test_resume();
-    test_journal_mismatch();
-    test_journal_corrupt();
-    test_journal_locked();
-    test_backend_values();
-    test_paths();
-    test_merge_errors();
-    test_cpu_shards();
+    int rc = EF_TEST_RUN(argc, argv, 1, parts);
     if (ef_t_fail == 0) { /* keep the files of a failed run for inspection */
         char cmd[700];
         snprintf(cmd, sizeof cmd, "rm -rf '%s'", tmpdir);
@@ -815,5 +818,5 @@ int main(void)
     } else {
         fprintf(stderr, "files kept in %s\n", tmpdir);
     }
-    return ef_test_summary();
+    return rc;
 }

@@ -124,13 +124,16 @@ static void compare(ef_gl_t *gl, int kind, const double *cfg, int n, const ef_re
     EF_CHECK(st->conv_diff * 20 <= n);
 }
 
-int main(void)
+/* The whole comparison, in one GL context. */
+static void test_agree(void)
 {
     ef_gl_t *gl = NULL;
     ef_msg_t m = {{0}};
     if (ef_gl_open(&gl, NULL, &m) != EF_OK) {
-        printf("SKIP: no headless OpenGL 4.3 context with fp64 here: %s\n", m.text);
-        return 77; /* ctest's skip code (SKIP_RETURN_CODE in gl.cmake) */
+        char why[sizeof m.text + 64];
+        snprintf(why, sizeof why, "no headless OpenGL 4.3 context with fp64 here: %s", m.text);
+        ef_test_skip(why); /* exit 77, ctest's skip code (SKIP_RETURN_CODE in gl.cmake) */
+        return;
     }
     printf("platform %s, renderer %s\n", ef_gl_platform(gl), ef_gl_renderer(gl));
 
@@ -205,5 +208,10 @@ int main(void)
     }
 
     ef_gl_close(gl);
-    return ef_test_summary();
+}
+
+int main(int argc, char **argv)
+{
+    static const ef_test_part_t parts[] = {{"agree", test_agree}};
+    return EF_TEST_RUN(argc, argv, 1, parts);
 }

@@ -1091,24 +1091,26 @@ static void test_close_basins(void)
     EF_CHECK_NEAR(r.dof[1], 1.23781, 1e-4);
 }
 
-int main(void)
+int main(int argc, char **argv)
 {
-    test_close_basins();
-    test_basics();
-    test_functional();
-    test_gradient();
-    test_hessian();
-    test_published();
-    test_invariance();
-    test_sym_g1();
-    test_sym_g2();
-    test_global_g1();
-    test_reversal_bound();
-    test_global_g2();
-    test_global_quartic();
-    test_quartic_nonplanar();
-    test_options();
-    test_errors();
-    test_threads();
-    return ef_test_summary();
+    static const ef_test_part_t parts[] = {
+        {"close_basins", test_close_basins},
+        {"basics", test_basics},
+        {"functional", test_functional},
+        {"gradient", test_gradient},
+        {"hessian", test_hessian},
+        {"published", test_published},
+        {"invariance", test_invariance},
+        {"sym_g1", test_sym_g1},
+        {"sym_g2", test_sym_g2},
+        {"global_g1", test_global_g1},
+        {"reversal_bound", test_reversal_bound},
+        {"global_g2", test_global_g2},
+        {"global_quartic", test_global_quartic},
+        {"quartic_nonplanar", test_quartic_nonplanar},
+        {"options", test_options},
+        {"errors", test_errors},
+        {"threads", test_threads},
+    };
+    return EF_TEST_RUN(argc, argv, 1, parts);
 }

@@ -1412,32 +1412,43 @@ static int emit_mode(int argc, char **argv)
 }
 
 /* Unit tests, or the build-time --emit mode. */
-int main(int argc, char **argv)
+/* test_roundtrip for every variant. */
+static void test_roundtrip_all(void)
 {
     int v;
 
-    if (argc > 1 && strcmp(argv[1], "--emit") == 0) {
-        return emit_mode(argc, argv);
-    }
-    tmp_setup();
-    test_crc();
     for (v = 0; v < V_COUNT; v++) {
         test_roundtrip(v);
     }
-    test_provenance_limits();
-    test_header_fields();
-    test_truncation();
-    test_bitflips();
-    test_values();
-    test_args();
-    test_check();
-    test_create();
-    test_node_config();
-    test_field_names();
-    test_write_load();
-    test_emit();
+}
+
+int main(int argc, char **argv)
+{
+    static const ef_test_part_t parts[] = {
+        {"crc", test_crc},
+        {"roundtrip", test_roundtrip_all},
+        {"provenance_limits", test_provenance_limits},
+        {"header_fields", test_header_fields},
+        {"truncation", test_truncation},
+        {"bitflips", test_bitflips},
+        {"values", test_values},
+        {"args", test_args},
+        {"check", test_check},
+        {"create", test_create},
+        {"node_config", test_node_config},
+        {"field_names", test_field_names},
+        {"write_load", test_write_load},
+        {"emit", test_emit},
+    };
+    int rc;
+
+    if (argc > 1 && strcmp(argv[1], "--emit") == 0) {
+        return emit_mode(argc, argv); /* not a check: its arguments are checked there */
+    }
+    tmp_setup();
+    rc = EF_TEST_RUN(argc, argv, 1, parts);
     tmp_cleanup();
-    return ef_test_summary();
+    return rc;
 }
 
 #else /* EF_TFILE_EMITTED */
@@ -1479,19 +1490,41 @@ static void check_emitted(const ef_table_t *c, const char *path)
     ef_tfile_free(&t);
 }
 
-/* Compare both emitted tables with their files. */
-int main(int argc, char **argv)
+static const char *emitted_g1_path, *emitted_g2_path;
+
+static void test_emitted_g1(void)
 {
-    if (argc != 3) {
-        fprintf(stderr, "usage: %s G1.eft G2.eft\n", argv[0]);
-        return 2;
-    }
-    check_emitted(&ef_emitted_g1, argv[1]);
-    check_emitted(&ef_emitted_g2, argv[2]);
+    check_emitted(&ef_emitted_g1, emitted_g1_path);
+}
+
+static void test_emitted_g2(void)
+{
+    check_emitted(&ef_emitted_g2, emitted_g2_path);
+}
+
+/* The awkward values survive the C source. */
+static void test_emitted_bits(void)
+{
     EF_CHECK(same_bits(ef_emitted_g2.data[1], -0.0f));
     EF_CHECK(same_bits(ef_emitted_g2.data[3], 0x1p-149f));
     EF_CHECK(same_bits(ef_emitted_g2.data[5], -0x1.fffffcp-127f));
-    return ef_test_summary();
+}
+
+/* Compare both emitted tables with their files: test_tfile_emitted G1.eft G2.eft [PART...] */
+int main(int argc, char **argv)
+{
+    static const ef_test_part_t parts[] = {
+        {"g1", test_emitted_g1},
+        {"g2", test_emitted_g2},
+        {"bits", test_emitted_bits},
+    };
+    if (argc < 3) {
+        fprintf(stderr, "usage: %s G1.eft G2.eft [PART...]\n", argv[0]);
+        return 2;
+    }
+    emitted_g1_path = argv[1];
+    emitted_g2_path = argv[2];
+    return EF_TEST_RUN(argc, argv, 3, parts);
 }
 
 #endif /* EF_TFILE_EMITTED */
