@@ -4,6 +4,6 @@
 # the ef_canopen codec, faults and EMCY, the TX queue, malformed frames, the SYNC-loss watchdog.
 add_executable(test_codrive ${CMAKE_CURRENT_SOURCE_DIR}/canopen/test_codrive.c)
 target_link_libraries(test_codrive PRIVATE ef_fw m)
-foreach(part nmt sdo pdo power csp segment faults bad tx watchdog)
+foreach(part nmt sdo pdo power csp segment faults bad tx watchdog txq)
   add_test(NAME fw_codrive_${part} COMMAND test_codrive ${part})
 endforeach()

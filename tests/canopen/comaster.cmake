@@ -7,6 +7,6 @@ target_link_libraries(test_comaster PRIVATE ef_fw m)
 # ef_canbus_sim.h is header-only (host/include, no host library needed).
 target_include_directories(test_comaster PRIVATE ${PROJECT_SOURCE_DIR}/host/include)
 foreach(part args fake_csp fake_seg boot abort devtype sdo_timeout malformed fault again bus
-             csp seg gobackn resend_limit emcy heartbeat sdo_segdl_fake sdo_user)
+             csp seg gobackn resend_limit emcy heartbeat sdo_segdl_fake sdo_user sdo_client)
   add_test(NAME fw_comaster_${part} COMMAND test_comaster ${part})
 endforeach()

@@ -1386,7 +1386,7 @@ static void test_bad(void)
                 log_clear();
         }
         EF_CHECK(g_d.drv.act.x == g_d.drv.act.x && fabsf(g_d.drv.act.x) < 1e7f);
-        EF_CHECK(g_d.txq_count <= EF_CODRIVE_TXQ);
+        EF_CHECK(g_d.txq.count <= EF_CODRIVE_TXQ);
         EF_CHECK(g_d.rx_ignored > 1000);
         nmt(EF_CO_NMT_RESET_NODE, 0);
         nmt(EF_CO_NMT_PREOP, 0);
@@ -1395,6 +1395,155 @@ static void test_bad(void)
 }
 
 /* ------------------------------------------------------------------ TX queue */
+
+/* A port for the queue alone: answers `rc` (EF_OK records the frame), counts calls. */
+typedef struct {
+    int rc;
+    int calls;
+    int n;
+    uint32_t ids[16];
+} txq_port_t;
+
+static int txq_port_send(void *ctx, const ef_can_frame_t *f)
+{
+    txq_port_t *p = (txq_port_t *)ctx;
+    p->calls++;
+    if (p->rc == EF_OK && p->n < 16)
+        p->ids[p->n++] = f->id;
+    return p->rc;
+}
+
+static ef_can_frame_t txq_frame(uint32_t id)
+{
+    ef_can_frame_t f = {0};
+    f.id = id;
+    f.dlc = 1;
+    f.data[0] = (uint8_t)id;
+    return f;
+}
+
+/* ef_txq on its own: arguments, order, both drop policies (the master's DROP_NEWEST keeps what
+ * waits, the drive's DROP_STALE gives up the oldest stale-able frame and never a kept one),
+ * bus-off, and both settings for frames refused outright. */
+static void test_txq(void)
+{
+    ef_can_frame_t slot[4];
+    uint8_t stale[4];
+    ef_txq_t q;
+    txq_port_t tp = {0};
+    ef_can_port_t port = {txq_port_send, &tp};
+    EF_CHECK_EQ(ef_txq_init(NULL, slot, NULL, 4, EF_TXQ_DROP_NEWEST, EF_TXQ_REFUSED_DROP),
+                EF_ERR_ARG);
+    EF_CHECK_EQ(ef_txq_init(&q, NULL, NULL, 4, EF_TXQ_DROP_NEWEST, EF_TXQ_REFUSED_DROP),
+                EF_ERR_ARG);
+    EF_CHECK_EQ(ef_txq_init(&q, slot, NULL, 0, EF_TXQ_DROP_NEWEST, EF_TXQ_REFUSED_DROP),
+                EF_ERR_ARG);
+    EF_CHECK_EQ(ef_txq_init(&q, slot, NULL, 4, EF_TXQ_DROP_STALE, EF_TXQ_REFUSED_DROP), EF_ERR_ARG);
+    EF_CHECK_EQ(ef_txq_init(&q, slot, NULL, 4, 7, EF_TXQ_REFUSED_DROP), EF_ERR_ARG);
+    EF_CHECK_EQ(ef_txq_init(&q, slot, NULL, 4, EF_TXQ_DROP_NEWEST, 7), EF_ERR_ARG);
+    EF_CHECK_EQ(ef_txq_room(NULL), 0);
+    EF_CHECK_EQ(ef_txq_count(NULL), 0);
+
+    /* DROP_NEWEST: a free port takes the frame at once; a busy one queues it, and once a frame
+     * waits the port is not asked (order); the frame beyond the queue is lost, the queued ones
+     * go out untouched and in order. */
+    EF_CHECK_EQ(ef_txq_init(&q, slot, NULL, 4, EF_TXQ_DROP_NEWEST, EF_TXQ_REFUSED_DROP), EF_OK);
+    ef_can_frame_t f = txq_frame(0x100);
+    EF_CHECK_EQ(ef_txq_send(&q, &port, &f, 0), EF_OK);
+    EF_CHECK_EQ(tp.n, 1);
+    EF_CHECK_EQ(q.sent, 1);
+    tp.rc = EF_ERR_AGAIN;
+    for (uint32_t i = 1; i <= 4; i++) {
+        f = txq_frame(0x100 + i);
+        EF_CHECK_EQ(ef_txq_send(&q, &port, &f, 1), EF_OK);
+    }
+    EF_CHECK_EQ(tp.calls, 2); /* only the first of the four asked the port */
+    EF_CHECK_EQ(q.again, 1);
+    EF_CHECK_EQ(ef_txq_count(&q), 4);
+    EF_CHECK_EQ(ef_txq_room(&q), 0);
+    f = txq_frame(0x105);
+    EF_CHECK_EQ(ef_txq_send(&q, &port, &f, 1), EF_ERR_FULL); /* stale-able, but the newest goes */
+    EF_CHECK_EQ(q.lost, 1);
+    EF_CHECK_EQ(ef_txq_flush(&q, &port), EF_ERR_AGAIN);
+    EF_CHECK_EQ(q.again, 2);
+    tp.rc = EF_OK;
+    EF_CHECK_EQ(ef_txq_flush(&q, &port), EF_OK);
+    EF_CHECK_EQ(tp.n, 5);
+    for (int i = 0; i < 5; i++)
+        EF_CHECK_EQ(tp.ids[i], 0x100 + i);
+    EF_CHECK_EQ(ef_txq_count(&q), 0);
+    EF_CHECK_EQ(q.sent, 5);
+
+    /* DROP_STALE: queued S1 K1 S2 K2 (S stale-able, K kept). K3 pushes out S1, K4 then S2; with
+     * only kept frames left the new frame is the one lost, stale-able or not. */
+    EF_CHECK_EQ(ef_txq_init(&q, slot, stale, 4, EF_TXQ_DROP_STALE, EF_TXQ_REFUSED_KEEP), EF_OK);
+    tp = (txq_port_t){0};
+    tp.rc = EF_ERR_AGAIN;
+    static const uint32_t ids[] = {0x701, 0x581, 0x702, 0x582};
+    for (int i = 0; i < 4; i++) {
+        f = txq_frame(ids[i]);
+        EF_CHECK_EQ(ef_txq_send(&q, &port, &f, (ids[i] & 0x700) == 0x700), EF_OK);
+    }
+    f = txq_frame(0x583);
+    EF_CHECK_EQ(ef_txq_send(&q, &port, &f, 0), EF_ERR_FULL);
+    f = txq_frame(0x584);
+    EF_CHECK_EQ(ef_txq_send(&q, &port, &f, 0), EF_ERR_FULL);
+    f = txq_frame(0x703);
+    EF_CHECK_EQ(ef_txq_send(&q, &port, &f, 1), EF_ERR_FULL);
+    f = txq_frame(0x585);
+    EF_CHECK_EQ(ef_txq_send(&q, &port, &f, 0), EF_ERR_FULL);
+    EF_CHECK_EQ(q.lost, 4);
+    EF_CHECK_EQ(ef_txq_count(&q), 4);
+    tp.rc = EF_OK;
+    EF_CHECK_EQ(ef_txq_flush(&q, &port), EF_OK);
+    EF_CHECK_EQ(tp.n, 4);
+    EF_CHECK_EQ(tp.ids[0], 0x581);
+    EF_CHECK_EQ(tp.ids[1], 0x582);
+    EF_CHECK_EQ(tp.ids[2], 0x583);
+    EF_CHECK_EQ(tp.ids[3], 0x584);
+
+    /* Bus-off: said, the frame kept (sent once the bus is back). REFUSED_KEEP: a frame refused
+     * outright stays at the head, and the answer is passed on. */
+    tp = (txq_port_t){0};
+    tp.rc = EF_ERR_BUS;
+    f = txq_frame(0x181);
+    EF_CHECK_EQ(ef_txq_send(&q, &port, &f, 1), EF_ERR_BUS);
+    EF_CHECK_EQ(ef_txq_flush(&q, &port), EF_ERR_BUS);
+    EF_CHECK_EQ(ef_txq_count(&q), 1);
+    tp.rc = EF_ERR_IO;
+    EF_CHECK_EQ(ef_txq_flush(&q, &port), EF_ERR_IO);
+    EF_CHECK_EQ(ef_txq_count(&q), 1);
+    EF_CHECK_EQ(q.rejected, 0);
+    tp.rc = EF_OK;
+    EF_CHECK_EQ(ef_txq_flush(&q, &port), EF_OK);
+    EF_CHECK_EQ(tp.n, 1);
+    EF_CHECK_EQ(tp.ids[0], 0x181);
+
+    /* REFUSED_DROP: a frame refused outright leaves (direct or queued), the next one goes. */
+    EF_CHECK_EQ(ef_txq_init(&q, slot, NULL, 4, EF_TXQ_DROP_NEWEST, EF_TXQ_REFUSED_DROP), EF_OK);
+    tp = (txq_port_t){0};
+    tp.rc = EF_ERR_IO;
+    f = txq_frame(0x201);
+    EF_CHECK_EQ(ef_txq_send(&q, &port, &f, 0), EF_OK);
+    EF_CHECK_EQ(ef_txq_count(&q), 0);
+    EF_CHECK_EQ(q.rejected, 1);
+    tp.rc = EF_ERR_AGAIN;
+    f = txq_frame(0x202);
+    EF_CHECK_EQ(ef_txq_send(&q, &port, &f, 0), EF_OK);
+    f = txq_frame(0x203);
+    EF_CHECK_EQ(ef_txq_send(&q, &port, &f, 0), EF_OK);
+    tp.rc = EF_ERR_IO;
+    EF_CHECK_EQ(ef_txq_flush(&q, &port), EF_OK); /* both refused, both gone */
+    EF_CHECK_EQ(q.rejected, 3);
+    EF_CHECK_EQ(ef_txq_count(&q), 0);
+    EF_CHECK_EQ(q.sent, 0);
+
+    /* The drive's own queue uses DROP_STALE and keeps refused frames (test_tx: end to end). */
+    drive_up(NULL);
+    EF_CHECK_EQ(g_d.txq.policy, EF_TXQ_DROP_STALE);
+    EF_CHECK_EQ(g_d.txq.refused, EF_TXQ_REFUSED_KEEP);
+    EF_CHECK_EQ(g_d.txq.cap, EF_CODRIVE_TXQ);
+}
 
 static void test_tx(void)
 {
@@ -1406,28 +1555,28 @@ static void test_tx(void)
     uint8_t req2[8] = {0x40, 0x18, 0x10, 1};
     sdo_req(req2, &cmd);
     EF_CHECK_EQ(g_bus.n, 0);
-    EF_CHECK_EQ(g_d.txq_count, 2);
+    EF_CHECK_EQ(g_d.txq.count, 2);
     uint32_t next = 0;
     EF_CHECK_EQ(ef_codrive_process(&g_d, 0, &next), EF_OK);
     EF_CHECK(next <= 1000);
-    EF_CHECK_EQ(g_d.txq_count, 2);
+    EF_CHECK_EQ(g_d.txq.count, 2);
     g_bus.refuse = 0;
     EF_CHECK_EQ(ef_codrive_process(&g_d, 0, NULL), EF_OK);
     EF_CHECK_EQ(g_bus.n, 2);
     EF_CHECK_EQ(ef_co_get32(&g_bus.log[0].data[4]), EF_CO_DEVICE_TYPE_402);
     EF_CHECK_EQ(ef_co_get32(&g_bus.log[1].data[4]), 0xEF0);
-    EF_CHECK_EQ(g_d.txq_count, 0);
+    EF_CHECK_EQ(g_d.txq.count, 0);
     /* A full queue of heartbeats: the oldest give way, an SDO answer and an EMCY are kept. */
     wr(EF_CO_OBJ_HB_PRODUCER, 0, 10, 2);
     log_clear();
     g_bus.refuse = EF_ERR_AGAIN;
     for (int i = 0; i < 40; i++)
         ef_codrive_process(&g_d, 10000, NULL);
-    EF_CHECK_EQ(g_d.txq_count, EF_CODRIVE_TXQ);
-    EF_CHECK_EQ(g_d.tx_lost, 40 - EF_CODRIVE_TXQ);
+    EF_CHECK_EQ(g_d.txq.count, EF_CODRIVE_TXQ);
+    EF_CHECK_EQ(g_d.txq.lost, 40 - EF_CODRIVE_TXQ);
     sdo_req(req, &cmd);
     EF_CHECK_EQ(ef_codrive_fault(&g_d, EF_DRV_FAULT_INJECTED), EF_OK);
-    EF_CHECK_EQ(g_d.txq_count, EF_CODRIVE_TXQ);
+    EF_CHECK_EQ(g_d.txq.count, EF_CODRIVE_TXQ);
     g_bus.refuse = 0;
     EF_CHECK_EQ(ef_codrive_process(&g_d, 0, NULL), EF_OK);
     EF_CHECK_EQ(g_bus.n, EF_CODRIVE_TXQ);
@@ -1773,26 +1922,11 @@ static void test_watchdog(void)
 
 int main(int argc, char **argv)
 {
-    int all = argc < 2;
-    if (all || strcmp(argv[1], "nmt") == 0)
-        test_nmt();
-    if (all || strcmp(argv[1], "sdo") == 0)
-        test_sdo();
-    if (all || strcmp(argv[1], "pdo") == 0)
-        test_pdo();
-    if (all || strcmp(argv[1], "power") == 0)
-        test_power();
-    if (all || strcmp(argv[1], "csp") == 0)
-        test_csp();
-    if (all || strcmp(argv[1], "segment") == 0)
-        test_segment();
-    if (all || strcmp(argv[1], "faults") == 0)
-        test_faults();
-    if (all || strcmp(argv[1], "bad") == 0)
-        test_bad();
-    if (all || strcmp(argv[1], "tx") == 0)
-        test_tx();
-    if (all || strcmp(argv[1], "watchdog") == 0)
-        test_watchdog();
-    return ef_test_summary();
+    static const ef_test_part_t parts[] = {
+        {"nmt", test_nmt},           {"sdo", test_sdo}, {"pdo", test_pdo},
+        {"power", test_power},       {"csp", test_csp}, {"segment", test_segment},
+        {"faults", test_faults},     {"bad", test_bad}, {"tx", test_tx},
+        {"watchdog", test_watchdog}, {"txq", test_txq},
+    };
+    return EF_TEST_RUN(argc, argv, 1, parts);
 }

@@ -163,7 +163,7 @@ float ef_co_inc_to_pos(int32_t inc, uint32_t inc_per_unit)
 }
 
 /* Little-endian float32 store and load through the bit pattern. */
-static void ef_co_putf(uint8_t *p, float f)
+static void coc_putf(uint8_t *p, float f)
 {
     union {
         float f;
@@ -173,7 +173,7 @@ static void ef_co_putf(uint8_t *p, float f)
     ef_co_put32(p, x.u);
 }
 
-static float ef_co_getf(const uint8_t *p)
+static float coc_getf(const uint8_t *p)
 {
     union {
         float f;
@@ -184,7 +184,7 @@ static float ef_co_getf(const uint8_t *p)
 }
 
 /* A phase is sent unless every number of it is zero. */
-static int ef_co_phase_used(const ef_timelaw_t *law, int k)
+static int coc_phase_used(const ef_timelaw_t *law, int k)
 {
     int used = law->dt[k] != 0.0f;
     for (int j = 0; j < 5; j++)
@@ -199,20 +199,20 @@ int ef_co_law_encode(const ef_move_t *m, uint8_t rec[EF_CO_REC_MAX], uint32_t *l
         return EF_ERR_ARG;
     uint8_t mask = 0;
     for (int k = 0; k < EF_TIMELAW_PHASES; k++)
-        if (ef_co_phase_used(&m->law, k))
+        if (coc_phase_used(&m->law, k))
             mask |= (uint8_t)(1u << k);
     ef_co_put16(rec, (uint16_t)m->seq);
     rec[2] = (uint8_t)(m->flags & EF_MOVE_STOP_END);
     rec[3] = mask;
-    ef_co_putf(rec + 4, m->length);
-    ef_co_putf(rec + 8, m->v_exit);
+    coc_putf(rec + 4, m->length);
+    coc_putf(rec + 8, m->v_exit);
     uint32_t n = 12;
     for (int k = 0; k < EF_TIMELAW_PHASES; k++) {
         if (!(mask & (1u << k)))
             continue;
-        ef_co_putf(rec + n, m->law.dt[k]);
+        coc_putf(rec + n, m->law.dt[k]);
         for (int j = 0; j < 5; j++)
-            ef_co_putf(rec + n + 4u + 4u * (uint32_t)j, m->law.c[k][j]);
+            coc_putf(rec + n + 4u + 4u * (uint32_t)j, m->law.c[k][j]);
         n += 24u;
     }
     *len = n;
@@ -232,7 +232,7 @@ int ef_co_axis_encode(const ef_move_t *m, int axis, uint8_t rec[EF_CO_REC_MAX], 
     for (int i = 0; i <= m->degree; i++) {
         const ef_vec3_t *b = &m->b[i];
         float v = axis == 0 ? b->x : axis == 1 ? b->y : b->z;
-        ef_co_putf(rec + 4 + 4 * i, v);
+        coc_putf(rec + 4 + 4 * i, v);
     }
     *len = 8u + 4u * m->degree;
     return EF_OK;
@@ -268,7 +268,7 @@ void ef_co_asm_init(ef_co_asm_t *a, int law)
 }
 
 /* Record length announced by chunk 0 (0: impossible). */
-static uint32_t ef_co_asm_len(const ef_co_asm_t *a, const uint8_t *d)
+static uint32_t coc_asm_len(const ef_co_asm_t *a, const uint8_t *d)
 {
     if (a->law) {
         uint8_t mask = d[4]; /* record byte 3 */
@@ -295,7 +295,7 @@ int ef_co_asm_feed(ef_co_asm_t *a, const uint8_t data[8])
     int rc = EF_ERR_AGAIN;
     if (k == 0u) {
         rc = a->len ? EF_ERR_SEQ : EF_ERR_AGAIN; /* a partial record is dropped */
-        uint32_t len = ef_co_asm_len(a, data);
+        uint32_t len = coc_asm_len(a, data);
         if (len == 0u) {
             a->len = 0;
             return EF_ERR_PROTO;
@@ -343,7 +343,7 @@ int ef_co_law_decode(const uint8_t *rec, uint32_t len, ef_move_t *m)
     if (len != 12u + 24u * n)
         return EF_ERR_ARG;
     ef_timelaw_t law;
-    float length = ef_co_getf(rec + 4), v_exit = ef_co_getf(rec + 8), dur = 0.0f;
+    float length = coc_getf(rec + 4), v_exit = coc_getf(rec + 8), dur = 0.0f;
     int fin = ef_finitef(length) & ef_finitef(v_exit);
     uint32_t at = 12;
     for (int k = 0; k < EF_TIMELAW_PHASES; k++) {
@@ -352,10 +352,10 @@ int ef_co_law_decode(const uint8_t *rec, uint32_t len, ef_move_t *m)
             law.c[k][j] = 0.0f;
         if (!(mask & (1u << k)))
             continue;
-        law.dt[k] = ef_co_getf(rec + at);
+        law.dt[k] = coc_getf(rec + at);
         fin &= ef_finitef(law.dt[k]);
         for (int j = 0; j < 5; j++) {
-            law.c[k][j] = ef_co_getf(rec + at + 4u + 4u * (uint32_t)j);
+            law.c[k][j] = coc_getf(rec + at + 4u + 4u * (uint32_t)j);
             fin &= ef_finitef(law.c[k][j]);
         }
         at += 24u;
@@ -384,7 +384,7 @@ int ef_co_axis_decode(const uint8_t *rec, uint32_t len, ef_move_t *m, uint16_t *
     float x[6];
     int fin = 1;
     for (int i = 0; i <= deg; i++) {
-        x[i] = ef_co_getf(rec + 4 + 4 * i);
+        x[i] = coc_getf(rec + 4 + 4 * i);
         fin &= ef_finitef(x[i]);
     }
     if (!fin)

@@ -12,13 +12,9 @@
 #define COD_REVISION 1u
 /** 0x6502: bit 7 CSP, bit 16 evenfeed segment mode. */
 #define COD_SUPPORTED ((1u << 7) | (1u << 16))
-/** Object access bits (od_t::acc). */
+/** Object access bits (cod_row_t::acc, cod_od_t::acc). */
 #define COD_R 1u
 #define COD_W 2u
-/** SDO server states (ef_codrive_t::sdo_state). */
-#define COD_SDO_IDLE     0u
-#define COD_SDO_DOWNLOAD 1u
-#define COD_SDO_UPLOAD   2u
 /** sdo_len of a segmented download whose size the client did not indicate. */
 #define COD_SDO_LEN_UNKNOWN 0xFFFFFFFFu
 /** Classic CAN data bytes and bits, the PDO length limit. */
@@ -68,12 +64,12 @@ static const char cod_name[] = "evenfeed sim drive";
 /** Controlword commands (CiA 402 table), decoded from bits 0..3 and 7. */
 enum { CW_NONE, CW_SHUTDOWN, CW_SWITCH_ON, CW_ENABLE_OP, CW_DISABLE_VOLTAGE, CW_QUICK_STOP };
 
-/** What the object dictionary says of one entry. */
+/** What the object dictionary says of one entry (a row, and the value read now). */
 typedef struct {
     uint32_t size; /**< bytes */
     uint32_t acc;  /**< COD_R | COD_W */
     uint32_t val;  /**< value (scalars up to 4 bytes, readable ones) */
-} od_t;
+} cod_od_t;
 
 /* ------------------------------------------------------------------------- helpers */
 
@@ -138,63 +134,20 @@ static ef_can_frame_t cod_frame(uint32_t id, uint8_t dlc)
 
 /* ------------------------------------------------------------------------- TX queue */
 
-/* Remove queue entry k (0 = oldest), closing the gap so the order is kept. */
-static void cod_txq_remove(ef_codrive_t *d, uint32_t k)
-{
-    for (uint32_t i = k; i + 1u < d->txq_count && i + 1u < EF_CODRIVE_TXQ; i++) {
-        uint32_t a = (d->txq_head + i) % EF_CODRIVE_TXQ;
-        uint32_t b = (d->txq_head + i + 1u) % EF_CODRIVE_TXQ;
-        d->txq[a] = d->txq[b];
-        d->txq_drop[a] = d->txq_drop[b];
-    }
-    d->txq_count--;
-}
-
-/* Queue a frame the port could not take; a full queue gives up its oldest heartbeat or TPDO
- * (stale by now anyway), never an SDO reply or EMCY. */
-static void cod_txq_add(ef_codrive_t *d, const ef_can_frame_t *f, int droppable)
-{
-    if (d->txq_count >= EF_CODRIVE_TXQ) {
-        uint32_t k = 0;
-        while (k < d->txq_count && !d->txq_drop[(d->txq_head + k) % EF_CODRIVE_TXQ])
-            k++;
-        d->tx_lost++;
-        if (k >= d->txq_count)
-            return; /* only SDO replies and EMCYs queued: the new frame is the one lost */
-        cod_txq_remove(d, k);
-    }
-    uint32_t at = (d->txq_head + d->txq_count) % EF_CODRIVE_TXQ;
-    d->txq[at] = *f;
-    d->txq_drop[at] = droppable ? 1u : 0u;
-    d->txq_count++;
-}
-
-/* Send now if nothing waits (order is kept), else queue behind what waits. */
+/* Send now if nothing waits (order is kept), else queue behind what waits; a full queue
+ * gives up its oldest heartbeat or TPDO (stale by now anyway), never an SDO reply or EMCY
+ * (ef_txq.h, EF_TXQ_DROP_STALE). */
 static void cod_send(ef_codrive_t *d, const ef_can_frame_t *f, int droppable)
 {
-    if (d->txq_count == 0u) {
-        int rc = d->port.send(d->port.ctx, f);
-        if (rc == EF_OK)
-            return;
-        if (rc == EF_ERR_BUS)
-            d->bus_err = 1u; /* kept: a bus that recovers carries it */
-    }
-    cod_txq_add(d, f, droppable);
+    if (ef_txq_send(&d->txq, &d->port, f, droppable) == EF_ERR_BUS)
+        d->bus_err = 1u; /* kept: a bus that recovers carries it */
 }
 
 /* Retry queued frames in order until the port is busy again. */
 static void cod_txq_flush(ef_codrive_t *d)
 {
-    for (uint32_t i = 0; i < EF_CODRIVE_TXQ && d->txq_count > 0u; i++) {
-        int rc = d->port.send(d->port.ctx, &d->txq[d->txq_head]);
-        if (rc != EF_OK) {
-            if (rc == EF_ERR_BUS)
-                d->bus_err = 1u;
-            return;
-        }
-        d->txq_head = (d->txq_head + 1u) % EF_CODRIVE_TXQ;
-        d->txq_count--;
-    }
+    if (ef_txq_flush(&d->txq, &d->port) == EF_ERR_BUS)
+        d->bus_err = 1u;
 }
 
 /* ------------------------------------------------------------------------- EMCY, status */
@@ -603,7 +556,7 @@ static void cod_comm_defaults(ef_codrive_t *d)
     d->cycle_us = 0u;
     d->hb_ms = 0u;
     d->hb_acc_us = 0u;
-    d->sdo_state = COD_SDO_IDLE;
+    d->sdo_state = EF_CODRIVE_SDO_IDLE;
 }
 
 /* CiA 301 restricted COB-IDs (NMT, SYNC, EMCY/TIME area, SDO, LSS, NMT error control). */
@@ -662,30 +615,8 @@ static void cod_rpdo_rx(ef_codrive_t *d, ef_codrive_pdo_t *p, const ef_can_frame
 
 /* ------------------------------------------------------------------------- object dictionary */
 
-/* A plain variable: sub 0 only. */
-static uint32_t od_var(uint8_t sub, od_t *o, uint32_t size, uint32_t acc, uint32_t val)
-{
-    if (sub != 0u)
-        return EF_CO_ABORT_NO_SUB;
-    o->size = size;
-    o->acc = acc;
-    o->val = val;
-    return 0u;
-}
-
-/* A record entry (sub 0: its highest sub-index, read-only u8). */
-static uint32_t od_rec(uint8_t sub, uint8_t subs, od_t *o, uint32_t size, uint32_t acc,
-                       uint32_t val)
-{
-    if (sub > subs)
-        return EF_CO_ABORT_NO_SUB;
-    if (sub == 0u)
-        return od_var(0u, o, 1u, COD_R, subs);
-    return od_var(0u, o, size, acc, val);
-}
-
-/* The PDO an index addresses (communication or mapping record), NULL otherwise. */
-static ef_codrive_pdo_t *cod_pdo_of(ef_codrive_t *d, uint16_t idx, int *rx, int *map, int *k)
+/* The PDO an index addresses (communication or mapping record): 1 and its kind, else 0. */
+static int cod_pdo_find(uint16_t idx, int *rx, int *map, int *k)
 {
     static const struct {
         uint16_t base;
@@ -699,114 +630,10 @@ static ef_codrive_pdo_t *cod_pdo_of(ef_codrive_t *d, uint16_t idx, int *rx, int 
             *rx = kinds[i].rx;
             *map = kinds[i].map;
             *k = idx - kinds[i].base;
-            return kinds[i].rx ? &d->rpdo[*k] : &d->tpdo[*k];
+            return 1;
         }
     }
-    return NULL;
-}
-
-/* 0x2102: the segment-mode status record. */
-static uint32_t od_segst(const ef_codrive_t *d, uint8_t sub, od_t *o)
-{
-    const ef_drive_t *v = &d->drv;
-    switch (sub) {
-    case EF_CO_SEGST_NEXT8:
-        return od_rec(sub, COD_SEGST_SUBS, o, 1u, COD_R, v->next_seq & 0xFFu);
-    case EF_CO_SEGST_FREE:
-        return od_rec(sub, COD_SEGST_SUBS, o, 1u, COD_R, ef_drive_free(v));
-    case EF_CO_SEGST_NEXT:
-        return od_rec(sub, COD_SEGST_SUBS, o, 4u, COD_R, v->next_seq);
-    case EF_CO_SEGST_DONE:
-        return od_rec(sub, COD_SEGST_SUBS, o, 4u, COD_R, v->done_any);
-    case EF_CO_SEGST_DROPPED:
-        return od_rec(sub, COD_SEGST_SUBS, o, 4u, COD_R, d->seg_dropped);
-    case EF_CO_SEGST_DUPS:
-        return od_rec(sub, COD_SEGST_SUBS, o, 4u, COD_R, d->seg_dups);
-    default:
-        return od_rec(sub, COD_SEGST_SUBS, o, 0u, 0u, 0u);
-    }
-}
-
-/* 0x1018: the identity record. */
-static uint32_t od_ident(const ef_codrive_t *d, uint8_t sub, od_t *o)
-{
-    static const uint32_t fixed[] = {COD_VENDOR, COD_PRODUCT, COD_REVISION};
-    uint32_t val = 0u;
-    if (sub >= 1u && sub <= 3u)
-        val = fixed[sub - 1u];
-    else if (sub == 4u)
-        val = d->cfg.serial;
-    return od_rec(sub, COD_IDENT_SUBS, o, 4u, COD_R, val);
-}
-
-/* Look an entry up: size, access and (scalars) value; 0 or the abort code. */
-static uint32_t od_find(ef_codrive_t *d, uint16_t idx, uint8_t sub, od_t *o)
-{
-    const ef_drive_t *v = &d->drv;
-    int rx = 0, map = 0, k = 0;
-    ef_codrive_pdo_t *p = cod_pdo_of(d, idx, &rx, &map, &k);
-    if (p && !map) {
-        uint32_t val = sub == 1u ? p->cobid : p->type;
-        return od_rec(sub, COD_COMM_SUBS, o, sub == 1u ? 4u : 1u, COD_R | COD_W, val);
-    }
-    if (p) {
-        if (sub > COD_MAP_MAX)
-            return EF_CO_ABORT_NO_SUB;
-        if (sub == 0u)
-            return od_var(0u, o, 1u, COD_R | COD_W, p->count);
-        return od_var(0u, o, 4u, COD_R | COD_W, p->map[sub - 1u]);
-    }
-    switch (idx) {
-    case EF_CO_OBJ_DEVICE_TYPE:
-        return od_var(sub, o, 4u, COD_R, EF_CO_DEVICE_TYPE_402);
-    case EF_CO_OBJ_ERROR_REG:
-        return od_var(sub, o, 1u, COD_R, d->error_reg);
-    case EF_CO_OBJ_SYNC_COBID:
-        return od_var(sub, o, 4u, COD_R | COD_W, d->sync_cobid);
-    case EF_CO_OBJ_CYCLE:
-        return od_var(sub, o, 4u, COD_R | COD_W, d->cycle_us);
-    case EF_CO_OBJ_DEVICE_NAME:
-        return od_var(sub, o, COD_NAME_LEN, COD_R, 0u);
-    case EF_CO_OBJ_EMCY_COBID:
-        return od_var(sub, o, 4u, COD_R, EF_CO_COB_EMCY + d->cfg.node);
-    case EF_CO_OBJ_HB_PRODUCER:
-        return od_var(sub, o, 2u, COD_R | COD_W, d->hb_ms);
-    case EF_CO_OBJ_IDENTITY:
-        return od_ident(d, sub, o);
-    case EF_CO_OBJ_INC_PER_UNIT:
-        return od_var(sub, o, 4u, COD_R, d->cfg.inc_per_unit);
-    case EF_CO_OBJ_DRIVE_FAULT:
-        return od_var(sub, o, 1u, COD_R, d->last_fault);
-    case EF_CO_OBJ_SYNC_TIMEOUT:
-        return od_var(sub, o, 2u, COD_R | COD_W, d->sync_timeout_ms);
-    case EF_CO_OBJ_SEG_AXIS:
-    case EF_CO_OBJ_SEG_LAW:
-        return od_var(sub, o, COD_PDO_BYTES, COD_W, 0u);
-    case EF_CO_OBJ_SEG_STATUS:
-        return od_segst(d, sub, o);
-    case EF_CO_OBJ_ERROR_CODE:
-        return od_var(sub, o, 2u, COD_R, d->error_code);
-    case EF_CO_OBJ_CONTROLWORD:
-        return od_var(sub, o, 2u, COD_R | COD_W, d->controlword);
-    case EF_CO_OBJ_STATUSWORD:
-        return od_var(sub, o, 2u, COD_R, cod_statusword(d));
-    case EF_CO_OBJ_MODE:
-        return od_var(sub, o, 1u, COD_R | COD_W, (uint8_t)cod_u32(d->mode));
-    case EF_CO_OBJ_MODE_DISPLAY:
-        return od_var(sub, o, 1u, COD_R, (uint8_t)cod_u32(d->mode_display));
-    case EF_CO_OBJ_POS_ACTUAL:
-        return od_var(sub, o, 4u, COD_R, cod_u32(cod_inc(d, v->act.x)));
-    case EF_CO_OBJ_FERR_WINDOW:
-        return od_var(sub, o, 4u, COD_R | COD_W, d->ferr_window);
-    case EF_CO_OBJ_TARGET_POS:
-        return od_var(sub, o, 4u, COD_R | COD_W, cod_u32(d->target_inc));
-    case EF_CO_OBJ_FERR_ACTUAL:
-        return od_var(sub, o, 4u, COD_R, cod_u32(cod_inc(d, v->cmd.x - v->act.x)));
-    case EF_CO_OBJ_SUPPORTED:
-        return od_var(sub, o, 4u, COD_R, COD_SUPPORTED);
-    default:
-        return EF_CO_ABORT_NO_OBJECT;
-    }
+    return 0;
 }
 
 /* Write a PDO parameter (CiA 301 rules: COB-ID changes only while invalid, mapping only
@@ -861,79 +688,368 @@ static uint32_t cod_pdo_write(ef_codrive_t *d, ef_codrive_pdo_t *p, int rx, int 
     return 0u;
 }
 
-/* Write a scalar entry whose size and access were checked; 0 or the abort code. */
-static uint32_t od_set(ef_codrive_t *d, uint16_t idx, uint8_t sub, uint32_t val)
+/* Read hooks: the value of (idx, sub) for rows whose value is not a constant. */
+
+static uint32_t cod_get_ereg(const ef_codrive_t *d, uint16_t idx, uint8_t sub)
+{
+    (void)idx, (void)sub;
+    return d->error_reg;
+}
+
+static uint32_t cod_get_sync_cobid(const ef_codrive_t *d, uint16_t idx, uint8_t sub)
+{
+    (void)idx, (void)sub;
+    return d->sync_cobid;
+}
+
+static uint32_t cod_get_cycle(const ef_codrive_t *d, uint16_t idx, uint8_t sub)
+{
+    (void)idx, (void)sub;
+    return d->cycle_us;
+}
+
+static uint32_t cod_get_emcy_cobid(const ef_codrive_t *d, uint16_t idx, uint8_t sub)
+{
+    (void)idx, (void)sub;
+    return EF_CO_COB_EMCY + d->cfg.node;
+}
+
+static uint32_t cod_get_hb(const ef_codrive_t *d, uint16_t idx, uint8_t sub)
+{
+    (void)idx, (void)sub;
+    return d->hb_ms;
+}
+
+static uint32_t cod_get_serial(const ef_codrive_t *d, uint16_t idx, uint8_t sub)
+{
+    (void)idx, (void)sub;
+    return d->cfg.serial;
+}
+
+/* PDO records: communication (1 COB-ID, 2 type) and mapping (0 count, 1..8 entries). */
+static uint32_t cod_get_pdo(const ef_codrive_t *d, uint16_t idx, uint8_t sub)
 {
     int rx = 0, map = 0, k = 0;
-    ef_codrive_pdo_t *p = cod_pdo_of(d, idx, &rx, &map, &k);
-    if (p)
-        return cod_pdo_write(d, p, rx, map, k, sub, val);
-    uint32_t period = d->cfg.servo_period_us;
-    switch (idx) {
-    case EF_CO_OBJ_SYNC_COBID:
-        if ((val & ~COD_COB_MASK) != 0u || val == 0u)
-            return EF_CO_ABORT_RANGE; /* a consumer only: no generate bit, 11-bit id */
-        d->sync_cobid = val;
-        return 0u;
-    case EF_CO_OBJ_CYCLE:
-        if (val % period != 0u ||
-            val / period > (uint32_t)EF_DRIVE_MAX_STEPS * EF_CODRIVE_SYNC_CALLS)
-            return EF_CO_ABORT_RANGE;
-        d->cycle_us = val;
-        return 0u;
-    case EF_CO_OBJ_HB_PRODUCER:
-        d->hb_ms = (uint16_t)val;
-        d->hb_acc_us = 0u;
-        return 0u;
-    case EF_CO_OBJ_SYNC_TIMEOUT:
-        if (val > EF_CODRIVE_SYNC_TIMEOUT_MAX_MS)
-            return EF_CO_ABORT_RANGE;
-        d->sync_timeout_ms = (uint16_t)val; /* the gap so far counts against the new value */
-        return 0u;
-    case EF_CO_OBJ_CONTROLWORD:
-        cod_control(d, (uint16_t)val);
-        return 0u;
-    case EF_CO_OBJ_MODE: {
-        int8_t m = val == 0xFFu ? (int8_t)EF_CO_MODE_SEGMENT : (int8_t)(val & 0x7Fu);
-        if (val != 0xFFu && val != (uint32_t)EF_CO_MODE_CSP)
-            return EF_CO_ABORT_RANGE;
-        if (m != d->mode && (d->power == EF_CO_PS_OP_ENABLED || d->power == EF_CO_PS_QUICK_STOP ||
-                             d->power == EF_CO_PS_FAULT_REACTION))
-            return EF_CO_ABORT_STATE;
-        d->mode = d->mode_display = m;
-        return 0u;
-    }
-    case EF_CO_OBJ_FERR_WINDOW:
-        if (val == 0u)
-            return EF_CO_ABORT_RANGE;
-        d->ferr_window = val;
-        d->drv.cfg.ferr_lim = (float)val / (float)d->cfg.inc_per_unit;
-        return 0u;
-    case EF_CO_OBJ_TARGET_POS:
-        d->target_inc = cod_i32(val);
-        return 0u;
-    default:
-        return EF_CO_ABORT_READONLY;
+    (void)cod_pdo_find(idx, &rx, &map, &k); /* the row matched: it is a PDO index */
+    const ef_codrive_pdo_t *p = rx ? &d->rpdo[k] : &d->tpdo[k];
+    if (!map)
+        return sub == 1u ? p->cobid : p->type;
+    return sub == 0u ? p->count : p->map[sub - 1u];
+}
+
+static uint32_t cod_get_ipu(const ef_codrive_t *d, uint16_t idx, uint8_t sub)
+{
+    (void)idx, (void)sub;
+    return d->cfg.inc_per_unit;
+}
+
+static uint32_t cod_get_fault(const ef_codrive_t *d, uint16_t idx, uint8_t sub)
+{
+    (void)idx, (void)sub;
+    return d->last_fault;
+}
+
+static uint32_t cod_get_sync_timeout(const ef_codrive_t *d, uint16_t idx, uint8_t sub)
+{
+    (void)idx, (void)sub;
+    return d->sync_timeout_ms;
+}
+
+/* 0x2102: the segment-mode status record. */
+static uint32_t cod_get_segst(const ef_codrive_t *d, uint16_t idx, uint8_t sub)
+{
+    const ef_drive_t *v = &d->drv;
+    (void)idx;
+    switch (sub) {
+    case EF_CO_SEGST_NEXT8:
+        return v->next_seq & 0xFFu;
+    case EF_CO_SEGST_FREE:
+        return ef_drive_free(v);
+    case EF_CO_SEGST_NEXT:
+        return v->next_seq;
+    case EF_CO_SEGST_DONE:
+        return v->done_any;
+    case EF_CO_SEGST_DROPPED:
+        return d->seg_dropped;
+    default: /* EF_CO_SEGST_DUPS: the row covers nothing else */
+        return d->seg_dups;
     }
 }
 
-/* Write len bytes to an entry: existence, access, length, then the value's own checks. */
-static uint32_t od_write(ef_codrive_t *d, uint16_t idx, uint8_t sub, const uint8_t *buf,
-                         uint32_t len)
+static uint32_t cod_get_ecode(const ef_codrive_t *d, uint16_t idx, uint8_t sub)
 {
-    od_t o = {0};
-    uint32_t ab = od_find(d, idx, sub, &o);
+    (void)idx, (void)sub;
+    return d->error_code;
+}
+
+static uint32_t cod_get_cw(const ef_codrive_t *d, uint16_t idx, uint8_t sub)
+{
+    (void)idx, (void)sub;
+    return d->controlword;
+}
+
+static uint32_t cod_get_sw(const ef_codrive_t *d, uint16_t idx, uint8_t sub)
+{
+    (void)idx, (void)sub;
+    return cod_statusword(d);
+}
+
+static uint32_t cod_get_mode(const ef_codrive_t *d, uint16_t idx, uint8_t sub)
+{
+    (void)sub;
+    return (uint8_t)cod_u32(idx == EF_CO_OBJ_MODE ? d->mode : d->mode_display);
+}
+
+static uint32_t cod_get_pos(const ef_codrive_t *d, uint16_t idx, uint8_t sub)
+{
+    (void)idx, (void)sub;
+    return cod_u32(cod_inc(d, d->drv.act.x));
+}
+
+static uint32_t cod_get_ferr_window(const ef_codrive_t *d, uint16_t idx, uint8_t sub)
+{
+    (void)idx, (void)sub;
+    return d->ferr_window;
+}
+
+static uint32_t cod_get_target(const ef_codrive_t *d, uint16_t idx, uint8_t sub)
+{
+    (void)idx, (void)sub;
+    return cod_u32(d->target_inc);
+}
+
+static uint32_t cod_get_ferr(const ef_codrive_t *d, uint16_t idx, uint8_t sub)
+{
+    (void)idx, (void)sub;
+    return cod_u32(cod_inc(d, d->drv.cmd.x - d->drv.act.x));
+}
+
+/* Write hooks: size and access were checked by the table; each checks its value and
+ * applies it; 0 or the abort code. val: the bytes little-endian (up to 4); buf: all. */
+
+static uint32_t cod_set_pdo(ef_codrive_t *d, uint16_t idx, uint8_t sub, uint32_t val,
+                            const uint8_t *buf)
+{
+    int rx = 0, map = 0, k = 0;
+    (void)buf;
+    (void)cod_pdo_find(idx, &rx, &map, &k);
+    return cod_pdo_write(d, rx ? &d->rpdo[k] : &d->tpdo[k], rx, map, k, sub, val);
+}
+
+static uint32_t cod_set_sync_cobid(ef_codrive_t *d, uint16_t idx, uint8_t sub, uint32_t val,
+                                   const uint8_t *buf)
+{
+    (void)idx, (void)sub, (void)buf;
+    if ((val & ~COD_COB_MASK) != 0u || val == 0u)
+        return EF_CO_ABORT_RANGE; /* a consumer only: no generate bit, 11-bit id */
+    d->sync_cobid = val;
+    return 0u;
+}
+
+static uint32_t cod_set_cycle(ef_codrive_t *d, uint16_t idx, uint8_t sub, uint32_t val,
+                              const uint8_t *buf)
+{
+    uint32_t period = d->cfg.servo_period_us;
+    (void)idx, (void)sub, (void)buf;
+    /* Whole servo periods, and no more than EF_CODRIVE_SYNC_CALLS model calls per SYNC. */
+    if (val % period != 0u || val / period > (uint32_t)EF_DRIVE_MAX_STEPS * EF_CODRIVE_SYNC_CALLS)
+        return EF_CO_ABORT_RANGE;
+    d->cycle_us = val;
+    return 0u;
+}
+
+static uint32_t cod_set_hb(ef_codrive_t *d, uint16_t idx, uint8_t sub, uint32_t val,
+                           const uint8_t *buf)
+{
+    (void)idx, (void)sub, (void)buf;
+    d->hb_ms = (uint16_t)val;
+    d->hb_acc_us = 0u;
+    return 0u;
+}
+
+static uint32_t cod_set_sync_timeout(ef_codrive_t *d, uint16_t idx, uint8_t sub, uint32_t val,
+                                     const uint8_t *buf)
+{
+    (void)idx, (void)sub, (void)buf;
+    if (val > EF_CODRIVE_SYNC_TIMEOUT_MAX_MS)
+        return EF_CO_ABORT_RANGE;
+    d->sync_timeout_ms = (uint16_t)val; /* the gap so far counts against the new value */
+    return 0u;
+}
+
+/* 0x2100 / 0x2101: a record chunk, the same as by RPDO. */
+static uint32_t cod_set_chunk(ef_codrive_t *d, uint16_t idx, uint8_t sub, uint32_t val,
+                              const uint8_t *buf)
+{
+    (void)sub, (void)val;
+    cod_seg_chunk(d, idx == EF_CO_OBJ_SEG_LAW, buf);
+    return 0u;
+}
+
+static uint32_t cod_set_cw(ef_codrive_t *d, uint16_t idx, uint8_t sub, uint32_t val,
+                           const uint8_t *buf)
+{
+    (void)idx, (void)sub, (void)buf;
+    cod_control(d, (uint16_t)val);
+    return 0u;
+}
+
+static uint32_t cod_set_mode(ef_codrive_t *d, uint16_t idx, uint8_t sub, uint32_t val,
+                             const uint8_t *buf)
+{
+    (void)idx, (void)sub, (void)buf;
+    int8_t m = val == 0xFFu ? (int8_t)EF_CO_MODE_SEGMENT : (int8_t)(val & 0x7Fu);
+    if (val != 0xFFu && val != (uint32_t)EF_CO_MODE_CSP)
+        return EF_CO_ABORT_RANGE;
+    if (m != d->mode && (d->power == EF_CO_PS_OP_ENABLED || d->power == EF_CO_PS_QUICK_STOP ||
+                         d->power == EF_CO_PS_FAULT_REACTION))
+        return EF_CO_ABORT_STATE;
+    d->mode = d->mode_display = m;
+    return 0u;
+}
+
+static uint32_t cod_set_ferr_window(ef_codrive_t *d, uint16_t idx, uint8_t sub, uint32_t val,
+                                    const uint8_t *buf)
+{
+    (void)idx, (void)sub, (void)buf;
+    if (val == 0u)
+        return EF_CO_ABORT_RANGE;
+    d->ferr_window = val;
+    d->drv.cfg.ferr_lim = (float)val / (float)d->cfg.inc_per_unit;
+    return 0u;
+}
+
+static uint32_t cod_set_target(ef_codrive_t *d, uint16_t idx, uint8_t sub, uint32_t val,
+                               const uint8_t *buf)
+{
+    (void)idx, (void)sub, (void)buf;
+    d->target_inc = cod_i32(val);
+    return 0u;
+}
+
+/** A read hook: the value of (idx, sub). */
+typedef uint32_t (*cod_get_t)(const ef_codrive_t *d, uint16_t idx, uint8_t sub);
+/** A write hook (see above). */
+typedef uint32_t (*cod_set_t)(ef_codrive_t *d, uint16_t idx, uint8_t sub, uint32_t val,
+                              const uint8_t *buf);
+
+/** One row of the object dictionary: indices index .. index + n_idx - 1, sub-indices
+ *  lo .. hi, all of one size and access. */
+typedef struct {
+    uint16_t index;
+    uint8_t n_idx;  /**< consecutive indices of this layout (the PDO records), >= 1 */
+    uint8_t lo, hi; /**< sub-index range */
+    uint8_t size;   /**< bytes */
+    uint8_t acc;    /**< COD_R | COD_W */
+    uint8_t pad;
+    uint32_t val;  /**< the value when get is NULL (constants) */
+    cod_get_t get; /**< NULL: val */
+    cod_set_t set; /**< set exactly when acc has COD_W */
+} cod_row_t;
+
+#define COD_RW (COD_R | COD_W)
+/** A plain variable (sub 0 only). */
+#define COD_VAR(idx, size, acc, get, set)                                                          \
+    {                                                                                              \
+        (idx), 1u, 0u, 0u, (size), (acc), 0u, 0u, (get), (set)                                     \
+    }
+/** A read-only constant. */
+#define COD_CONST(idx, size, val)                                                                  \
+    {                                                                                              \
+        (idx), 1u, 0u, 0u, (size), COD_R, 0u, (val), NULL, NULL                                    \
+    }
+/** Sub 0 of a record over n indices: its highest sub-index, read-only u8. */
+#define COD_SUB0(idx, n, subs)                                                                     \
+    {                                                                                              \
+        (idx), (n), 0u, 0u, 1u, COD_R, 0u, (subs), NULL, NULL                                      \
+    }
+
+/** The object dictionary (docs/can.md), by index. Sub-indices a row does not cover, of an
+ *  index some row has, are EF_CO_ABORT_NO_SUB; other indices EF_CO_ABORT_NO_OBJECT. */
+static const cod_row_t cod_od[] = {
+    COD_CONST(EF_CO_OBJ_DEVICE_TYPE, 4u, EF_CO_DEVICE_TYPE_402),
+    COD_VAR(EF_CO_OBJ_ERROR_REG, 1u, COD_R, cod_get_ereg, NULL),
+    COD_VAR(EF_CO_OBJ_SYNC_COBID, 4u, COD_RW, cod_get_sync_cobid, cod_set_sync_cobid),
+    COD_VAR(EF_CO_OBJ_CYCLE, 4u, COD_RW, cod_get_cycle, cod_set_cycle),
+    COD_CONST(EF_CO_OBJ_DEVICE_NAME, COD_NAME_LEN, 0u), /* the bytes: cod_name (upload) */
+    COD_VAR(EF_CO_OBJ_EMCY_COBID, 4u, COD_R, cod_get_emcy_cobid, NULL),
+    COD_VAR(EF_CO_OBJ_HB_PRODUCER, 2u, COD_RW, cod_get_hb, cod_set_hb),
+    COD_SUB0(EF_CO_OBJ_IDENTITY, 1u, COD_IDENT_SUBS),
+    {EF_CO_OBJ_IDENTITY, 1u, 1u, 1u, 4u, COD_R, 0u, COD_VENDOR, NULL, NULL},
+    {EF_CO_OBJ_IDENTITY, 1u, 2u, 2u, 4u, COD_R, 0u, COD_PRODUCT, NULL, NULL},
+    {EF_CO_OBJ_IDENTITY, 1u, 3u, 3u, 4u, COD_R, 0u, COD_REVISION, NULL, NULL},
+    {EF_CO_OBJ_IDENTITY, 1u, 4u, 4u, 4u, COD_R, 0u, 0u, cod_get_serial, NULL},
+    COD_SUB0(EF_CO_OBJ_RPDO_COMM, EF_CODRIVE_RPDOS, COD_COMM_SUBS),
+    {EF_CO_OBJ_RPDO_COMM, EF_CODRIVE_RPDOS, 1u, 1u, 4u, COD_RW, 0u, 0u, cod_get_pdo, cod_set_pdo},
+    {EF_CO_OBJ_RPDO_COMM, EF_CODRIVE_RPDOS, 2u, 2u, 1u, COD_RW, 0u, 0u, cod_get_pdo, cod_set_pdo},
+    {EF_CO_OBJ_RPDO_MAP, EF_CODRIVE_RPDOS, 0u, 0u, 1u, COD_RW, 0u, 0u, cod_get_pdo, cod_set_pdo},
+    {EF_CO_OBJ_RPDO_MAP, EF_CODRIVE_RPDOS, 1u, COD_MAP_MAX, 4u, COD_RW, 0u, 0u, cod_get_pdo,
+     cod_set_pdo},
+    COD_SUB0(EF_CO_OBJ_TPDO_COMM, EF_CODRIVE_TPDOS, COD_COMM_SUBS),
+    {EF_CO_OBJ_TPDO_COMM, EF_CODRIVE_TPDOS, 1u, 1u, 4u, COD_RW, 0u, 0u, cod_get_pdo, cod_set_pdo},
+    {EF_CO_OBJ_TPDO_COMM, EF_CODRIVE_TPDOS, 2u, 2u, 1u, COD_RW, 0u, 0u, cod_get_pdo, cod_set_pdo},
+    {EF_CO_OBJ_TPDO_MAP, EF_CODRIVE_TPDOS, 0u, 0u, 1u, COD_RW, 0u, 0u, cod_get_pdo, cod_set_pdo},
+    {EF_CO_OBJ_TPDO_MAP, EF_CODRIVE_TPDOS, 1u, COD_MAP_MAX, 4u, COD_RW, 0u, 0u, cod_get_pdo,
+     cod_set_pdo},
+    COD_VAR(EF_CO_OBJ_INC_PER_UNIT, 4u, COD_R, cod_get_ipu, NULL),
+    COD_VAR(EF_CO_OBJ_DRIVE_FAULT, 1u, COD_R, cod_get_fault, NULL),
+    COD_VAR(EF_CO_OBJ_SYNC_TIMEOUT, 2u, COD_RW, cod_get_sync_timeout, cod_set_sync_timeout),
+    COD_VAR(EF_CO_OBJ_SEG_AXIS, COD_PDO_BYTES, COD_W, NULL, cod_set_chunk),
+    COD_VAR(EF_CO_OBJ_SEG_LAW, COD_PDO_BYTES, COD_W, NULL, cod_set_chunk),
+    COD_SUB0(EF_CO_OBJ_SEG_STATUS, 1u, COD_SEGST_SUBS),
+    {EF_CO_OBJ_SEG_STATUS, 1u, EF_CO_SEGST_NEXT8, EF_CO_SEGST_FREE, 1u, COD_R, 0u, 0u,
+     cod_get_segst, NULL},
+    {EF_CO_OBJ_SEG_STATUS, 1u, EF_CO_SEGST_NEXT, EF_CO_SEGST_DUPS, 4u, COD_R, 0u, 0u, cod_get_segst,
+     NULL},
+    COD_VAR(EF_CO_OBJ_ERROR_CODE, 2u, COD_R, cod_get_ecode, NULL),
+    COD_VAR(EF_CO_OBJ_CONTROLWORD, 2u, COD_RW, cod_get_cw, cod_set_cw),
+    COD_VAR(EF_CO_OBJ_STATUSWORD, 2u, COD_R, cod_get_sw, NULL),
+    COD_VAR(EF_CO_OBJ_MODE, 1u, COD_RW, cod_get_mode, cod_set_mode),
+    COD_VAR(EF_CO_OBJ_MODE_DISPLAY, 1u, COD_R, cod_get_mode, NULL),
+    COD_VAR(EF_CO_OBJ_POS_ACTUAL, 4u, COD_R, cod_get_pos, NULL),
+    COD_VAR(EF_CO_OBJ_FERR_WINDOW, 4u, COD_RW, cod_get_ferr_window, cod_set_ferr_window),
+    COD_VAR(EF_CO_OBJ_TARGET_POS, 4u, COD_RW, cod_get_target, cod_set_target),
+    COD_VAR(EF_CO_OBJ_FERR_ACTUAL, 4u, COD_R, cod_get_ferr, NULL),
+    COD_CONST(EF_CO_OBJ_SUPPORTED, 4u, COD_SUPPORTED),
+};
+
+/* Look an entry up: its row, size, access and (readable scalars) value; 0 or the abort
+ * code (no such index, or no such sub-index of one). */
+static uint32_t cod_od_find(const ef_codrive_t *d, uint16_t idx, uint8_t sub, cod_od_t *o,
+                            const cod_row_t **row)
+{
+    int known = 0;
+    for (uint32_t i = 0; i < sizeof cod_od / sizeof cod_od[0]; i++) {
+        const cod_row_t *r = &cod_od[i];
+        if (idx < r->index || idx >= (uint32_t)r->index + r->n_idx)
+            continue;
+        known = 1;
+        if (sub < r->lo || sub > r->hi)
+            continue;
+        o->size = r->size;
+        o->acc = r->acc;
+        o->val = r->get ? r->get(d, idx, sub) : r->val;
+        if (row)
+            *row = r;
+        return 0u;
+    }
+    return known ? EF_CO_ABORT_NO_SUB : EF_CO_ABORT_NO_OBJECT;
+}
+
+/* Write len bytes to an entry: existence, access, length, then the value's own checks. */
+static uint32_t cod_od_write(ef_codrive_t *d, uint16_t idx, uint8_t sub, const uint8_t *buf,
+                             uint32_t len)
+{
+    cod_od_t o = {0};
+    const cod_row_t *r = NULL;
+    uint32_t ab = cod_od_find(d, idx, sub, &o, &r);
     if (ab)
         return ab;
-    if (!(o.acc & COD_W))
+    if (!(o.acc & COD_W) || !r->set)
         return EF_CO_ABORT_READONLY;
     if (len != o.size)
         return EF_CO_ABORT_LEN;
-    if (idx == EF_CO_OBJ_SEG_AXIS || idx == EF_CO_OBJ_SEG_LAW) {
-        cod_seg_chunk(d, idx == EF_CO_OBJ_SEG_LAW, buf);
-        return 0u;
-    }
-    return od_set(d, idx, sub, cod_get_le(buf, len));
+    return r->set(d, idx, sub, cod_get_le(buf, len), buf);
 }
 
 /* ------------------------------------------------------------------------- SDO server */
@@ -952,23 +1068,23 @@ static void cod_sdo_reply(ef_codrive_t *d, uint8_t cmd, uint16_t idx, uint8_t su
 /* Abort the transfer (or refuse the request) with a CiA 301 code. */
 static void cod_sdo_abort(ef_codrive_t *d, uint16_t idx, uint8_t sub, uint32_t code)
 {
-    d->sdo_state = COD_SDO_IDLE;
+    d->sdo_state = EF_CODRIVE_SDO_IDLE;
     cod_sdo_reply(d, EF_CO_SDO_ABORT, idx, sub, code);
 }
 
 /* Initiate download: expedited writes at once, segmented ones are announced and checked. */
 static void cod_sdo_dl_init(ef_codrive_t *d, const uint8_t *q, uint16_t idx, uint8_t sub)
 {
-    d->sdo_state = COD_SDO_IDLE; /* a new request ends any transfer under way */
-    od_t o = {0};
-    uint32_t ab = od_find(d, idx, sub, &o);
+    d->sdo_state = EF_CODRIVE_SDO_IDLE; /* a new request ends any transfer under way */
+    cod_od_t o = {0};
+    uint32_t ab = cod_od_find(d, idx, sub, &o, NULL);
     if (!ab && !(o.acc & COD_W))
         ab = EF_CO_ABORT_READONLY;
     int e = (q[0] & 0x02u) != 0u, s = (q[0] & 0x01u) != 0u;
     uint32_t n = (q[0] >> 2) & 3u;
     if (!ab && e) {
         uint32_t len = s ? 4u - n : o.size;
-        ab = len > 4u ? EF_CO_ABORT_LEN : od_write(d, idx, sub, q + 4, len);
+        ab = len > 4u ? EF_CO_ABORT_LEN : cod_od_write(d, idx, sub, q + 4, len);
     } else if (!ab) {
         uint32_t size = s ? ef_co_get32(q + 4) : COD_SDO_LEN_UNKNOWN;
         if (s && (size != o.size || size > EF_CODRIVE_SDO_BUF))
@@ -980,7 +1096,7 @@ static void cod_sdo_dl_init(ef_codrive_t *d, const uint8_t *q, uint16_t idx, uin
         return;
     }
     if (!e) {
-        d->sdo_state = COD_SDO_DOWNLOAD;
+        d->sdo_state = EF_CODRIVE_SDO_DOWNLOAD;
         d->sdo_toggle = 0u;
         d->sdo_index = idx;
         d->sdo_sub = sub;
@@ -994,7 +1110,7 @@ static void cod_sdo_dl_seg(ef_codrive_t *d, const uint8_t *q)
 {
     uint16_t idx = d->sdo_index;
     uint8_t sub = d->sdo_sub;
-    if (d->sdo_state != COD_SDO_DOWNLOAD) {
+    if (d->sdo_state != EF_CODRIVE_SDO_DOWNLOAD) {
         cod_sdo_abort(d, idx, sub, EF_CO_ABORT_CS);
         return;
     }
@@ -1015,8 +1131,8 @@ static void cod_sdo_dl_seg(ef_codrive_t *d, const uint8_t *q)
     d->sdo_pos += k;
     d->sdo_toggle ^= 1u;
     if (last) {
-        d->sdo_state = COD_SDO_IDLE;
-        uint32_t ab = od_write(d, idx, sub, d->sdo_buf, d->sdo_pos);
+        d->sdo_state = EF_CODRIVE_SDO_IDLE;
+        uint32_t ab = cod_od_write(d, idx, sub, d->sdo_buf, d->sdo_pos);
         if (ab) {
             cod_sdo_abort(d, idx, sub, ab);
             return;
@@ -1030,9 +1146,9 @@ static void cod_sdo_dl_seg(ef_codrive_t *d, const uint8_t *q)
 /* Initiate upload: expedited for up to 4 bytes, else a snapshot goes out in segments. */
 static void cod_sdo_ul_init(ef_codrive_t *d, uint16_t idx, uint8_t sub)
 {
-    d->sdo_state = COD_SDO_IDLE;
-    od_t o = {0};
-    uint32_t ab = od_find(d, idx, sub, &o);
+    d->sdo_state = EF_CODRIVE_SDO_IDLE;
+    cod_od_t o = {0};
+    uint32_t ab = cod_od_find(d, idx, sub, &o, NULL);
     if (!ab && !(o.acc & COD_R))
         ab = EF_CO_ABORT_WRITEONLY;
     if (!ab && o.size > EF_CODRIVE_SDO_BUF)
@@ -1053,7 +1169,7 @@ static void cod_sdo_ul_init(ef_codrive_t *d, uint16_t idx, uint8_t sub)
     /* Only the device name is longer than 4 bytes and readable. */
     for (uint32_t i = 0; i < o.size; i++)
         d->sdo_buf[i] = (uint8_t)cod_name[i];
-    d->sdo_state = COD_SDO_UPLOAD;
+    d->sdo_state = EF_CODRIVE_SDO_UPLOAD;
     d->sdo_toggle = 0u;
     d->sdo_index = idx;
     d->sdo_sub = sub;
@@ -1065,7 +1181,7 @@ static void cod_sdo_ul_init(ef_codrive_t *d, uint16_t idx, uint8_t sub)
 /* Upload segment: the next up to 7 bytes, toggle checked. */
 static void cod_sdo_ul_seg(ef_codrive_t *d, const uint8_t *q)
 {
-    if (d->sdo_state != COD_SDO_UPLOAD) {
+    if (d->sdo_state != EF_CODRIVE_SDO_UPLOAD) {
         cod_sdo_abort(d, d->sdo_index, d->sdo_sub, EF_CO_ABORT_CS);
         return;
     }
@@ -1084,7 +1200,7 @@ static void cod_sdo_ul_seg(ef_codrive_t *d, const uint8_t *q)
     d->sdo_pos += k;
     d->sdo_toggle ^= 1u;
     if (last)
-        d->sdo_state = COD_SDO_IDLE;
+        d->sdo_state = EF_CODRIVE_SDO_IDLE;
     cod_send(d, &f, 0);
 }
 
@@ -1112,7 +1228,7 @@ static void cod_sdo(ef_codrive_t *d, const ef_can_frame_t *f)
         cod_sdo_ul_seg(d, q);
         break;
     case 4u:
-        d->sdo_state = COD_SDO_IDLE; /* the client aborted: no answer */
+        d->sdo_state = EF_CODRIVE_SDO_IDLE; /* the client aborted: no answer */
         break;
     default: /* block transfers and unknown specifiers */
         cod_sdo_abort(d, idx, sub, EF_CO_ABORT_CS);
@@ -1130,10 +1246,10 @@ static uint32_t cod_tpdo_pack(ef_codrive_t *d, const ef_codrive_pdo_t *p, uint8_
     for (uint32_t i = 0; i < p->count && i < COD_MAP_MAX; i++) {
         uint32_t e = p->map[i];
         uint32_t n = (e & 0xFFu) / 8u;
-        od_t o = {0};
+        cod_od_t o = {0};
         if (off + n > COD_PDO_BYTES)
             break;
-        if (od_find(d, (uint16_t)(e >> 16), (uint8_t)(e >> 8), &o) == 0u)
+        if (cod_od_find(d, (uint16_t)(e >> 16), (uint8_t)(e >> 8), &o, NULL) == 0u)
             cod_put_le(data + off, o.val, n);
         off += n;
     }
@@ -1367,7 +1483,7 @@ static void cod_nmt(ef_codrive_t *d, const ef_can_frame_t *f)
         break;
     case EF_CO_NMT_STOP:
         cod_nmt_leave_op(d);
-        d->sdo_state = COD_SDO_IDLE;
+        d->sdo_state = EF_CODRIVE_SDO_IDLE;
         d->nmt = EF_CO_NMT_STOPPED;
         break;
     case EF_CO_NMT_PREOP:
@@ -1425,6 +1541,9 @@ int ef_codrive_init(ef_codrive_t *d, const ef_codrive_cfg_t *c, const ef_can_por
     *d = (ef_codrive_t){0};
     d->cfg = *c;
     d->port = *port;
+    /* Cannot fail: the arrays are the drive's own. */
+    (void)ef_txq_init(&d->txq, d->txq_buf, d->txq_stale, EF_CODRIVE_TXQ, EF_TXQ_DROP_STALE,
+                      EF_TXQ_REFUSED_KEEP);
     if (cod_reset_app(d, c->home) != EF_OK)
         return EF_ERR_ARG;
     cod_comm_defaults(d);
@@ -1491,7 +1610,7 @@ int ef_codrive_process(ef_codrive_t *d, uint32_t dt_us, uint32_t *next_us)
     uint32_t wd = cod_watchdog(d, dt_us);
     if (wd < next)
         next = wd;
-    if (d->txq_count > 0u && next > COD_RETRY_US)
+    if (ef_txq_count(&d->txq) > 0u && next > COD_RETRY_US)
         next = COD_RETRY_US;
     if (next_us)
         *next_us = next;

@@ -5,8 +5,14 @@
  * Structure: ef_comaster_rx() records what a frame says (SDO answers, TPDO1 status,
  * heartbeats, EMCY) and runs the state checks; ef_comaster_process() advances time, times
  * out, produces SYNC and sends each cycle's RPDOs right after it. All transmission goes
- * through com_send(), which keeps frame order (a frame waits behind queued ones). The port's
- * send must not call back into ef_comaster_rx() (a bus simulation queues frames instead). */
+ * through com_send() and the TX queue (ef_txq.h), which keeps frame order (a frame waits
+ * behind queued ones). The SDO client (ef_sdo_client.h) is an object of its own: it returns
+ * the frames it needs sent, and the master acts on each transfer's outcome. The port's send
+ * must not call back into ef_comaster_rx() (a bus simulation queues frames instead).
+ *
+ * State and sub-state (m->state, m->sub: the transition table is in ef_comaster.h) change
+ * only in com_advance() (frames and time), com_timers() (timeouts) and the com_enter_*()
+ * helpers; everything else reads them. */
 #include "evenfeed/canopen/ef_comaster.h"
 #include "evenfeed/core/ef_err.h"
 
@@ -20,20 +26,6 @@
 /** TPDO1s must be newer than the SYNC a command went out after by this many SYNCs before
  *  the master believes them: the RPDO is applied at the next SYNC and reported after it. */
 #define COM_STALE_SYNCS 2u
-/** SDO command bytes (CiA 301). */
-#define SDO_DL_INIT   0x20u /**< download initiate (client) */
-#define SDO_DL_RESP   0x60u /**< download initiate response (server) */
-#define SDO_DL_SEG    0x00u /**< download segment (client; + toggle << 4, n << 1, c) */
-#define SDO_DL_ACK    0x20u /**< download segment response (server; + toggle << 4) */
-#define SDO_UL_INIT   0x40u /**< upload initiate (both; server adds n/e/s bits) */
-#define SDO_UL_SEG    0x60u /**< upload segment request (client; + toggle << 4) */
-#define SDO_CS_MASK   0xE0u /**< command specifier bits */
-#define SDO_TOGGLE    0x10u /**< toggle bit of segment frames */
-#define SDO_EXPEDITED 0x02u /**< e bit */
-#define SDO_SIZED     0x01u /**< s bit */
-#define SDO_LAST      0x01u /**< c bit of a segment (no more segments) */
-/** Data bytes of one SDO segment. */
-#define SDO_SEG_BYTES 7u
 /** TPDO1 lengths per mode. */
 #define COM_TPDO1_CSP_LEN 6u
 #define COM_TPDO1_SEG_LEN 8u
@@ -91,12 +83,6 @@ static int com_error(ef_comaster_t *m, int code, int what, int k, uint16_t index
     return code;
 }
 
-/* Ring index of the i-th frame after the head of the TX queue. */
-static uint32_t com_txq_at(const ef_comaster_t *m, uint32_t i)
-{
-    return (m->txq_head + i) % EF_COM_TXQ;
-}
-
 static void com_enter_stop(ef_comaster_t *m);
 
 /* A port error: record it (first error kept) and stop under control; frames stay queued so
@@ -112,28 +98,17 @@ static void com_bus_fail(ef_comaster_t *m, uint32_t detail)
     com_enter_stop(m);
 }
 
-/* Hand queued frames to the port in order until it is busy. */
+/* Hand queued frames to the port in order until it is busy (frames refused outright leave
+ * the queue: a retry would change nothing). */
 static void com_flush(ef_comaster_t *m)
 {
-    for (uint32_t i = 0; i < EF_COM_TXQ && m->txq_count > 0; i++) {
-        int rc = m->port.send(m->port.ctx, &m->txq[m->txq_head]);
-        if (rc == EF_ERR_AGAIN) {
-            m->tx_again++;
-            return;
-        }
-        if (rc == EF_ERR_BUS) {
-            com_bus_fail(m, 0);
-            return;
-        }
-        /* EF_OK, or a frame the port refuses outright: either way it leaves the queue. */
-        m->tx_frames += (rc == EF_OK) ? 1u : 0u;
-        m->txq_head = (m->txq_head + 1u) % EF_COM_TXQ;
-        m->txq_count--;
-    }
+    if (ef_txq_flush(&m->txq, &m->port) == EF_ERR_BUS)
+        com_bus_fail(m, 0);
 }
 
 /* Send a frame, or queue it behind frames still waiting (order matters: chunks of a record,
- * SYNC before the cycle's RPDOs). A full queue drops the frame (counted). */
+ * SYNC before the cycle's RPDOs). A full queue drops the frame (counted in txq.lost): what
+ * is queued stays intact (ef_txq.h, EF_TXQ_DROP_NEWEST). */
 static void com_send(ef_comaster_t *m, uint32_t id, const uint8_t *data, uint8_t dlc)
 {
     ef_can_frame_t f;
@@ -143,31 +118,15 @@ static void com_send(ef_comaster_t *m, uint32_t id, const uint8_t *data, uint8_t
     f.pad[0] = f.pad[1] = 0;
     for (uint32_t i = 0; i < EF_CAN_MAX_DLC; i++)
         f.data[i] = (i < dlc && data) ? data[i] : 0u;
-    if (m->txq_count == 0) {
-        int rc = m->port.send(m->port.ctx, &f);
-        if (rc == EF_OK) {
-            m->tx_frames++;
-            return;
-        }
-        if (rc == EF_ERR_BUS)
-            com_bus_fail(m, 0);
-        else if (rc != EF_ERR_AGAIN)
-            return; /* refused outright: nothing a retry would change */
-        else
-            m->tx_again++;
-    }
-    if (m->txq_count >= EF_COM_TXQ) {
-        m->tx_lost++;
-        return;
-    }
-    m->txq[com_txq_at(m, m->txq_count)] = f;
-    m->txq_count++;
+    if (ef_txq_send(&m->txq, &m->port, &f, 0) == EF_ERR_BUS)
+        com_bus_fail(m, 0);
 }
 
-/* Free places in the TX queue (room check before a multi-frame segment). */
-static uint32_t com_tx_room(const ef_comaster_t *m)
+/* Send what the SDO client asks for (dlc 0: nothing). */
+static void com_sdo_send(ef_comaster_t *m, const ef_can_frame_t *f)
 {
-    return EF_COM_TXQ - m->txq_count;
+    if (f->dlc != 0u)
+        com_send(m, f->id, f->data, f->dlc);
 }
 
 /* NMT command to all nodes (node 0). */
@@ -282,78 +241,39 @@ static uint32_t com_ops(const ef_comaster_t *m, int k, com_op_t *ops)
 
 /* ------------------------------------------------------------------ SDO client */
 
-/* Send the first frame of the pending transfer (also its retry: a transfer restarts whole). */
-static void com_sdo_request(ef_comaster_t *m)
-{
-    uint8_t d[8] = {0};
-    ef_co_put16(&d[1], m->sdo_index);
-    d[3] = m->sdo_sub;
-    if (m->sdo_write && m->sdo_len > 4u) {
-        d[0] = (uint8_t)(SDO_DL_INIT | SDO_SIZED); /* segmented: the size, then segments */
-        ef_co_put32(&d[4], m->sdo_len);
-    } else if (m->sdo_write) {
-        d[0] = (uint8_t)(SDO_DL_INIT | ((4u - m->sdo_len) << 2) | SDO_EXPEDITED | SDO_SIZED);
-        ef_co_put32(&d[4], m->sdo_value);
-    } else {
-        d[0] = SDO_UL_INIT;
-        m->sdo_len = 0; /* a retried upload starts over */
-    }
-    m->sdo_toggle = 0;
-    m->sdo_got = 0;
-    m->sdo_t0_us = m->now_us;
-    com_send(m, EF_CO_COB_SDO_RX + m->sdo_node, d, 8);
-}
-
-/* Segmented download: send the next segment (sdo_got counts the bytes sent with it). */
-static void com_sdo_dl_seg(ef_comaster_t *m)
-{
-    uint32_t left = m->sdo_len - m->sdo_got;
-    uint32_t n = left < SDO_SEG_BYTES ? left : SDO_SEG_BYTES;
-    uint8_t d[8] = {0};
-    d[0] = (uint8_t)(SDO_DL_SEG | (m->sdo_toggle ? SDO_TOGGLE : 0u) | ((SDO_SEG_BYTES - n) << 1) |
-                     (n == left ? SDO_LAST : 0u));
-    for (uint32_t i = 0; i < n; i++)
-        d[1 + i] = m->sdo_buf[m->sdo_got + i];
-    m->sdo_got += n;
-    m->sdo_t0_us = m->now_us;
-    com_send(m, EF_CO_COB_SDO_RX + m->sdo_node, d, 8);
-}
-
-/* Begin configuration step op of node k. */
+/* Begin configuration step op of node k (a write sends op->size bytes of op->value). */
 static void com_sdo_start(ef_comaster_t *m, int k, const com_op_t *op)
 {
-    m->sdo_busy = 1;
+    ef_can_frame_t out;
     m->sdo_user = 0;
-    m->sdo_node = m->cfg.nodes[k];
-    m->sdo_index = op->index;
-    m->sdo_sub = op->sub;
-    m->sdo_write = op->kind == OP_WRITE;
-    m->sdo_value = op->value;
-    m->sdo_len = op->kind == OP_WRITE ? op->size : 0u;
-    m->sdo_tries = 1;
-    com_sdo_request(m);
+    if (op->kind == OP_WRITE) {
+        uint8_t b[4];
+        ef_co_put32(b, op->value);
+        (void)ef_sdo_client_download(&m->sdo, m->cfg.nodes[k], op->index, op->sub, b, op->size,
+                                     m->now_us, &out); /* idle, sizes 1..4: cannot fail */
+    } else {
+        (void)ef_sdo_client_upload(&m->sdo, m->cfg.nodes[k], op->index, op->sub, m->now_us, &out);
+    }
+    com_sdo_send(m, &out);
 }
 
 /* An SDO failure: the caller's transfer keeps it as its result; at CONFIG (node cur) it is the
  * master's error, naming the node and the object. */
-static void com_sdo_fail(ef_comaster_t *m, int code, uint32_t abort)
+static void com_sdo_fail(ef_comaster_t *m, int code)
 {
     int k = m->cur;
-    m->sdo_busy = 0;
-    if (m->sdo_user) {
-        m->sdo_rc = code;
-        m->sdo_abort = abort;
-        return;
-    }
+    if (m->sdo_user)
+        return; /* the client keeps the outcome for ef_comaster_sdo_result() */
     if (m->cfg_restart) {
         /* The node rebooted under us: its answer (or silence) means nothing; start over. */
         m->cfg_restart = 0;
         m->op = 0;
         return;
     }
-    com_error(m, code, m->sdo_write ? EF_COM_WHAT_SDO_WRITE : EF_COM_WHAT_SDO_READ, k, m->sdo_index,
-              m->sdo_sub);
-    m->err.abort = abort;
+    const ef_sdo_client_t *c = &m->sdo;
+    com_error(m, code, c->write ? EF_COM_WHAT_SDO_WRITE : EF_COM_WHAT_SDO_READ, k, c->index,
+              c->sub);
+    m->err.abort = c->abort;
     com_enter_stop(m);
 }
 
@@ -362,11 +282,8 @@ static void com_sdo_fail(ef_comaster_t *m, int code, uint32_t abort)
 static void com_sdo_done(ef_comaster_t *m)
 {
     int k = m->cur;
-    m->sdo_busy = 0;
-    if (m->sdo_user) {
-        m->sdo_rc = EF_OK;
+    if (m->sdo_user)
         return;
-    }
     if (m->cfg_restart) {
         m->cfg_restart = 0;
         m->op = 0;
@@ -377,7 +294,7 @@ static void com_sdo_done(ef_comaster_t *m)
     if (m->op >= n)
         return;
     const com_op_t *o = &ops[m->op];
-    uint32_t v = m->sdo_value;
+    uint32_t v = o->kind == OP_READ ? ef_sdo_client_value(&m->sdo) : o->value;
     if (o->kind == OP_READ && o->size == 1u)
         v &= 0xFFu;
     int bad = 0;
@@ -394,10 +311,12 @@ static void com_sdo_done(ef_comaster_t *m)
             m->node[k].inc_per_unit = v;
         break;
     case CK_NAME: {
-        uint32_t len = m->sdo_got < EF_COM_SDO_BUF ? m->sdo_got : EF_COM_SDO_BUF;
-        for (uint32_t i = 0; i < len; i++)
-            m->name[k][i] = (char)m->sdo_buf[i];
-        m->name[k][len] = '\0';
+        const uint8_t *data = 0;
+        uint32_t len = 0;
+        (void)ef_sdo_client_result(&m->sdo, 0, &data, &len); /* done: data, len <= the buffer */
+        for (uint32_t i = 0; i < len && i < EF_COM_SDO_BUF; i++)
+            m->name[k][i] = (char)data[i];
+        m->name[k][len < EF_COM_SDO_BUF ? len : EF_COM_SDO_BUF] = '\0';
         break;
     }
     default:
@@ -413,129 +332,35 @@ static void com_sdo_done(ef_comaster_t *m)
     m->op++;
 }
 
-/* Segmented download: a segment confirmed (toggle checked); the next one, or done. */
-static void com_sdo_dl_ack(ef_comaster_t *m, uint8_t cmd)
+/* What a transfer's step ended in: done, failed (PROTO, TIMEOUT), or still pending. */
+static void com_sdo_outcome(ef_comaster_t *m, int rc)
 {
-    if ((cmd & SDO_CS_MASK) != SDO_DL_ACK) {
-        com_sdo_fail(m, EF_ERR_PROTO, 0);
-        return;
-    }
-    if (((cmd & SDO_TOGGLE) != 0) != (m->sdo_toggle != 0)) {
-        com_sdo_fail(m, EF_ERR_PROTO, EF_CO_ABORT_TOGGLE);
-        return;
-    }
-    if (m->sdo_got >= m->sdo_len) {
+    if (rc == EF_OK)
         com_sdo_done(m);
-        return;
-    }
-    m->sdo_toggle ^= 1u;
-    com_sdo_dl_seg(m);
+    else if (rc == EF_ERR_PROTO || rc == EF_ERR_TIMEOUT)
+        com_sdo_fail(m, rc);
 }
 
-/* An SDO answer from the node of the pending transfer. */
-static void com_sdo_rx(ef_comaster_t *m, const ef_can_frame_t *f)
-{
-    const uint8_t *d = f->data;
-    uint8_t cmd = d[0];
-    int echo = ef_co_get16(&d[1]) == m->sdo_index && d[3] == m->sdo_sub;
-    if (cmd == EF_CO_SDO_ABORT) {
-        if (!echo) {
-            com_sdo_fail(m, EF_ERR_PROTO, 0);
-            return;
-        }
-        com_sdo_fail(m, EF_ERR_PROTO, ef_co_get32(&d[4]));
-        return;
-    }
-    if (m->sdo_write) {
-        if (m->sdo_got > 0u) { /* segmented, a segment sent: its confirmation */
-            com_sdo_dl_ack(m, cmd);
-            return;
-        }
-        if (cmd != SDO_DL_RESP || !echo) {
-            com_sdo_fail(m, EF_ERR_PROTO, 0);
-            return;
-        }
-        if (m->sdo_len > 4u) {
-            com_sdo_dl_seg(m); /* initiate confirmed: the first segment (toggle 0) */
-            return;
-        }
-        com_sdo_done(m);
-        return;
-    }
-    if (m->sdo_got == 0 && m->sdo_len == 0 && (cmd & SDO_CS_MASK) == SDO_UL_INIT) {
-        if (!echo) {
-            com_sdo_fail(m, EF_ERR_PROTO, 0);
-            return;
-        }
-        if (cmd & SDO_EXPEDITED) {
-            uint32_t size = (cmd & SDO_SIZED) ? 4u - ((cmd >> 2) & 3u) : 4u;
-            m->sdo_value = ef_co_get32(&d[4]);
-            if (size < 4u)
-                m->sdo_value &= (1u << (8u * size)) - 1u;
-            for (uint32_t i = 0; i < size && i < EF_COM_SDO_BUF; i++)
-                m->sdo_buf[i] = d[4 + i];
-            m->sdo_got = size;
-            com_sdo_done(m);
-            return;
-        }
-        /* Segmented: the size (when given) is informative; the last segment ends it. */
-        m->sdo_len = (cmd & SDO_SIZED) ? ef_co_get32(&d[4]) : 0xFFFFFFFFu;
-        if (m->sdo_len == 0u)
-            m->sdo_len = 0xFFFFFFFFu;
-        uint8_t q[8] = {SDO_UL_SEG, 0, 0, 0, 0, 0, 0, 0};
-        m->sdo_toggle = 0;
-        m->sdo_t0_us = m->now_us;
-        com_send(m, EF_CO_COB_SDO_RX + m->sdo_node, q, 8);
-        return;
-    }
-    if (m->sdo_len != 0u && (cmd & SDO_CS_MASK) == 0u) {
-        if (((cmd & SDO_TOGGLE) != 0) != (m->sdo_toggle != 0)) {
-            com_sdo_fail(m, EF_ERR_PROTO, EF_CO_ABORT_TOGGLE);
-            return;
-        }
-        uint32_t n = 7u - ((cmd >> 1) & 7u);
-        for (uint32_t i = 0; i < n; i++, m->sdo_got++)
-            if (m->sdo_got < EF_COM_SDO_BUF)
-                m->sdo_buf[m->sdo_got] = d[1 + i];
-        if (cmd & SDO_LAST) {
-            com_sdo_done(m);
-            return;
-        }
-        m->sdo_toggle ^= 1u;
-        uint8_t q[8] = {
-            (uint8_t)(SDO_UL_SEG | (m->sdo_toggle ? SDO_TOGGLE : 0u)), 0, 0, 0, 0, 0, 0, 0};
-        m->sdo_t0_us = m->now_us;
-        com_send(m, EF_CO_COB_SDO_RX + m->sdo_node, q, 8);
-        return;
-    }
-    com_sdo_fail(m, EF_ERR_PROTO, 0);
-}
-
-/* An SDO answer for the pending transfer from node q: it must have 8 bytes. */
+/* An SDO answer for the pending transfer from node q (routed here by its COB-ID): one that
+ * is not 8 bytes is counted against the node, and fails the transfer. */
 static void com_sdo_frame(ef_comaster_t *m, ef_com_node_t *q, const ef_can_frame_t *f)
 {
-    if (f->dlc != 8u) {
+    ef_can_frame_t out;
+    if (f->dlc != 8u)
         q->rx_bad++;
-        com_sdo_fail(m, EF_ERR_PROTO, 0);
-        return;
-    }
-    com_sdo_rx(m, f);
+    int rc = ef_sdo_client_rx(&m->sdo, f, m->now_us, &out);
+    com_sdo_send(m, &out);
+    com_sdo_outcome(m, rc);
 }
 
 /* SDO timeout: one retry of the whole transfer, then the transfer fails (at CONFIG an error
  * naming node and object). */
 static void com_sdo_timer(ef_comaster_t *m)
 {
-    if (!m->sdo_busy)
-        return;
-    if (!ef_time_reached(m->now_us, m->sdo_t0_us + m->cfg.sdo_timeout_ms * 1000u))
-        return;
-    if (m->sdo_tries < 2u && !m->cfg_restart) {
-        m->sdo_tries++;
-        com_sdo_request(m);
-        return;
-    }
-    com_sdo_fail(m, EF_ERR_TIMEOUT, 0);
+    ef_can_frame_t out;
+    int rc = ef_sdo_client_process(&m->sdo, m->now_us, &out);
+    com_sdo_send(m, &out);
+    com_sdo_outcome(m, rc);
 }
 
 /* ------------------------------------------------------------------ state changes */
@@ -550,7 +375,7 @@ static void com_sync_start(ef_comaster_t *m)
 /* Shared final step: SHUTDOWN every node, wait for operation disabled. */
 static void com_enter_shutdown(ef_comaster_t *m)
 {
-    m->step = 1;
+    m->sub = EF_COM_SUB_SHUTDOWN;
     m->t_step_us = m->now_us;
     m->mark_sync = m->sync_count;
 }
@@ -561,7 +386,7 @@ static void com_enter_final(ef_comaster_t *m)
     m->state = (uint8_t)(m->err.code ? EF_COM_ERROR : EF_COM_DONE);
     m->sync_on = 0;
     if (!m->sdo_user)
-        m->sdo_busy = 0; /* a configuration step ends; the caller's transfer goes on */
+        ef_sdo_client_abandon(&m->sdo); /* a configuration step ends; the caller's goes on */
 }
 
 /* Controlled stop: quick stop every enabled node while SYNC keeps running (drives move
@@ -575,11 +400,11 @@ static void com_enter_stop(ef_comaster_t *m)
         return;
     }
     m->state = EF_COM_STOPPING;
-    m->step = 0;
+    m->sub = EF_COM_SUB_STOP_RAMP;
     m->t_step_us = m->now_us;
     m->mark_sync = m->sync_count;
     if (!m->sdo_user)
-        m->sdo_busy = 0;
+        ef_sdo_client_abandon(&m->sdo);
 }
 
 /* Whether node k's latest TPDO1 reports the drive after the current wait began. */
@@ -594,7 +419,7 @@ static int com_fresh(const ef_comaster_t *m, int k)
 static void com_enter_run(ef_comaster_t *m)
 {
     m->state = EF_COM_RUN;
-    m->step = 0;
+    m->sub = EF_COM_SUB_NONE;
     m->tq_head = m->tq_count = 0;
     m->sq_head = m->sq_count = m->sq_base = m->sent_to = m->next_seq = 0;
     m->running = 0;
@@ -621,6 +446,7 @@ static void com_advance(ef_comaster_t *m)
             all &= m->node[k].nmt != 0xFFu;
         if (all) {
             m->state = EF_COM_CONFIG;
+            m->sub = EF_COM_SUB_NONE;
             m->cur = 0;
             m->op = 0;
             m->cfg_restart = 0;
@@ -630,7 +456,8 @@ static void com_advance(ef_comaster_t *m)
     }
     case EF_COM_CONFIG: {
         /* Bounded: each pass either starts a transfer or moves to the next node. */
-        for (int guard = 0; guard <= n && !m->sdo_busy && m->state == EF_COM_CONFIG; guard++) {
+        for (int guard = 0; guard <= n && !ef_sdo_client_busy(&m->sdo) && m->state == EF_COM_CONFIG;
+             guard++) {
             if (m->cur >= n) {
                 m->state = EF_COM_START;
                 m->t_step_us = m->now_us;
@@ -677,29 +504,30 @@ static void com_advance(ef_comaster_t *m)
     }
     case EF_COM_FINISH:
     case EF_COM_STOPPING: {
-        if (m->step != 1 && m->state == EF_COM_FINISH) {
-            /* Step 0: everything acknowledged / sent and every node idle at its end; in
-             * segment mode step 2 then clears the run bit and waits for bit 12 to clear
+        if (m->sub != EF_COM_SUB_SHUTDOWN && m->state == EF_COM_FINISH) {
+            /* DRAIN: everything acknowledged / sent and every node idle at its end; in
+             * segment mode RUN_OFF then clears the run bit and waits for bit 12 to clear
              * (the drive leaves its running state; at rest that is no stop). */
+            int drain = m->sub == EF_COM_SUB_FINISH_DRAIN;
             int done = 1;
             for (int k = 0; k < n; k++) {
                 const ef_com_node_t *q = &m->node[k];
                 done &= com_fresh(m, k) && (q->statusword & EF_CO_SW_TARGET_REACHED) &&
-                        (m->step == 0 || !(q->statusword & EF_CO_SW_FOLLOWING));
+                        (drain || !(q->statusword & EF_CO_SW_FOLLOWING));
             }
             if (m->cfg.mode == EF_COM_MODE_CSP)
                 done &= m->tq_count == 0;
-            else if (m->step == 0)
+            else if (drain)
                 done &= m->running && m->sq_count == 0;
-            if (done && m->cfg.mode == EF_COM_MODE_SEGMENT && m->step == 0) {
-                m->step = 2;
+            if (done && m->cfg.mode == EF_COM_MODE_SEGMENT && drain) {
+                m->sub = EF_COM_SUB_FINISH_RUN_OFF;
                 m->running = 0;
                 m->t_step_us = m->now_us;
                 m->mark_sync = m->sync_count;
             } else if (done) {
                 com_enter_shutdown(m);
             }
-        } else if (m->step == 0) {
+        } else if (m->sub == EF_COM_SUB_STOP_RAMP) {
             int rest = 1;
             for (int k = 0; k < n; k++) {
                 const ef_com_node_t *q = &m->node[k];
@@ -755,11 +583,11 @@ static uint16_t com_cw(ef_comaster_t *m, int k)
         }
     case EF_COM_RUN:
     case EF_COM_FINISH:
-        if (m->step == 1)
+        if (m->sub == EF_COM_SUB_SHUTDOWN)
             break;
         return (uint16_t)(EF_CO_CW_ENABLE_OP | (m->running ? EF_CO_CW_SEG_RUN : 0u));
     case EF_COM_STOPPING:
-        if (m->step == 1)
+        if (m->sub == EF_COM_SUB_SHUTDOWN)
             break;
         if (q->power == EF_CO_PS_FAULT || q->power == EF_CO_PS_FAULT_REACTION)
             return prev;
@@ -770,7 +598,7 @@ static uint16_t com_cw(ef_comaster_t *m, int k)
     default:
         return EF_CO_CW_DISABLE_VOLTAGE;
     }
-    /* Final SHUTDOWN (FINISH/STOPPING step 1): quick stop active needs disable voltage. */
+    /* Final SHUTDOWN (FINISH/STOPPING sub SHUTDOWN): quick stop active needs disable voltage. */
     if (q->power == EF_CO_PS_QUICK_STOP)
         return EF_CO_CW_DISABLE_VOLTAGE;
     if (q->power == EF_CO_PS_FAULT || q->power == EF_CO_PS_FAULT_REACTION)
@@ -782,7 +610,7 @@ static uint16_t com_cw(ef_comaster_t *m, int k)
 static void com_cycle_csp(ef_comaster_t *m)
 {
     int n = m->cfg.n_nodes;
-    int feed = m->state == EF_COM_RUN || (m->state == EF_COM_FINISH && m->step == 0);
+    int feed = m->state == EF_COM_RUN || m->sub == EF_COM_SUB_FINISH_DRAIN;
     if (feed && m->tq_count > 0) {
         for (int k = 0; k < n; k++) {
             int32_t inc;
@@ -879,7 +707,7 @@ static void com_gobackn(ef_comaster_t *m)
 static void com_cycle_seg(ef_comaster_t *m)
 {
     int n = m->cfg.n_nodes;
-    int feed = m->state == EF_COM_RUN || (m->state == EF_COM_FINISH && m->step == 0);
+    int feed = m->state == EF_COM_RUN || m->sub == EF_COM_SUB_FINISH_DRAIN;
     if (feed) {
         /* Start when prefill is acknowledged, or everything is after finish(). */
         uint32_t want = m->cfg.prefill < m->seg_cap ? m->cfg.prefill : m->seg_cap;
@@ -896,9 +724,10 @@ static void com_cycle_seg(ef_comaster_t *m)
         changed |= m->cw[k] != m->cw_sent[k];
     }
     m->cw_age++;
-    /* During the power-state steps every cycle: they are short and each step matters. */
-    if (changed || m->cw_age >= COM_CW_REFRESH || m->state == EF_COM_ENABLE ||
-        m->state == EF_COM_STOPPING || m->step == 1) {
+    /* During the power-state steps every cycle (START included): they are short and each
+     * step matters. */
+    if (changed || m->cw_age >= COM_CW_REFRESH || m->state == EF_COM_START ||
+        m->state == EF_COM_ENABLE || m->state == EF_COM_STOPPING || m->sub == EF_COM_SUB_SHUTDOWN) {
         m->cw_age = 0;
         for (int k = 0; k < n; k++) {
             if (!m->node[k].seen_tpdo)
@@ -922,7 +751,7 @@ static void com_cycle_seg(ef_comaster_t *m)
                 return;
         }
         const ef_move_t *mv = &m->sq[(m->sq_head + (m->sent_to - m->sq_base)) % EF_COM_SEGQ];
-        if (com_seg_frames(m, mv) > com_tx_room(m))
+        if (com_seg_frames(m, mv) > ef_txq_room(&m->txq))
             return;
         for (int k = 0; k < n; k++)
             if (m->node[k].next_seq == m->sent_to)
@@ -1020,11 +849,13 @@ static void com_heartbeat(ef_comaster_t *m, int k, const ef_can_frame_t *f)
         if (m->state == EF_COM_CONFIG && k >= m->cur) {
             /* Booted again before we configured it (a power-up racing our reset
              * communication): configure it from the start. */
-            if (k == m->cur && (m->sdo_busy || m->op > 0)) {
-                if (m->sdo_busy)
+            if (k == m->cur && (ef_sdo_client_busy(&m->sdo) || m->op > 0)) {
+                if (ef_sdo_client_busy(&m->sdo)) {
                     m->cfg_restart = 1;
-                else
+                    ef_sdo_client_no_retry(&m->sdo); /* a retry would ask a node that forgot */
+                } else {
                     m->op = 0;
+                }
             }
         } else if (m->state >= EF_COM_CONFIG && m->state < EF_COM_DONE) {
             com_error(m, EF_ERR_DRIVE, EF_COM_WHAT_RESTART, k, 0, 0);
@@ -1124,8 +955,11 @@ int ef_comaster_init(ef_comaster_t *m, const ef_com_cfg_t *c, const ef_can_port_
         q->power = EF_CO_PS_NOT_READY;
         q->inc_per_unit = EF_CO_INC_PER_UNIT;
     }
+    /* Cannot fail: the timeout was checked above. */
+    (void)ef_sdo_client_init(&m->sdo, c->sdo_timeout_ms * 1000u);
+    (void)ef_txq_init(&m->txq, m->txq_buf, 0, EF_COM_TXQ, EF_TXQ_DROP_NEWEST, EF_TXQ_REFUSED_DROP);
     m->state = EF_COM_BOOT;
-    m->step = 0; /* the first process() call sends the reset and starts the boot timer */
+    m->sub = EF_COM_SUB_BOOT_RESET; /* the first process() call sends the reset, starts the timer */
     return EF_OK;
 }
 
@@ -1141,8 +975,8 @@ int ef_comaster_rx(ef_comaster_t *m, const ef_can_frame_t *f)
         return EF_OK;
     if (m->state == EF_COM_DONE || m->state == EF_COM_ERROR) {
         /* After the end only the caller's SDO transfer goes on; everything else is ignored. */
-        int j = com_node_of(m, m->sdo_node);
-        if (m->sdo_busy && j >= 0 && f->id == EF_CO_COB_SDO_TX + m->sdo_node)
+        int j = com_node_of(m, m->sdo.node);
+        if (ef_sdo_client_busy(&m->sdo) && j >= 0 && f->id == EF_CO_COB_SDO_TX + m->sdo.node)
             com_sdo_frame(m, &m->node[j], f);
         return EF_OK;
     }
@@ -1165,7 +999,7 @@ int ef_comaster_rx(ef_comaster_t *m, const ef_can_frame_t *f)
         com_tpdo1(m, k, f);
         break;
     case EF_CO_COB_SDO_TX:
-        if (!m->sdo_busy || m->sdo_node != id) {
+        if (!ef_sdo_client_busy(&m->sdo) || m->sdo.node != id) {
             q->rx_bad++; /* nothing asked: a late answer to a retried request */
             break;
         }
@@ -1193,8 +1027,8 @@ static void com_timers(ef_comaster_t *m, uint32_t dt_us)
     com_sdo_timer(m); /* the configuration step or the caller's transfer */
     switch (m->state) {
     case EF_COM_BOOT:
-        if (m->step == 0) {
-            m->step = 1;
+        if (m->sub == EF_COM_SUB_BOOT_RESET) {
+            m->sub = EF_COM_SUB_BOOT_WAIT;
             m->t_step_us = now;
             if (m->cfg.reset_comm)
                 com_nmt(m, EF_CO_NMT_RESET_COMM);
@@ -1230,16 +1064,18 @@ static void com_timers(ef_comaster_t *m, uint32_t dt_us)
         break;
     case EF_COM_STOPPING:
     case EF_COM_FINISH: {
-        int stopping = m->state == EF_COM_STOPPING;
-        uint32_t lim = (m->step != 0) ? m->cfg.enable_timeout_ms : m->cfg.stop_timeout_ms;
-        /* FINISH waits as long as the drives execute; only its last steps are timed. */
-        if ((stopping || m->step != 0) && ef_time_reached(now, m->t_step_us + lim * 1000u)) {
+        /* FINISH waits as long as the drives execute (DRAIN); only its last steps are timed;
+         * the ramp of a stop has the stop's own limit. */
+        int sub = m->sub;
+        uint32_t lim =
+            sub == EF_COM_SUB_STOP_RAMP ? m->cfg.stop_timeout_ms : m->cfg.enable_timeout_ms;
+        if (sub != EF_COM_SUB_FINISH_DRAIN && ef_time_reached(now, m->t_step_us + lim * 1000u)) {
             for (int k = 0; k < n; k++)
                 if (!m->lost[k]) {
                     com_error(m, EF_ERR_TIMEOUT, EF_COM_WHAT_STOP, k, 0, 0);
                     break;
                 }
-            if (m->step != 1)
+            if (sub != EF_COM_SUB_SHUTDOWN)
                 com_enter_shutdown(m);
             else
                 com_enter_final(m);
@@ -1297,12 +1133,9 @@ int ef_comaster_process(ef_comaster_t *m, uint32_t dt_us, uint32_t *next_us)
     if (next_us) {
         uint32_t nx = 0xFFFFFFFFu;
         if (m->state == EF_COM_DONE || m->state == EF_COM_ERROR || m->state == EF_COM_IDLE) {
-            nx = m->txq_count ? COM_RETRY_US : 0xFFFFFFFFu;
-            if (m->sdo_busy) {
-                uint32_t due = m->sdo_t0_us + m->cfg.sdo_timeout_ms * 1000u;
-                uint32_t s = ef_time_reached(m->now_us, due) ? 0u : due - m->now_us;
-                nx = s < nx ? s : nx;
-            }
+            nx = ef_txq_count(&m->txq) ? COM_RETRY_US : 0xFFFFFFFFu;
+            uint32_t s = ef_sdo_client_due_us(&m->sdo, m->now_us); /* 0xFFFFFFFF: none */
+            nx = s < nx ? s : nx;
         } else {
             nx = 10000u; /* timers are coarse (ms): look at them at least this often */
             if (m->sync_on) {
@@ -1310,9 +1143,9 @@ int ef_comaster_process(ef_comaster_t *m, uint32_t dt_us, uint32_t *next_us)
                     m->sync_acc_us >= m->cfg.cycle_us ? 0u : m->cfg.cycle_us - m->sync_acc_us;
                 nx = s < nx ? s : nx;
             }
-            if (m->txq_count && COM_RETRY_US < nx)
+            if (ef_txq_count(&m->txq) && COM_RETRY_US < nx)
                 nx = COM_RETRY_US;
-            if (m->state == EF_COM_CONFIG && !m->sdo_busy)
+            if (m->state == EF_COM_CONFIG && !ef_sdo_client_busy(&m->sdo))
                 nx = 0; /* the next step is ready now */
         }
         *next_us = nx;
@@ -1420,7 +1253,7 @@ int ef_comaster_finish(ef_comaster_t *m)
         return EF_ERR_STATE;
     m->finishing = 1;
     m->state = EF_COM_FINISH;
-    m->step = 0;
+    m->sub = EF_COM_SUB_FINISH_DRAIN;
     m->t_step_us = m->now_us;
     m->mark_sync = m->sync_count; /* CSP with an empty queue: wait for fresh TPDOs */
     return EF_OK;
@@ -1450,24 +1283,11 @@ int ef_comaster_bus_error(ef_comaster_t *m, uint32_t detail)
 static int com_sdo_user_ok(const ef_comaster_t *m)
 {
     int st = m->state;
-    return !m->sdo_busy && (st == EF_COM_RUN || st == EF_COM_DONE || st == EF_COM_ERROR);
+    return !ef_sdo_client_busy(&m->sdo) &&
+           (st == EF_COM_RUN || st == EF_COM_DONE || st == EF_COM_ERROR);
 }
 
-/* Begin the caller's transfer to node k (fields of the direction already set). */
-static void com_sdo_user_start(ef_comaster_t *m, int k, uint16_t index, uint8_t sub)
-{
-    m->sdo_busy = 1;
-    m->sdo_user = 1;
-    m->sdo_rc = EF_ERR_AGAIN;
-    m->sdo_abort = 0;
-    m->sdo_node = m->cfg.nodes[k];
-    m->sdo_index = index;
-    m->sdo_sub = sub;
-    m->sdo_tries = 1;
-    com_sdo_request(m);
-}
-
-/* Caller's download: expedited up to 4 bytes, segmented above (data copied to sdo_buf). */
+/* Caller's download: expedited up to 4 bytes, segmented above (the client copies the data). */
 int ef_comaster_sdo_write(ef_comaster_t *m, int k, uint16_t index, uint8_t sub, const uint8_t *data,
                           uint32_t len)
 {
@@ -1475,16 +1295,13 @@ int ef_comaster_sdo_write(ef_comaster_t *m, int k, uint16_t index, uint8_t sub, 
         return EF_ERR_ARG;
     if (!com_sdo_user_ok(m))
         return EF_ERR_STATE;
-    uint32_t v = 0;
-    for (uint32_t i = 0; i < len; i++) {
-        m->sdo_buf[i] = data[i];
-        if (i < 4u)
-            v |= (uint32_t)data[i] << (8u * i);
-    }
-    m->sdo_write = 1;
-    m->sdo_value = v;
-    m->sdo_len = len;
-    com_sdo_user_start(m, k, index, sub);
+    ef_can_frame_t out;
+    int rc =
+        ef_sdo_client_download(&m->sdo, m->cfg.nodes[k], index, sub, data, len, m->now_us, &out);
+    if (rc != EF_OK)
+        return rc;
+    m->sdo_user = 1;
+    com_sdo_send(m, &out);
     return EF_OK;
 }
 
@@ -1495,14 +1312,16 @@ int ef_comaster_sdo_read(ef_comaster_t *m, int k, uint16_t index, uint8_t sub)
         return EF_ERR_ARG;
     if (!com_sdo_user_ok(m))
         return EF_ERR_STATE;
-    m->sdo_write = 0;
-    m->sdo_value = 0;
-    m->sdo_len = 0;
-    com_sdo_user_start(m, k, index, sub);
+    ef_can_frame_t out;
+    int rc = ef_sdo_client_upload(&m->sdo, m->cfg.nodes[k], index, sub, m->now_us, &out);
+    if (rc != EF_OK)
+        return rc;
+    m->sdo_user = 1;
+    com_sdo_send(m, &out);
     return EF_OK;
 }
 
-/* Outcome of the caller's last transfer (a read's data from sdo_buf). */
+/* Outcome of the caller's last transfer (the client's, if the caller started it). */
 int ef_comaster_sdo_result(const ef_comaster_t *m, uint32_t *abort, const uint8_t **data,
                            uint32_t *len)
 {
@@ -1516,15 +1335,5 @@ int ef_comaster_sdo_result(const ef_comaster_t *m, uint32_t *abort, const uint8_
         return EF_ERR_ARG;
     if (!m->sdo_user)
         return EF_ERR_STATE;
-    if (m->sdo_busy)
-        return EF_ERR_AGAIN;
-    if (abort)
-        *abort = m->sdo_abort;
-    if (m->sdo_rc == EF_OK && !m->sdo_write) {
-        if (data)
-            *data = m->sdo_buf;
-        if (len)
-            *len = m->sdo_got < EF_COM_SDO_BUF ? m->sdo_got : EF_COM_SDO_BUF;
-    }
-    return m->sdo_rc;
+    return ef_sdo_client_result(&m->sdo, abort, data, len);
 }

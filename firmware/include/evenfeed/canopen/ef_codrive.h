@@ -35,10 +35,36 @@
  * the gap itself the axis holds: a SYNC may merely be late), then FAULT. A SYNC takes the
  * stepping back (never both).
  *
- * Storage: all static; the TX queue holds ::EF_CODRIVE_TXQ frames (a full port queue is
- * retried, not dropped; beyond the queue the oldest heartbeat/TPDO is replaced, never an
- * SDO reply or EMCY; only a queue holding nothing but SDO replies and EMCYs loses the new
- * frame, counted in tx_lost like the others).
+ * Storage: all static; the TX queue (ef_txq.h) holds ::EF_CODRIVE_TXQ frames. A full port
+ * queue is retried, not dropped; beyond the queue the policy is ::EF_TXQ_DROP_STALE: the
+ * oldest heartbeat/TPDO gives way (the next one supersedes it), never an SDO reply or EMCY
+ * (the master waits for those); only a queue holding nothing but SDO replies and EMCYs loses
+ * the new frame, counted in txq.lost like the others. A frame the port refuses outright
+ * stays queued (::EF_TXQ_REFUSED_KEEP).
+ *
+ * ## SDO server (::ef_codrive_t::sdo_state, ::ef_codrive_sdo_t)
+ *
+ *     state     request (client)                              next      answer
+ *     any       initiate download, expedited, accepted        IDLE      initiate response
+ *     any       initiate download, segmented, accepted        DOWNLOAD  initiate response
+ *     DOWNLOAD  segment, right toggle and length, c = 0       DOWNLOAD  segment response
+ *     DOWNLOAD  segment, right toggle and length, c = 1       IDLE      segment response (after
+ *                                                                       the object's write)
+ *     any       initiate upload, up to 4 bytes                IDLE      expedited response
+ *     any       initiate upload, longer (the device name)     UPLOAD    initiate response, size
+ *     UPLOAD    segment request, right toggle, more           UPLOAD    segment
+ *     UPLOAD    segment request, right toggle, the last       IDLE      segment with c = 1
+ *     any       abort from the client                         IDLE      none
+ *     any       anything refused (object, access, length,     IDLE      abort with the reason
+ *               toggle, specifier, value)
+ *     any       NMT stop, reset communication, reset node     IDLE      none
+ *
+ * ## Object dictionary
+ * One table in ef_codrive.c (docs/can.md lists it): a row per index (or run of PDO indices)
+ * and sub-index range, with size, access, and read/write hooks. A read takes the hook's
+ * value (or the row's constant); a write is checked for existence, access and length by
+ * the table, then the hook checks the value and applies it. TPDOs read their mapped
+ * objects through the same rows.
  *
  * Details the profile leaves open, as implemented:
  * - NMT: INITIALISING ignores every frame until the boot-up is sent. PRE-OPERATIONAL: NMT,
@@ -80,6 +106,7 @@
 
 #include "evenfeed/hal/ef_can.h"
 #include "evenfeed/canopen/ef_canopen.h"
+#include "evenfeed/canopen/ef_txq.h"
 #include "evenfeed/drive/ef_drive.h"
 
 #ifdef __cplusplus
@@ -137,6 +164,13 @@ typedef struct {
     uint8_t pad2[3];
 } ef_codrive_pdo_t;
 
+/** SDO server states (see the table above). */
+typedef enum {
+    EF_CODRIVE_SDO_IDLE = 0, /**< no transfer under way */
+    EF_CODRIVE_SDO_DOWNLOAD, /**< segmented download: segments expected */
+    EF_CODRIVE_SDO_UPLOAD,   /**< segmented upload: segment requests expected */
+} ef_codrive_sdo_t;
+
 /** A decoded law record waiting for its axis record (private). */
 typedef struct {
     ef_timelaw_t law;
@@ -173,7 +207,8 @@ typedef struct {
     ef_codrive_pdo_t rpdo[EF_CODRIVE_RPDOS];
     ef_codrive_pdo_t tpdo[EF_CODRIVE_TPDOS];
     /* SDO server: one transfer at a time. */
-    uint8_t sdo_state, sdo_toggle;
+    uint8_t sdo_state; /**< ::ef_codrive_sdo_t */
+    uint8_t sdo_toggle;
     uint16_t sdo_index;
     uint8_t sdo_sub, pad3[3];
     uint32_t sdo_len, sdo_pos;
@@ -184,10 +219,10 @@ typedef struct {
     uint8_t have_law, have_axis;
     uint16_t law_seq16, axis_seq16;
     uint32_t seg_dropped, seg_dups;
-    /* TX queue. */
-    ef_can_frame_t txq[EF_CODRIVE_TXQ];
-    uint32_t txq_head, txq_count;
-    uint32_t tx_lost;    /**< heartbeats/TPDOs replaced in a full queue */
+    /* TX queue: ::EF_TXQ_DROP_STALE, refused frames kept (ef_txq.h says why). */
+    ef_txq_t txq;                           /**< count, sent, again, lost: read only */
+    ef_can_frame_t txq_buf[EF_CODRIVE_TXQ]; /**< private: its storage */
+    uint8_t txq_stale[EF_CODRIVE_TXQ];      /**< private: the queued frame is a heartbeat or TPDO */
     uint32_t rx_ignored; /**< frames not for this drive or malformed (counted, harmless) */
     /* Private (ef_codrive.c). */
     uint8_t power_next;                  /**< OPERATION ENABLED left by a stop: the state it ends in
@@ -200,11 +235,10 @@ typedef struct {
     uint8_t tpdo_sent[EF_CODRIVE_TPDOS]; /**< tpdo_last holds what was last sent */
     uint8_t pad4[3];
     uint8_t tpdo_last[EF_CODRIVE_TPDOS][8];
-    uint8_t txq_drop[EF_CODRIVE_TXQ]; /**< the queued frame is a heartbeat or TPDO */
-    uint32_t sync_cobid;              /**< 0x1005 */
-    int32_t target_inc;               /**< 0x607A */
-    uint32_t faults;                  /**< faults reported (EMCY sent) since init */
-    ef_codrive_law_t law_prev;        /**< the law record before the pending one, still unpaired */
+    uint32_t sync_cobid;       /**< 0x1005 */
+    int32_t target_inc;        /**< 0x607A */
+    uint32_t faults;           /**< faults reported (EMCY sent) since init */
+    ef_codrive_law_t law_prev; /**< the law record before the pending one, still unpaired */
 } ef_codrive_t;
 
 /**

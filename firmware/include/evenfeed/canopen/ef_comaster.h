@@ -33,6 +33,32 @@
  *              (its own controlled ramp), wait (stop_timeout_ms) for rest, then SHUTDOWN;
  *              ERROR (after an error) or DONE (a requested stop).
  *
+ * ## Transitions (state / sub-state, ::ef_com_sub_t; "stop" is the controlled stop below)
+ *
+ *     from                  event                                         to
+ *     (init)                ef_comaster_init()                            BOOT / BOOT_RESET
+ *     BOOT / BOOT_RESET     first process(): NMT reset comm (reset_comm)  BOOT / BOOT_WAIT
+ *     BOOT / BOOT_WAIT      every node heard                              CONFIG
+ *     BOOT / BOOT_WAIT      boot_timeout_ms, a node silent                ERROR
+ *     CONFIG                every node's steps done: NMT start, SYNC on   START
+ *     CONFIG                SDO failure, check mismatch, restart          ERROR (no drive started)
+ *     START                 every node's first TPDO1                      ENABLE
+ *     ENABLE                every node OPERATION ENABLED                  RUN
+ *     RUN                   ef_comaster_finish()                          FINISH / FINISH_DRAIN
+ *     FINISH / FINISH_DRAIN all executed, at rest; CSP                    FINISH / SHUTDOWN
+ *     FINISH / FINISH_DRAIN all executed, at rest; segment mode           FINISH / FINISH_RUN_OFF
+ *     FINISH / FINISH_RUN_OFF bit 12 clear on every node                  FINISH / SHUTDOWN
+ *     FINISH / FINISH_RUN_OFF enable_timeout_ms (error STOP)              FINISH / SHUTDOWN
+ *     START..FINISH         an error or ef_comaster_stop()                STOPPING / STOP_RAMP
+ *     STOPPING / STOP_RAMP  every node at rest (or lost)                  STOPPING / SHUTDOWN
+ *     STOPPING / STOP_RAMP  stop_timeout_ms (error STOP)                  STOPPING / SHUTDOWN
+ *     any / SHUTDOWN        every node out of operation (or lost), or     DONE (no error),
+ *                           enable_timeout_ms (error STOP)                ERROR (an error)
+ *
+ * An error in BOOT or CONFIG ends in ERROR at once: SYNC is not running, so no drive moves.
+ * The sub-state matters to the cycle too: the master feeds targets / segments only in RUN
+ * and FINISH_DRAIN; SHUTDOWN commands SHUTDOWN (disable voltage after a quick stop).
+ *
  * Supervision in every state after BOOT: heartbeat consumer (a node silent for
  * hb_timeout_ms: ::EF_ERR_HEARTBEAT), EMCY consumer (::EF_ERR_DRIVE with the code), a FAULT
  * statusword (::EF_ERR_DRIVE), a boot-up message from a running node (it restarted:
@@ -52,7 +78,7 @@
  * (go-back-N; the drive ignores duplicates). Execution starts (controlword bit 4 to every
  * node in one SYNC) once cfg.prefill segments are acknowledged or finish() was called.
  *
- * ## SDO client
+ * ## SDO client (an ef_sdo_client_t, ef_sdo_client.h: its states and transition table)
  * One transfer at a time, to the node it names: expedited upload and download (up to 4
  * bytes), segmented upload (the server chooses), segmented download (more than 4 bytes:
  * initiate with the size indicated (s = 1, e = 0, size in bytes 4..7), the server confirms,
@@ -64,7 +90,15 @@
  * At CONFIG the master owns the client (its failures are the master's error, naming node and
  * object). In RUN, DONE and ERROR the caller may use it (ef_comaster_sdo_write(),
  * ef_comaster_sdo_read(), ef_comaster_sdo_result()); such a transfer continues through FINISH
- * and STOPPING, and its failure is the caller's only: no master error, no stop.
+ * and STOPPING, and its failure is the caller's only: no master error, no stop. A node that
+ * boots again during its configuration transfer gets no retry of it (it forgot the transfer):
+ * the configuration starts over.
+ *
+ * ## TX queue (an ef_txq_t, ef_txq.h)
+ * Frames leave in the order they were sent; a full queue loses the frame being sent, never a
+ * queued one (::EF_TXQ_DROP_NEWEST: a record half on the bus stays whole; the protocol
+ * repairs a lost newest frame), counted in txq.lost. A frame the port refuses outright leaves
+ * the queue (a retry would change nothing).
  *
  * Non-blocking: ef_comaster_rx() per received frame, ef_comaster_process(m, dt_us,
  * &next_us) for time (wrap-safe differences of a free-running microsecond counter).
@@ -94,6 +128,8 @@
 
 #include "evenfeed/hal/ef_can.h"
 #include "evenfeed/canopen/ef_canopen.h"
+#include "evenfeed/canopen/ef_sdo_client.h"
+#include "evenfeed/canopen/ef_txq.h"
 #include "evenfeed/path/ef_path.h"
 
 #ifdef __cplusplus
@@ -117,9 +153,13 @@ extern "C" {
 #define EF_COM_TXQ 64
 #endif
 /** SDO client buffer: the longest upload kept (the device name; longer data is read and
- *  cut) and the longest download (ef_comaster_sdo_write()). */
+ *  cut) and the longest download (ef_comaster_sdo_write()). It is the SDO client's
+ *  ::EF_SDO_CLIENT_BUF: set either one. */
 #ifndef EF_COM_SDO_BUF
-#define EF_COM_SDO_BUF 32
+#define EF_COM_SDO_BUF EF_SDO_CLIENT_BUF
+#endif
+#if EF_COM_SDO_BUF != EF_SDO_CLIENT_BUF
+#error "EF_COM_SDO_BUF and EF_SDO_CLIENT_BUF differ: set one of them"
 #endif
 
 /** Streaming modes. */
@@ -141,6 +181,21 @@ typedef enum {
     EF_COM_DONE,  /**< finished (or stopped on request) and disabled */
     EF_COM_ERROR, /**< stopped after an error; ef_comaster_error() says what */
 } ef_com_state_t;
+
+/** Sub-states (::ef_comaster_t::sub): where a state is in its sequence (transition table in
+ *  the file comment). Each belongs to one state, except SHUTDOWN, the common end of FINISH and
+ *  STOPPING. */
+typedef enum {
+    EF_COM_SUB_NONE = 0,       /**< CONFIG, START, ENABLE, RUN, DONE, ERROR: none */
+    EF_COM_SUB_BOOT_RESET,     /**< BOOT: reset communication not sent, boot timer not begun */
+    EF_COM_SUB_BOOT_WAIT,      /**< BOOT: waiting for every node's boot-up (boot_timeout_ms) */
+    EF_COM_SUB_FINISH_DRAIN,   /**< FINISH: the queue executes (untimed) */
+    EF_COM_SUB_FINISH_RUN_OFF, /**< FINISH, segment mode: run bit cleared, waiting for statusword
+                                    bit 12 to clear (enable_timeout_ms) */
+    EF_COM_SUB_STOP_RAMP,      /**< STOPPING: QUICK STOP, waiting for rest (stop_timeout_ms) */
+    EF_COM_SUB_SHUTDOWN,       /**< FINISH, STOPPING: SHUTDOWN, waiting for every node to leave
+                                    operation (enable_timeout_ms) */
+} ef_com_sub_t;
 
 /** What the master was doing when an error arose (::ef_com_error_t::what). */
 typedef enum {
@@ -230,26 +285,19 @@ typedef struct {
     ef_com_cfg_t cfg;
     ef_can_port_t port;
     uint8_t state; /**< ::ef_com_state_t */
-    uint8_t step;  /**< private: step within the state */
+    uint8_t sub;   /**< private: ::ef_com_sub_t, the step within the state */
     uint8_t cur;   /**< private: node being configured / enabled */
     uint8_t finishing;
     ef_com_node_t node[EF_COM_MAX_NODES];
     ef_com_error_t err;
     uint32_t now_us;    /**< time since init (wraps) */
-    uint32_t t_step_us; /**< private: when the current step began */
+    uint32_t t_step_us; /**< private: when the current state or sub-state began */
     uint32_t sync_acc_us;
     uint32_t sync_count; /**< SYNCs sent */
     /* SDO client (one transfer at a time). */
-    uint8_t sdo_busy, sdo_toggle, sdo_node, sdo_sub;
-    uint16_t sdo_index;
-    uint8_t sdo_write, sdo_tries;
-    uint32_t sdo_value, sdo_len, sdo_got;
-    uint8_t sdo_buf[EF_COM_SDO_BUF];
-    uint32_t sdo_t0_us;
-    uint8_t sdo_user; /**< private: the pending / last transfer is the caller's */
+    ef_sdo_client_t sdo; /**< private: bring-up's transfers, then the caller's */
+    uint8_t sdo_user;    /**< private: the pending / last transfer is the caller's */
     uint8_t sdo_pad[3];
-    int32_t sdo_rc;     /**< private: outcome of the caller's last transfer */
-    uint32_t sdo_abort; /**< private: its abort code (0: none) */
     /* CSP. */
     float tq[EF_COM_TARGETQ][EF_COM_MAX_NODES];
     uint32_t tq_head, tq_count;
@@ -265,10 +313,10 @@ typedef struct {
     uint16_t cw[EF_COM_MAX_NODES]; /**< controlword being sent */
     uint8_t running;               /**< execution started (bit 4 sent) */
     uint8_t pad[3];
-    /* TX queue. */
-    ef_can_frame_t txq[EF_COM_TXQ];
-    uint32_t txq_head, txq_count;
-    uint32_t tx_frames, rx_frames, tx_again;
+    /* TX queue: ::EF_TXQ_DROP_NEWEST, refused frames dropped (ef_txq.h says why). */
+    ef_txq_t txq;                       /**< count, sent, again, lost: read only */
+    ef_can_frame_t txq_buf[EF_COM_TXQ]; /**< private: its storage */
+    uint32_t rx_frames;
     /* Private (ef_comaster.c). */
     uint16_t op;                    /**< configuration step of node cur */
     uint8_t cfg_restart;            /**< node cur booted again while being configured: start over */
@@ -283,7 +331,6 @@ typedef struct {
     uint32_t resends;   /**< go-back-N rounds, all nodes */
     uint32_t resend_run[EF_COM_MAX_NODES]; /**< private: go-back-N rounds for a node since it
                                                 last advanced */
-    uint32_t tx_lost;                      /**< frames dropped with the TX queue full */
     uint32_t sync_late;                    /**< SYNC periods skipped by late process() calls */
     uint32_t rx_other;                     /**< frames of no configured node (ignored) */
     char name[EF_COM_MAX_NODES][EF_COM_SDO_BUF + 1]; /**< 0x1008 of each node */
