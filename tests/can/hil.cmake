@@ -33,9 +33,17 @@ add_test(NAME sockcan_offline
 set_tests_properties(sockcan_offline PROPERTIES TIMEOUT 30)
 
 if(EF_SANITIZE)
+  # The guest binary is built without ASan from the sources it needs: the transports, the
+  # pump and, for the pump's master and drive nodes, the whole firmware library.
+  get_target_property(EF_HIL_FW_DIR ef_fw SOURCE_DIR)
+  get_target_property(EF_HIL_FW_SRC ef_fw SOURCES)
+  list(TRANSFORM EF_HIL_FW_SRC PREPEND "${EF_HIL_FW_DIR}/")
+  set(EF_HIL_CAN_LIB ${PROJECT_SOURCE_DIR}/host/lib/can)
   ef_hil_executable(test_sockcan_uml ${CMAKE_CURRENT_SOURCE_DIR}/can/test_sockcan.c
-    ${PROJECT_SOURCE_DIR}/host/lib/can/ef_sockcan.c ${PROJECT_SOURCE_DIR}/host/lib/core/ef_host.c
-    ${PROJECT_SOURCE_DIR}/firmware/src/hal/ef_can.c ${PROJECT_SOURCE_DIR}/firmware/src/core/ef_err.c)
+    ${EF_HIL_CAN_LIB}/ef_sockcan.c ${EF_HIL_CAN_LIB}/ef_canif.c ${EF_HIL_CAN_LIB}/ef_canmem.c
+    ${EF_HIL_CAN_LIB}/ef_canpump.c ${PROJECT_SOURCE_DIR}/host/lib/core/ef_host.c
+    ${EF_HIL_FW_SRC})
+  target_link_libraries(test_sockcan_uml PRIVATE m)
   set(EF_SOCKCAN_GUEST_BIN $<TARGET_FILE:test_sockcan_uml>)
   set(EF_SOCKCAN_DEPS test_sockcan_uml)
 else()

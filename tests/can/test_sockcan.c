@@ -26,6 +26,9 @@
 #include "ef_test.h"
 #include "evenfeed/core/ef_err.h"
 #include "evenfeed/host/can/ef_sockcan.h"
+#include "evenfeed/host/can/ef_canif.h"
+#include "evenfeed/host/can/ef_canmem.h"
+#include "evenfeed/host/can/ef_canpump.h"
 
 #define IF "vcan0"
 
@@ -618,28 +621,441 @@ static void t_hil_down(void)
     ef_sockcan_close(&rx);
 }
 
+/* ------------------------------------------------------------------ transport interface */
+
+/* The ef_canif_* calls on no transport, on SocketCAN's without CAN, and the state helpers. */
+static void t_canif(void)
+{
+    ef_canif_t none = {NULL, NULL};
+    ef_canif_cfg_t cfg = {.name = IF};
+    ef_canif_status_t st;
+    ef_can_frame_t f = seq_frame(0x100, 1);
+    ef_msg_t m = {{0}};
+
+    EF_CHECK_EQ(ef_canif_open(&none, &cfg, &m), EF_ERR_ARG);
+    EF_CHECK_EQ(ef_canif_open(NULL, &cfg, &m), EF_ERR_ARG);
+    EF_CHECK_EQ(ef_canif_send(&none, &f), EF_ERR_ARG);
+    EF_CHECK_EQ(ef_canif_recv(&none, &f, NULL, 0), EF_ERR_ARG);
+    EF_CHECK_EQ(ef_canif_flush(&none), EF_ERR_ARG);
+    ef_canif_status(&none, 0, &st);
+    EF_CHECK_EQ(st.state, EF_CANIF_STATE_STOPPED);
+    EF_CHECK_EQ(st.seen, 0);
+    EF_CHECK_EQ(st.tec, -1);
+    EF_CHECK(strcmp(ef_canif_error(&none), "") == 0);
+    ef_canif_close(&none);
+    ef_canif_close(NULL);
+    EF_CHECK(ef_canif_port(&none).send == NULL);
+
+    /* SocketCAN's transport: open failures as ef_sockcan_open() says them. */
+    ef_sockcan_t s;
+    ef_canif_t ci = ef_sockcan_canif(&s);
+    EF_CHECK(strcmp(ci.ops->name, "socketcan") == 0);
+    EF_CHECK_EQ(ef_canif_open(&ci, NULL, &m), EF_ERR_ARG);
+    cfg.name = "nosuchcan7";
+    EF_CHECK_EQ(ef_canif_open(&ci, &cfg, &m), EF_ERR_IO);
+    EF_CHECK(strstr(m.text, "nosuchcan7") != NULL);
+    ef_canif_status(&ci, 0, &st);
+    EF_CHECK_EQ(st.state, EF_CANIF_STATE_STOPPED);
+    EF_CHECK_EQ(ef_canif_send(&ci, &f), EF_ERR_ARG);
+    ef_can_port_t port = ef_canif_port(&ci);
+    EF_CHECK_EQ(port.send(port.ctx, &f), EF_ERR_ARG);
+    ef_canif_close(&ci);
+    uint32_t a = ef_sockcan_now_us(), b = ef_canif_now_us(&ci);
+    EF_CHECK(b - a < 1000000u);
+
+    EF_CHECK_EQ(ef_canif_state_of(0), EF_CANIF_STATE_ACTIVE);
+    EF_CHECK_EQ(ef_canif_state_of(EF_CANIF_ERROR_WARNING), EF_CANIF_STATE_WARNING);
+    EF_CHECK_EQ(ef_canif_state_of(EF_CANIF_ERROR_WARNING | EF_CANIF_ERROR_PASSIVE),
+                EF_CANIF_STATE_PASSIVE);
+    EF_CHECK_EQ(ef_canif_state_of(EF_CANIF_BUS_OFF | EF_CANIF_ERROR_PASSIVE),
+                EF_CANIF_STATE_BUS_OFF);
+    EF_CHECK_EQ(ef_canif_state_of(EF_CANIF_DOWN | EF_CANIF_BUS_OFF), EF_CANIF_STATE_DOWN);
+    EF_CHECK_EQ(ef_canif_state_of(EF_CANIF_RESTARTED), EF_CANIF_STATE_ACTIVE);
+    EF_CHECK(strcmp(ef_canif_state_str(EF_CANIF_STATE_BUS_OFF), "bus-off") == 0);
+    EF_CHECK(strcmp(ef_canif_state_str(EF_CANIF_STATE_PASSIVE), "error-passive") == 0);
+    EF_CHECK(strcmp(ef_canif_state_str(99), "?") == 0);
+    /* The old names are the interface's values (they reach ef_comaster_bus_error()). */
+    EF_CHECK_EQ(EF_SOCKCAN_BUS_OFF, 1);
+    EF_CHECK_EQ(EF_SOCKCAN_ERROR_PASSIVE, 2);
+    EF_CHECK_EQ(EF_SOCKCAN_DOWN, 16);
+}
+
+/* Open port k of a bus with n filters (and a log). */
+static int mem_open(ef_canmem_t *b, int k, const ef_canif_filter_t *flt, int n, const char *log)
+{
+    ef_canif_t ci = ef_canmem_canif(b, k);
+    char name[16];
+    snprintf(name, sizeof name, "mem%d", k);
+    ef_canif_cfg_t c = {.name = name, .filters = flt, .n_filters = n, .log = log};
+    ef_msg_t m;
+    int rc = ef_canif_open(&ci, &c, &m);
+    if (rc != EF_OK)
+        fprintf(stderr, "open port %d: %s\n", k, m.text);
+    return rc;
+}
+
+/* The in-memory bus: delivery, filters, bit budget, queue limits, conditions, overrun, log. */
+static void t_canmem(void)
+{
+    static ef_canmem_t bus;
+    ef_canif_filter_t flt = {0x100, 0x7FF | EF_CANIF_ID_EFF}; /* base 0x100 only */
+    ef_can_frame_t f, g;
+    ef_canif_status_t st;
+    char log[512];
+    uint32_t ts = 0;
+
+    ef_canmem_init(&bus, 0);
+    ef_canif_t p0 = ef_canmem_canif(&bus, 0), p1 = ef_canmem_canif(&bus, 1),
+               p2 = ef_canmem_canif(&bus, 2), bad = ef_canmem_canif(&bus, EF_CANMEM_MAX_PORTS);
+    EF_CHECK(bad.ctx == NULL);
+    EF_CHECK_EQ(ef_canif_send(&bad, &f), EF_ERR_ARG);
+    EF_CHECK_EQ(mem_open(&bus, 0, NULL, 0, wpath(log, sizeof log, "mem0.log")), EF_OK);
+    EF_CHECK_EQ(mem_open(&bus, 0, NULL, 0, NULL), EF_ERR_ARG); /* already open */
+    EF_CHECK_EQ(mem_open(&bus, 1, &flt, 1, NULL), EF_OK);
+    EF_CHECK_EQ(mem_open(&bus, 2, NULL, EF_CANIF_MAX_FILTERS + 1, NULL), EF_ERR_ARG);
+    EF_CHECK_EQ(ef_canif_recv(&p0, &g, NULL, 1000000), EF_ERR_AGAIN); /* no wait */
+
+    f = seq_frame(0x100, 1);
+    EF_CHECK_EQ(ef_canif_send(&p2, &f), EF_ERR_ARG); /* not open */
+    EF_CHECK_EQ(ef_canif_send(&p0, &f), EF_OK);
+    f = seq_frame(0x101, 2);
+    EF_CHECK_EQ(ef_canif_send(&p0, &f), EF_OK);
+    f = seq_frame(0x100, 3);
+    f.flags = EF_CAN_FLAG_EFF;
+    EF_CHECK_EQ(ef_canif_send(&p0, &f), EF_OK);
+    f.dlc = 9;
+    EF_CHECK_EQ(ef_canif_send(&p0, &f), EF_ERR_ARG);
+    EF_CHECK_EQ(ef_canif_recv(&p1, &g, NULL, 0), EF_ERR_AGAIN); /* still on the bus */
+    ef_canmem_advance(&bus, 300);
+    ef_canmem_deliver(&bus);
+    EF_CHECK_EQ(bus.frames, 3);
+    EF_CHECK_EQ(ef_canif_recv(&p1, &g, &ts, 0), EF_OK);
+    EF_CHECK_EQ(g.id, 0x100);
+    EF_CHECK_EQ(seq_of(&g), 1);
+    EF_CHECK_EQ(ts, 300);
+    EF_CHECK_EQ(ef_canif_recv(&p1, &g, NULL, 0), EF_ERR_AGAIN); /* 0x101 and EFF filtered */
+    EF_CHECK_EQ(ef_canif_recv(&p0, &g, NULL, 0), EF_ERR_AGAIN); /* never its own */
+    EF_CHECK_EQ(ef_canif_now_us(&p1), 300);
+    ef_canif_status(&p0, 0, &st);
+    EF_CHECK_EQ(st.state, EF_CANIF_STATE_ACTIVE);
+    EF_CHECK_EQ(st.tx, 3);
+    EF_CHECK_EQ(st.tx_bits, 2u * 135u + 160u); /* the extended frame: 160 */
+    ef_canif_close(&p0);
+    EF_CHECK_EQ(count_lines(log, "(0000000000.000000) mem0 100#0001"), 1);
+    EF_CHECK_EQ(count_lines(log, "mem0 00000100#0003"), 1);
+    EF_CHECK_EQ(count_lines(log, " mem0 "), 3);
+    ef_canif_close(&p0); /* closed: harmless */
+
+    /* 1 Mbit/s: a 135-bit frame needs 135 us of bus time; an idle bus saves none. */
+    ef_canif_close(&p1);
+    ef_canmem_init(&bus, 1000000u);
+    EF_CHECK_EQ(mem_open(&bus, 0, NULL, 0, NULL), EF_OK);
+    EF_CHECK_EQ(mem_open(&bus, 1, NULL, 0, NULL), EF_OK);
+    ef_canmem_advance(&bus, 10000);
+    ef_canmem_deliver(&bus); /* idle: the 10 000 bits are gone */
+    for (unsigned i = 0; i < 2; i++) {
+        f = seq_frame(0x200, i);
+        EF_CHECK_EQ(ef_canif_send(&p0, &f), EF_OK);
+    }
+    ef_canmem_advance(&bus, 100);
+    ef_canmem_deliver(&bus);
+    EF_CHECK_EQ(bus.frames, 0);
+    ef_canmem_advance(&bus, 100);
+    ef_canmem_deliver(&bus);
+    EF_CHECK_EQ(bus.frames, 1);
+    ef_canmem_advance(&bus, 100);
+    ef_canmem_deliver(&bus);
+    EF_CHECK_EQ(bus.frames, 2);
+    EF_CHECK_EQ(bus.bits, 270);
+    EF_CHECK_EQ(bus.frames_fn[4], 2);
+    EF_CHECK_EQ(ef_canif_recv(&p1, &g, &ts, 0), EF_OK);
+    EF_CHECK_EQ(ts, 10200);
+    EF_CHECK_EQ(ef_canif_recv(&p1, &g, &ts, 0), EF_OK);
+    EF_CHECK_EQ(ts, 10300);
+
+    /* A full bus queue: the frame is refused, the caller keeps it. */
+    bus.txcap = 2;
+    EF_CHECK_EQ(ef_canif_send(&p0, &f), EF_OK);
+    EF_CHECK_EQ(ef_canif_send(&p0, &f), EF_OK);
+    EF_CHECK_EQ(ef_canif_send(&p0, &f), EF_ERR_AGAIN);
+    EF_CHECK(strstr(ef_canif_error(&p0), "queue full") && strstr(ef_canif_error(&p0), "mem0"));
+    ef_canif_status(&p0, 0, &st);
+    EF_CHECK_EQ(st.tx_full, 1);
+    EF_CHECK_EQ(st.tx_pending, 0);
+    EF_CHECK_EQ(ef_canif_flush(&p0), EF_OK); /* nothing held: no flush op */
+
+    /* Conditions: bus-off refuses sends until cleared (or a restart). */
+    ef_canmem_raise(&bus, 0, EF_CANIF_BUS_OFF | EF_CANIF_ERROR_PASSIVE);
+    EF_CHECK_EQ(ef_canif_send(&p0, &f), EF_ERR_BUS);
+    EF_CHECK(strstr(ef_canif_error(&p0), "bus-off") != NULL);
+    ef_canif_status(&p0, EF_CANIF_BUS_OFF, &st);
+    EF_CHECK_EQ(st.state, EF_CANIF_STATE_BUS_OFF);
+    EF_CHECK_EQ(st.seen, EF_CANIF_BUS_OFF | EF_CANIF_ERROR_PASSIVE);
+    ef_canif_status(&p0, 0, &st);
+    EF_CHECK_EQ(st.seen, EF_CANIF_ERROR_PASSIVE);
+    EF_CHECK_EQ(st.state, EF_CANIF_STATE_PASSIVE);
+    ef_canmem_raise(&bus, 0, EF_CANIF_BUS_OFF);
+    ef_canmem_raise(&bus, 0, EF_CANIF_RESTARTED);
+    ef_canif_status(&p0, ~0u, &st);
+    EF_CHECK_EQ(st.seen, EF_CANIF_ERROR_PASSIVE | EF_CANIF_RESTARTED);
+    EF_CHECK_EQ(st.err_frames, 3);
+
+    /* A receiver that does not read loses what its queue cannot hold. */
+    ef_canmem_init(&bus, 0);
+    EF_CHECK_EQ(mem_open(&bus, 0, NULL, 0, NULL), EF_OK);
+    EF_CHECK_EQ(mem_open(&bus, 1, NULL, 0, NULL), EF_OK);
+    for (unsigned i = 0; i < EF_CANMEM_RXQ + 10; i++) {
+        f = seq_frame(0x300, i);
+        EF_CHECK_EQ(ef_canif_send(&p0, &f), EF_OK);
+    }
+    ef_canmem_deliver(&bus);
+    ef_canif_status(&p1, 0, &st);
+    EF_CHECK_EQ(st.rx_overrun, 10);
+    unsigned next = 0;
+    while (ef_canif_recv(&p1, &g, NULL, 0) == EF_OK) {
+        EF_CHECK_EQ(seq_of(&g), next);
+        next++;
+    }
+    EF_CHECK_EQ(next, EF_CANMEM_RXQ);
+    ef_canif_close(&p0);
+    ef_canif_close(&p1);
+}
+
+/* What a test node saw, in order. */
+typedef struct {
+    char ev[64][24];
+    int n;
+    uint32_t next_us; /* what process asks for */
+    uint32_t bus;     /* conditions passed, or-ed */
+    int bus_calls;
+    ef_canif_t *reply; /* process sends one frame here when set */
+} pump_node_t;
+
+static int pn_rx(void *obj, const ef_can_frame_t *f, uint32_t ts_us)
+{
+    pump_node_t *n = obj;
+    if (n->n < 64)
+        snprintf(n->ev[n->n++], sizeof n->ev[0], "rx %X@%u", (unsigned)f->id, (unsigned)ts_us);
+    return EF_OK;
+}
+
+static int pn_process(void *obj, uint32_t dt_us, uint32_t *next_us)
+{
+    pump_node_t *n = obj;
+    if (n->n < 64)
+        snprintf(n->ev[n->n++], sizeof n->ev[0], "proc %u", (unsigned)dt_us);
+    if (n->next_us)
+        *next_us = n->next_us;
+    if (n->reply) {
+        ef_can_frame_t f = seq_frame(0x580, 0);
+        ef_canif_send(n->reply, &f);
+    }
+    return EF_OK;
+}
+
+static void pn_bus(void *obj, uint32_t conditions)
+{
+    pump_node_t *n = obj;
+    n->bus |= conditions;
+    n->bus_calls++;
+}
+
+/* Events of a node as one string, for comparison. */
+static const char *pn_str(pump_node_t *n, char *buf, size_t len)
+{
+    buf[0] = 0;
+    for (int i = 0; i < n->n; i++)
+        snprintf(buf + strlen(buf), len - strlen(buf), "%s%s", i ? "; " : "", n->ev[i]);
+    n->n = 0;
+    return buf;
+}
+
+/* A transport whose receive fails: the pump ends, once, with its message. */
+static int fk_open(void *ctx, const ef_canif_cfg_t *c, ef_msg_t *m)
+{
+    (void)ctx;
+    (void)c;
+    (void)m;
+    return EF_OK;
+}
+static void fk_close(void *ctx)
+{
+    (void)ctx;
+}
+static int fk_send(void *ctx, const ef_can_frame_t *f)
+{
+    (void)ctx;
+    (void)f;
+    return EF_OK;
+}
+static int fk_recv(void *ctx, ef_can_frame_t *f, uint32_t *ts, uint32_t timeout_us)
+{
+    (void)ctx;
+    (void)f;
+    (void)ts;
+    (void)timeout_us;
+    return EF_ERR_IO;
+}
+static void fk_status(void *ctx, uint32_t clear, ef_canif_status_t *st)
+{
+    (void)ctx;
+    (void)clear;
+    st->state = EF_CANIF_STATE_ACTIVE;
+}
+static const char *fk_error(void *ctx)
+{
+    (void)ctx;
+    return "fake0: recv: broken";
+}
+
+/* The pump: frames before time, the held frame, bursts, bus conditions, errors. */
+static void t_canpump(void)
+{
+    static ef_canmem_t bus;
+    pump_node_t nd;
+    ef_canpump_t p;
+    ef_canpump_cfg_t pc;
+    char buf[1024];
+    ef_can_frame_t f, g;
+    memset(&nd, 0, sizeof nd);
+
+    ef_canmem_init(&bus, 0);
+    EF_CHECK_EQ(mem_open(&bus, 0, NULL, 0, NULL), EF_OK);
+    EF_CHECK_EQ(mem_open(&bus, 1, NULL, 0, NULL), EF_OK);
+    ef_canif_t ci = ef_canmem_canif(&bus, 0), peer = ef_canmem_canif(&bus, 1);
+    ef_canpump_node_t node = {pn_rx, pn_process, pn_bus, &nd};
+    ef_canpump_node_t half = {pn_rx, NULL, NULL, &nd};
+    EF_CHECK_EQ(ef_canpump_init(&p, &ci, &half, NULL), EF_ERR_ARG);
+    EF_CHECK_EQ(ef_canpump_init(NULL, &ci, &node, NULL), EF_ERR_ARG);
+    ef_canpump_cfg_default(&pc);
+    EF_CHECK_EQ(pc.rx_burst, 64);
+    pc.rx_burst = 2;
+    EF_CHECK_EQ(ef_canpump_init(&p, &ci, &node, &pc), EF_OK);
+
+    /* Frames received before the clock reading go to the node before its time does. */
+    f = seq_frame(0x10, 0);
+    EF_CHECK_EQ(ef_canif_send(&peer, &f), EF_OK);
+    ef_canmem_advance(&bus, 50);
+    ef_canmem_deliver(&bus);
+    ef_canmem_advance(&bus, 50);
+    EF_CHECK_EQ(ef_canpump_poll(&p, 1000), EF_OK);
+    EF_CHECK(strcmp(pn_str(&nd, buf, sizeof buf), "rx 10@50; proc 100") == 0);
+    EF_CHECK_EQ(ef_canpump_elapsed_us(&p), 100);
+
+    /* A burst of 2: the third frame is taken by the wait and held for the next round. */
+    for (unsigned i = 1; i <= 4; i++) {
+        f = seq_frame(0x10 + i, i);
+        EF_CHECK_EQ(ef_canif_send(&peer, &f), EF_OK);
+    }
+    ef_canmem_deliver(&bus);
+    ef_canmem_advance(&bus, 10);
+    EF_CHECK_EQ(ef_canpump_poll(&p, 1000), EF_OK);
+    EF_CHECK(strcmp(pn_str(&nd, buf, sizeof buf), "rx 11@100; rx 12@100; proc 10") == 0);
+    EF_CHECK_EQ(ef_canpump_rx_frames(&p), 4); /* the held one is counted */
+    EF_CHECK_EQ(ef_canpump_rx_bits(&p), 4u * 135u);
+    ef_canmem_advance(&bus, 20);
+    EF_CHECK_EQ(ef_canpump_poll(&p, 1000), EF_OK);
+    EF_CHECK(strcmp(pn_str(&nd, buf, sizeof buf), "rx 13@100; rx 14@100; proc 20") == 0);
+    EF_CHECK_EQ(ef_canpump_elapsed_us(&p), 130);
+
+    /* What the node sends in process reaches the bus. */
+    nd.reply = &ci;
+    EF_CHECK_EQ(ef_canpump_poll(&p, 0), EF_OK);
+    nd.reply = NULL;
+    ef_canmem_deliver(&bus);
+    EF_CHECK_EQ(ef_canif_recv(&peer, &g, NULL, 0), EF_OK);
+    EF_CHECK_EQ(g.id, 0x580);
+    pn_str(&nd, buf, sizeof buf);
+
+    /* Bus conditions: each passed once; without bus_clear bus-off stays (sends refused). */
+    ef_canmem_raise(&bus, 0, EF_CANIF_ERROR_WARNING);
+    EF_CHECK_EQ(ef_canpump_poll(&p, 0), EF_OK);
+    EF_CHECK_EQ(nd.bus_calls, 0); /* a warning stops nothing */
+    ef_canmem_raise(&bus, 0, EF_CANIF_ERROR_PASSIVE);
+    EF_CHECK_EQ(ef_canpump_poll(&p, 0), EF_OK);
+    EF_CHECK_EQ(ef_canpump_poll(&p, 0), EF_OK);
+    EF_CHECK_EQ(nd.bus_calls, 1);
+    EF_CHECK_EQ(nd.bus, EF_CANIF_ERROR_PASSIVE);
+    ef_canmem_raise(&bus, 0, EF_CANIF_BUS_OFF);
+    EF_CHECK_EQ(ef_canpump_poll(&p, 0), EF_OK);
+    EF_CHECK_EQ(nd.bus_calls, 2);
+    EF_CHECK_EQ(nd.bus, EF_CANIF_ERROR_PASSIVE | EF_CANIF_BUS_OFF);
+    EF_CHECK_EQ(ef_canif_send(&ci, &f), EF_ERR_BUS);
+    pn_str(&nd, buf, sizeof buf);
+
+    /* With bus_clear (a master's controlled stop must still be tried): cleared once passed. */
+    ef_canmem_init(&bus, 0);
+    EF_CHECK_EQ(mem_open(&bus, 0, NULL, 0, NULL), EF_OK);
+    memset(&nd, 0, sizeof nd);
+    ef_canpump_cfg_default(&pc);
+    pc.bus_clear = EF_CANIF_BUS_OFF;
+    EF_CHECK_EQ(ef_canpump_init(&p, &ci, &node, &pc), EF_OK);
+    ef_canmem_raise(&bus, 0, EF_CANIF_BUS_OFF);
+    EF_CHECK_EQ(ef_canpump_poll(&p, 0), EF_OK);
+    EF_CHECK_EQ(nd.bus_calls, 1);
+    EF_CHECK_EQ(nd.bus, EF_CANIF_BUS_OFF);
+    EF_CHECK_EQ(ef_canif_send(&ci, &f), EF_OK);
+    ef_canmem_raise(&bus, 0, EF_CANIF_BUS_OFF); /* seen again: already passed on */
+    EF_CHECK_EQ(ef_canpump_poll(&p, 0), EF_OK);
+    EF_CHECK_EQ(nd.bus_calls, 1);
+    EF_CHECK_EQ(ef_canif_send(&ci, &f), EF_OK);
+    EF_CHECK_EQ(ef_canpump_error(&p), EF_OK);
+    EF_CHECK(strcmp(ef_canpump_msg(&p), "") == 0);
+    ef_canif_close(&ci);
+    ef_canif_close(&peer);
+
+    /* A transport error ends the pump: kept, with the transport's message, node not run. */
+    static const ef_canif_ops_t fk = {
+        .name = "fake",
+        .open = fk_open,
+        .close = fk_close,
+        .send = fk_send,
+        .recv = fk_recv,
+        .status = fk_status,
+        .error = fk_error,
+    };
+    ef_canif_t fci = {&fk, NULL};
+    memset(&nd, 0, sizeof nd);
+    EF_CHECK_EQ(ef_canpump_init(&p, &fci, &node, NULL), EF_OK);
+    EF_CHECK_EQ(ef_canpump_poll(&p, 0), EF_ERR_IO);
+    EF_CHECK(strstr(ef_canpump_msg(&p), "fake0: recv: broken") != NULL);
+    EF_CHECK_EQ(ef_canpump_poll(&p, 0), EF_ERR_IO);
+    EF_CHECK_EQ(ef_canpump_error(&p), EF_ERR_IO);
+    EF_CHECK_EQ(nd.n, 0);
+}
+
 /* Run the offline or the in-guest group. */
+/* test_sockcan offline|hil WORKDIR [PART...]: offline runs the parts that need no CAN
+ * interface; hil (in the guest, vcan0 up) runs those and the rest. The runner names each
+ * part on stderr as it starts it, so a hung guest shows where it stopped. */
 int main(int argc, char **argv)
 {
+/* Parts that need no CAN interface; the parts that do follow them in hil[]. */
+/* clang-format off */
+#define SC_OFFLINE_PARTS                                                                           \
+    {"open_errors", t_open_errors},                                                                \
+    {"log_format", t_log_format},                                                                  \
+    {"frame_bits", t_frame_bits},                                                                  \
+    {"canif", t_canif},                                                                            \
+    {"canmem", t_canmem},                                                                          \
+    {"canpump", t_canpump}
+    /* clang-format on */
+    static const ef_test_part_t offline[] = {SC_OFFLINE_PARTS};
+    static const ef_test_part_t hil[] = {
+        SC_OFFLINE_PARTS,
+        {"hil_open", t_hil_open},
+        {"hil_filters_and_log", t_hil_filters_and_log},
+        {"hil_error_frames", t_hil_error_frames},
+        {"hil_enobufs", t_hil_enobufs},
+        {"hil_down", t_hil_down},
+    };
+#undef SC_OFFLINE_PARTS
     if (argc < 3 || (strcmp(argv[1], "offline") != 0 && strcmp(argv[1], "hil") != 0)) {
-        fprintf(stderr, "usage: %s offline|hil WORKDIR\n", argv[0]);
+        fprintf(stderr, "usage: %s offline|hil WORKDIR [PART...]\n", argv[0]);
         return 2;
     }
     snprintf(workdir, sizeof workdir, "%s", argv[2]);
-    t_open_errors();
-    t_log_format();
-    t_frame_bits();
-    if (strcmp(argv[1], "hil") == 0) {
-        fprintf(stderr, "open\n");
-        t_hil_open();
-        fprintf(stderr, "filters and log\n");
-        t_hil_filters_and_log();
-        fprintf(stderr, "error frames\n");
-        t_hil_error_frames();
-        fprintf(stderr, "ENOBUFS\n");
-        t_hil_enobufs();
-        fprintf(stderr, "interface down\n");
-        t_hil_down();
-    }
-    return ef_test_summary();
+    if (strcmp(argv[1], "hil") == 0)
+        return EF_TEST_RUN(argc, argv, 3, hil);
+    return EF_TEST_RUN(argc, argv, 3, offline);
 }

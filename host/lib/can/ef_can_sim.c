@@ -6,29 +6,29 @@
 #include <linux/can/error.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 #include "evenfeed/canopen/ef_codrive.h"
 #include "evenfeed/host/can/ef_canhost.h"
+#include "evenfeed/host/can/ef_canpump.h"
 #include "evenfeed/host/can/ef_sockcan.h"
 
 /* Longest receive wait (us): bounds how late a signal that arrives just before the wait
  * is noticed. */
-#define SIM_MAX_WAIT_US 50000u
+#define CSIM_MAX_WAIT_US 50000u
 /* Frames handled in one loop iteration before time is advanced again. */
-#define SIM_RX_BURST 64
+#define CSIM_RX_BURST 64
 
 typedef struct {
     const ef_can_sim_cfg_t *c;
     ef_codrive_t d;
-    ef_sockcan_t sk;
+    ef_sockcan_t sk; /* the transport's context: only ci touches it, but for --bus-off-at */
+    ef_canif_t ci;
+    ef_canpump_t pump;
     FILE *trace;
     uint32_t op_syncs; /* SYNCs received in OPERATION ENABLED */
     uint32_t chunks;   /* segment chunk frames received (1-based count of the last) */
     uint32_t last_seq; /* d.drv.next_seq already traced */
     int fault_done, hb_done, busoff_done;
-    int io_rc;
-    ef_msg_t io_msg;
-} sim_t;
+} csim_t;
 
 /* Defaults documented in ef_canhost.h. */
 void ef_can_sim_cfg_default(ef_can_sim_cfg_t *c)
@@ -40,11 +40,11 @@ void ef_can_sim_cfg_default(ef_can_sim_cfg_t *c)
     c->run_ms = -1;
 }
 
-/* The drive's port: ef_sockcan_send(), tracing every EMCY the drive sends. */
-static int sim_send(void *ctx, const ef_can_frame_t *f)
+/* The drive's port: the transport's send, tracing every EMCY the drive sends. */
+static int csim_send(void *ctx, const ef_can_frame_t *f)
 {
-    sim_t *S = ctx;
-    int rc = ef_sockcan_send(&S->sk, f);
+    csim_t *S = ctx;
+    int rc = ef_canif_send(&S->ci, f);
     if (rc == EF_OK && S->trace && !(f->flags & EF_CAN_FLAG_EFF) &&
         f->id == EF_CO_COB_EMCY + S->c->node && f->dlc >= 4)
         fprintf(S->trace, "e,%u,0x%04X,%u\n", (unsigned)S->d.sync_count,
@@ -53,14 +53,14 @@ static int sim_send(void *ctx, const ef_can_frame_t *f)
 }
 
 /* A segment chunk frame of this drive: its axis records (RPDO2) or the shared law records. */
-static int sim_is_chunk(const sim_t *S, const ef_can_frame_t *f)
+static int csim_is_chunk(const csim_t *S, const ef_can_frame_t *f)
 {
     return !(f->flags & EF_CAN_FLAG_EFF) &&
            (f->id == EF_CO_COB_RPDO2 + S->c->node || f->id == EF_CO_LAW_COBID);
 }
 
 /* Whether the K-th chunk (1-based) is to be dropped (--drop-rx). */
-static int sim_drop(const sim_t *S, uint32_t k)
+static int csim_drop(const csim_t *S, uint32_t k)
 {
     for (uint32_t i = 0; i < S->c->n_drop; i++)
         if (S->c->drop_rx[i] == k)
@@ -70,7 +70,7 @@ static int sim_drop(const sim_t *S, uint32_t k)
 
 /* The move with sequence number seq in the drive's ring or interpolator queue (NULL if it
  * already left both). */
-static const ef_move_t *sim_find_move(const ef_drive_t *dv, uint32_t seq)
+static const ef_move_t *csim_find_move(const ef_drive_t *dv, uint32_t seq)
 {
     for (uint32_t i = 0; i < dv->ring_count; i++) {
         const ef_move_t *mv = &dv->ring[(dv->ring_head + i) % EF_DRIVE_SLOTS];
@@ -86,7 +86,7 @@ static const ef_move_t *sim_find_move(const ef_drive_t *dv, uint32_t seq)
 }
 
 /* Trace every segment the drive accepted since the last call (next_seq went up). */
-static void sim_trace_accepted(sim_t *S)
+static void csim_trace_accepted(csim_t *S)
 {
     const ef_drive_t *dv = &S->d.drv;
     if (dv->next_seq < S->last_seq) /* fault reset: numbering from 0 again */
@@ -94,7 +94,7 @@ static void sim_trace_accepted(sim_t *S)
     for (; S->last_seq != dv->next_seq; S->last_seq++) {
         if (!S->trace)
             continue;
-        const ef_move_t *mv = sim_find_move(dv, S->last_seq);
+        const ef_move_t *mv = csim_find_move(dv, S->last_seq);
         if (mv)
             fprintf(S->trace, "s,%u,%u,%.6f\n", (unsigned)S->last_seq, (unsigned)mv->degree,
                     (double)mv->duration);
@@ -103,21 +103,18 @@ static void sim_trace_accepted(sim_t *S)
     }
 }
 
-/* Send an error frame announcing bus-off (--bus-off-at), with a plain write on the socket. */
-static void sim_send_bus_off(sim_t *S)
+/* Send an error frame announcing bus-off (--bus-off-at): SocketCAN's own business, since
+ * vcan has no controller to go bus-off, so this one call bypasses the transport. */
+static void csim_send_bus_off(csim_t *S)
 {
-    struct can_frame cf;
-    memset(&cf, 0, sizeof cf);
-    cf.can_id = CAN_ERR_FLAG | CAN_ERR_BUSOFF;
-    cf.can_dlc = CAN_ERR_DLC;
-    ssize_t n = write(S->sk.fd, &cf, sizeof cf);
+    int rc = ef_sockcan_inject_error(&S->sk, CAN_ERR_BUSOFF);
     if (S->trace)
         fprintf(S->trace, "# bus-off error frame sent at SYNC %u: %s\n", (unsigned)S->d.sync_count,
-                n == (ssize_t)sizeof cf ? "ok" : strerror(n < 0 ? errno : EIO));
+                rc == EF_OK ? "ok" : S->sk.msg.text);
 }
 
 /* One `p` row: the drive's state now, under the last SYNC's number. */
-static void sim_trace_p(sim_t *S)
+static void csim_trace_p(csim_t *S)
 {
     const ef_codrive_t *d = &S->d;
     if (S->trace)
@@ -127,10 +124,10 @@ static void sim_trace_p(sim_t *S)
 }
 
 /* After each SYNC: trace the step, then the injections due at this SYNC time. */
-static void sim_after_sync(sim_t *S)
+static void csim_after_sync(csim_t *S)
 {
     const ef_codrive_t *d = &S->d;
-    sim_trace_p(S);
+    csim_trace_p(S);
     if (d->power == EF_CO_PS_OP_ENABLED)
         S->op_syncs++;
     uint64_t t_ms = (uint64_t)S->op_syncs * d->cycle_us / 1000u;
@@ -153,31 +150,50 @@ static void sim_after_sync(sim_t *S)
     if (!S->busoff_done && S->c->bus_off_at_ms >= 0 && S->op_syncs > 0 &&
         t_ms >= (uint64_t)S->c->bus_off_at_ms) {
         S->busoff_done = 1;
-        sim_send_bus_off(S);
+        csim_send_bus_off(S);
     }
 }
 
-/* One received frame: drop it (--drop-rx) or hand it to the drive, then trace. */
-static void sim_rx(sim_t *S, const ef_can_frame_t *f)
+/* The pump's node: one received frame, dropped (--drop-rx) or handed to the drive, then
+ * traced. */
+static int csim_rx(void *obj, const ef_can_frame_t *f, uint32_t ts_us)
 {
-    if (sim_is_chunk(S, f)) {
+    csim_t *S = obj;
+    (void)ts_us;
+    if (csim_is_chunk(S, f)) {
         S->chunks++;
-        if (sim_drop(S, S->chunks)) {
+        if (csim_drop(S, S->chunks)) {
             if (S->trace)
                 fprintf(S->trace, "# dropped chunk %u (id 0x%03X, byte 0 0x%02X)\n",
                         (unsigned)S->chunks, (unsigned)f->id, (unsigned)f->data[0]);
-            return;
+            return EF_OK;
         }
     }
     uint32_t syncs = S->d.sync_count;
-    ef_codrive_rx(&S->d, f); /* a fault it raises is traced by its EMCY */
-    sim_trace_accepted(S);
+    int rc = ef_codrive_rx(&S->d, f); /* a fault it raises is traced by its EMCY */
+    csim_trace_accepted(S);
     if (S->d.sync_count != syncs)
-        sim_after_sync(S);
+        csim_after_sync(S);
+    return rc;
+}
+
+/* The pump's node: the drive's own time (its SYNC-loss watchdog), traced when it moved. */
+static int csim_process(void *obj, uint32_t dt_us, uint32_t *next_us)
+{
+    csim_t *S = obj;
+    float cmd0 = S->d.drv.cmd.x, act0 = S->d.drv.act.x;
+    uint16_t sw0 = S->d.statusword;
+    int rc = ef_codrive_process(&S->d, dt_us, next_us); /* a bus error: the drive keeps trying */
+    /* The drive stepped on its own clock (the SYNC-loss watchdog's stop): trace it too. */
+    if (S->d.drv.cmd.x != cmd0 || S->d.drv.act.x != act0 || S->d.statusword != sw0)
+        csim_trace_p(S);
+    if (S->trace)
+        fflush(S->trace); /* a reader sees everything up to now */
+    return rc;
 }
 
 /* Open the trace and the socket; print the ready line. */
-static int sim_open(sim_t *S, ef_msg_t *m)
+static int csim_open(csim_t *S, ef_msg_t *m)
 {
     const ef_can_sim_cfg_t *c = S->c;
     if (!c->iface || !c->iface[0])
@@ -205,13 +221,23 @@ static int sim_open(sim_t *S, ef_msg_t *m)
         {EF_CO_COB_RPDO3 + c->node, 0x7FFu},
         {EF_CO_COB_SDO_RX + c->node, 0x7FFu},
     };
-    int rc = ef_sockcan_open(&S->sk, c->iface, flt, (int)(sizeof flt / sizeof flt[0]), c->log, m);
+    S->ci = ef_sockcan_canif(&S->sk);
+    const ef_canif_cfg_t icfg = {.name = c->iface,
+                                 .filters = flt,
+                                 .n_filters = (int)(sizeof flt / sizeof flt[0]),
+                                 .log = c->log};
+    int rc = ef_canif_open(&S->ci, &icfg, m);
     if (rc != EF_OK)
         return rc;
+    ef_canpump_cfg_t pcfg;
+    ef_canpump_cfg_default(&pcfg);
+    pcfg.rx_burst = CSIM_RX_BURST;
+    const ef_canpump_node_t node = {csim_rx, csim_process, NULL, S};
+    (void)ef_canpump_init(&S->pump, &S->ci, &node, &pcfg); /* arguments are all set */
     ef_codrive_cfg_t dc;
     ef_codrive_cfg_default(&dc, c->node);
     dc.home = c->home;
-    ef_can_port_t port = {sim_send, S};
+    ef_can_port_t port = {csim_send, S};
     rc = ef_codrive_init(&S->d, &dc, &port);
     if (rc != EF_OK)
         return ef_fail(m, rc, "sim-drive: node %u: the drive refused its configuration (home %g)",
@@ -227,68 +253,29 @@ int ef_can_sim_run(const ef_can_sim_cfg_t *c, ef_msg_t *m)
 {
     if (!c)
         return ef_fail(m, EF_ERR_ARG, "sim-drive: missing configuration");
-    sim_t *S = calloc(1, sizeof *S);
+    csim_t *S = calloc(1, sizeof *S);
     if (!S)
         return ef_fail(m, EF_ERR_NOMEM, "sim-drive: no memory");
     S->c = c;
     S->sk.fd = -1;
-    int rc = sim_open(S, m);
-    uint32_t t_prev = ef_sockcan_now_us();
-    uint64_t t_us = 0;
-    ef_can_frame_t f;
-    int have = 0; /* f holds a frame the last wait received, not yet handed over */
+    int rc = csim_open(S, m);
     while (rc == EF_OK && !(c->stop && *c->stop)) {
-        uint32_t now = ef_sockcan_now_us();
-        uint32_t dt = now - t_prev;
-        t_prev = now;
-        t_us += dt;
-        if (c->run_ms >= 0 && t_us >= (uint64_t)c->run_ms * 1000u)
-            break;
-        /* What arrived up to now goes to the drive before the time elapsed up to now: SYNCs
-         * that waited in the socket while this process was held back are no SYNC loss. */
-        int rrc = have ? EF_OK : ef_sockcan_recv(&S->sk, &f, 0);
-        have = 0;
-        for (int n = 0; rrc == EF_OK; n++) {
-            sim_rx(S, &f);
-            if (n + 1 >= SIM_RX_BURST)
-                break;
-            rrc = ef_sockcan_recv(&S->sk, &f, 0);
-        }
-        if (rrc == EF_ERR_IO) {
-            rc = ef_fail(m, EF_ERR_IO, "sim-drive: %s", S->sk.msg.text);
-            break;
-        }
-        uint32_t next = SIM_MAX_WAIT_US;
-        float cmd0 = S->d.drv.cmd.x, act0 = S->d.drv.act.x;
-        uint16_t sw0 = S->d.statusword;
-        ef_codrive_process(&S->d, dt, &next); /* a bus error: the drive keeps trying */
-        /* The drive stepped on its own clock (the SYNC-loss watchdog's stop): trace it too. */
-        if (S->d.drv.cmd.x != cmd0 || S->d.drv.act.x != act0 || S->d.statusword != sw0)
-            sim_trace_p(S);
-        int frc = ef_sockcan_flush(&S->sk);
-        if (frc == EF_ERR_IO) {
-            rc = ef_fail(m, EF_ERR_IO, "sim-drive: %s", S->sk.msg.text);
-            break;
-        }
-        if (S->trace)
-            fflush(S->trace); /* a reader sees everything up to now */
-        uint32_t wait = next < SIM_MAX_WAIT_US ? next : SIM_MAX_WAIT_US;
+        uint32_t wait = CSIM_MAX_WAIT_US;
         if (c->run_ms >= 0) {
+            /* Only with a run time: a clock reading per round costs under User-Mode Linux. */
+            uint64_t t_us = ef_canpump_elapsed_us(&S->pump);
+            if (t_us >= (uint64_t)c->run_ms * 1000u)
+                break;
             uint64_t left = (uint64_t)c->run_ms * 1000u - t_us;
             if (left < wait)
                 wait = (uint32_t)left;
         }
-        rrc = ef_sockcan_recv(&S->sk, &f, wait); /* handed over at the top, after the clock */
-        if (rrc == EF_OK) {
-            have = 1;
-        } else if (rrc == EF_ERR_IO) {
-            rc = ef_fail(m, EF_ERR_IO, "sim-drive: %s", S->sk.msg.text);
-            break;
-        }
+        if (ef_canpump_poll(&S->pump, wait) != EF_OK)
+            rc = ef_fail(m, EF_ERR_IO, "sim-drive: %s", ef_canpump_msg(&S->pump));
     }
     if (S->trace)
         fclose(S->trace);
-    ef_sockcan_close(&S->sk);
+    ef_canif_close(&S->ci);
     free(S);
     return rc;
 }

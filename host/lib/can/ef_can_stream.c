@@ -7,10 +7,9 @@
 #include <stdlib.h>
 #include <string.h>
 #include "evenfeed/host/can/ef_canhost.h"
+#include "evenfeed/host/can/ef_canpump.h"
 #include "evenfeed/host/can/ef_sockcan.h"
 
-/* Frames received in one pump iteration before time is advanced again. */
-#define CS_RX_BURST 64
 /* Longest receive wait while the socket's backlog holds frames (us). */
 #define CS_BACKLOG_WAIT_US 500u
 /* Time added to the master's stop timeout for the final wait (ms). */
@@ -37,20 +36,16 @@ typedef struct {
     ef_can_stream_result_t *res;
     ef_com_cfg_t mc;
     ef_comaster_t ms;
-    ef_sockcan_t sk;
-    int sk_open;
+    ef_sockcan_t sk; /* the default transport's context (cfg canif NULL) */
+    ef_canif_t ci;
+    ef_canpump_t pump; /* its clock starts when the socket opens */
     FILE *trace;
-    uint32_t t_prev; /* ef_sockcan_now_us() at the last pump */
-    uint64_t t_us;   /* time since the socket opened (us) */
-    uint64_t t_run;  /* t_us when RUN was reached */
+    uint64_t t_run; /* pump time when RUN was reached */
     /* SYNC periods. */
     uint64_t sync_last_t;
     double p_sum, p_sq;
     uint64_t p_n;
     uint32_t syncs;
-    uint32_t bus_reported; /* EF_SOCKCAN_* conditions passed to the master */
-    int io_rc;             /* a socket error that ends everything */
-    ef_msg_t io_msg;
     int cb_rc; /* what a callback failed with (the pipeline only says it stopped) */
     ef_msg_t cbm;
     int cb_master;     /* the callback failed because the master left RUN */
@@ -205,7 +200,7 @@ static void cs_error_text(const cs_t *S, char *buf, size_t n)
 /* Every SYNC the master sends: timestamp, period statistics, trace of the actual positions. */
 static void cs_on_sync(cs_t *S)
 {
-    uint64_t t = S->t_us + (uint32_t)(ef_sockcan_now_us() - S->t_prev);
+    uint64_t t = ef_canpump_elapsed_us(&S->pump);
     S->syncs++;
     if (S->syncs > 1) {
         double p = (double)(t - S->sync_last_t);
@@ -252,11 +247,11 @@ static void cs_snoop_tpdo(cs_t *S, const ef_can_frame_t *f)
     }
 }
 
-/* The master's port: ef_sockcan_send(), watching for the SYNCs it sends. */
+/* The master's port: the transport's send, watching for the SYNCs it sends. */
 static int cs_send(void *ctx, const ef_can_frame_t *f)
 {
     cs_t *S = ctx;
-    int rc = ef_sockcan_send(&S->sk, f);
+    int rc = ef_canif_send(&S->ci, f);
     if (rc == EF_OK && f->id == EF_CO_COB_SYNC && !(f->flags & EF_CAN_FLAG_EFF))
         cs_on_sync(S);
     return rc;
@@ -271,81 +266,59 @@ static void cs_note_error(cs_t *S)
     }
 }
 
-/* Pass new bus conditions (bus-off, error-passive, interface down) to the master. */
-static void cs_check_bus(cs_t *S)
+/* The pump's node: new bus conditions (bus-off, error-passive, interface down) go to the
+ * master. */
+static void cs_bus(void *obj, uint32_t bad)
 {
-    uint32_t bad = S->sk.bus & (EF_SOCKCAN_BUS_OFF | EF_SOCKCAN_ERROR_PASSIVE | EF_SOCKCAN_DOWN);
-    if (bad & ~S->bus_reported) {
-        S->bus_reported |= bad;
-        ef_comaster_bus_error(&S->ms, bad);
-        cs_note_error(S);
-    }
-    /* Reported once; from then on the kernel decides whether a frame can go (the socket
-     * would refuse every send while it believes the bus is off, and the master's controlled
-     * stop must still be tried: a bus that recovers carries it). */
-    S->sk.bus &= ~EF_SOCKCAN_BUS_OFF;
+    cs_t *S = obj;
+    ef_comaster_bus_error(&S->ms, bad);
+    cs_note_error(S);
 }
 
-/* A socket error ends the stream: nothing can be sent to the drives any more. */
-static void cs_io_error(cs_t *S)
+/* The pump's node: every received frame to the master, its TPDO1s into the trace. */
+static int cs_rx(void *obj, const ef_can_frame_t *f, uint32_t ts_us)
 {
-    if (S->io_rc)
-        return;
-    S->io_rc = EF_ERR_IO;
-    ef_fail(&S->io_msg, EF_ERR_IO, "%s", S->sk.msg.text);
+    cs_t *S = obj;
+    (void)ts_us;
+    cs_snoop_tpdo(S, f);
+    int rc = ef_comaster_rx(&S->ms, f);
+    cs_note_error(S);
+    return rc;
 }
 
-/* One round: advance the master by the time elapsed, send, wait for frames (at most until
- * the master's next deadline or max_wait_us) and hand them to the master. */
+/* The pump's node: the master's time. */
+static int cs_process(void *obj, uint32_t dt_us, uint32_t *next_us)
+{
+    cs_t *S = obj;
+    int rc = ef_comaster_process(&S->ms, dt_us, next_us); /* errors are kept by the master */
+    cs_note_error(S);
+    return rc;
+}
+
+/* A socket error that ended the pump (0: none): nothing can reach the drives any more. */
+static int cs_io_rc(const cs_t *S)
+{
+    return ef_canpump_error(&S->pump);
+}
+
+/* One round of the pump, waiting at most until the master's next deadline or max_wait_us. */
 static void cs_pump(cs_t *S, uint32_t max_wait_us)
 {
-    if (S->io_rc)
-        return;
-    uint32_t now = ef_sockcan_now_us();
-    uint32_t dt = now - S->t_prev;
-    S->t_prev = now;
-    S->t_us += dt;
-    uint32_t next = max_wait_us;
-    ef_comaster_process(&S->ms, dt, &next); /* errors are kept by the master */
-    cs_note_error(S);
-    int rc = ef_sockcan_flush(&S->sk);
-    if (rc == EF_ERR_IO)
-        cs_io_error(S);
-    cs_check_bus(S);
-    uint32_t wait = next < max_wait_us ? next : max_wait_us;
-    if (S->sk.bl_count > 0 && wait > CS_BACKLOG_WAIT_US)
-        wait = CS_BACKLOG_WAIT_US;
-    ef_can_frame_t f;
-    rc = ef_sockcan_recv(&S->sk, &f, wait);
-    for (int n = 0; rc == EF_OK; n++) {
-        S->res->rx_frames++;
-        S->res->rx_bits += ef_can_frame_bits(&f);
-        cs_snoop_tpdo(S, &f);
-        ef_comaster_rx(&S->ms, &f);
-        cs_note_error(S);
-        if (n + 1 >= CS_RX_BURST)
-            break;
-        rc = ef_sockcan_recv(&S->sk, &f, 0);
-    }
-    if (rc == EF_ERR_IO)
-        cs_io_error(S);
-    cs_check_bus(S);
+    (void)ef_canpump_poll(&S->pump, max_wait_us); /* an error is kept by the pump */
 }
 
 /* Microseconds since the socket opened, now. */
 static uint64_t cs_now(const cs_t *S)
 {
-    return S->t_us + (uint32_t)(ef_sockcan_now_us() - S->t_prev);
+    return ef_canpump_elapsed_us(&S->pump);
 }
 
 /* The master left RUN (or the socket failed) while the caller streams: its error. */
 static int cs_not_running(cs_t *S)
 {
     S->cb_master = 1;
-    if (S->io_rc) {
-        S->cbm = S->io_msg;
-        return S->cb_rc = S->io_rc;
-    }
+    if (cs_io_rc(S))
+        return S->cb_rc = ef_fail(&S->cbm, cs_io_rc(S), "%s", ef_canpump_msg(&S->pump));
     const ef_com_error_t *e = ef_comaster_error(&S->ms);
     if (e->code != 0) {
         char t[400];
@@ -412,7 +385,7 @@ static int cs_move(void *user, const ef_move_t *mv, const ef_pipe_move_info_t *m
     uint32_t seq = S->ms.next_seq;
     uint64_t t0 = cs_now(S);
     for (;;) {
-        if (S->io_rc || ef_comaster_state(&S->ms) != EF_COM_RUN)
+        if (cs_io_rc(S) || ef_comaster_state(&S->ms) != EF_COM_RUN)
             return cs_not_running(S);
         int rc = ef_comaster_push_move(&S->ms, mv);
         if (rc == EF_OK)
@@ -444,7 +417,7 @@ static int cs_setpoint(void *user, double t, const ef_setpoint_t *sp, const ef_p
         return S->cb_rc;
     uint64_t t0 = cs_now(S);
     for (;;) {
-        if (S->io_rc || ef_comaster_state(&S->ms) != EF_COM_RUN)
+        if (cs_io_rc(S) || ef_comaster_state(&S->ms) != EF_COM_RUN)
             return cs_not_running(S);
         int rc = ef_comaster_push_target(&S->ms, pos);
         if (rc == EF_OK)
@@ -489,7 +462,7 @@ static int cs_event(void *user, const ef_gcode_item_t *it)
     uint64_t t0 = cs_now(S);
     uint64_t lim = (uint64_t)S->c->stall_ms * 1000u + (uint64_t)(S->pushed_time * 1e6);
     for (;;) {
-        if (S->io_rc || ef_comaster_state(&S->ms) != EF_COM_RUN)
+        if (cs_io_rc(S) || ef_comaster_state(&S->ms) != EF_COM_RUN)
             return cs_not_running(S);
         if (S->c->mode == EF_COM_MODE_CSP) {
             if (ef_comaster_space(&S->ms) >= EF_COM_TARGETQ)
@@ -615,7 +588,7 @@ static int cs_run_pipeline(cs_t *S, ef_msg_t *m)
         }
         if (done)
             break;
-        if (S->io_rc || ef_comaster_state(&S->ms) != EF_COM_RUN) {
+        if (cs_io_rc(S) || ef_comaster_state(&S->ms) != EF_COM_RUN) {
             rc = cs_not_running(S);
             break;
         }
@@ -641,7 +614,7 @@ static int cs_wait_end(cs_t *S, uint64_t lim_us)
         int st = ef_comaster_state(&S->ms);
         if (st == EF_COM_DONE || st == EF_COM_ERROR)
             return 1;
-        if (S->io_rc || cs_now(S) - t0 > lim_us)
+        if (cs_io_rc(S) || cs_now(S) - t0 > lim_us)
             return 0;
         cs_pump(S, S->mc.cycle_us);
     }
@@ -682,9 +655,13 @@ static void cs_result(cs_t *S)
         double var = S->p_sq / (double)S->p_n - res->sync_mean_us * res->sync_mean_us;
         res->sync_std_us = var > 0.0 ? sqrt(var) : 0.0;
     }
-    res->tx_frames = S->sk.tx;
-    res->tx_bits = S->sk.tx_bits;
-    res->err_frames = S->sk.err_frames;
+    ef_canif_status_t st;
+    ef_canif_status(&S->ci, 0, &st);
+    res->tx_frames = st.tx;
+    res->tx_bits = st.tx_bits;
+    res->err_frames = st.err_frames;
+    res->rx_frames = ef_canpump_rx_frames(&S->pump);
+    res->rx_bits = ef_canpump_rx_bits(&S->pump);
     res->wall_time = (double)cs_now(S) * 1e-6;
     res->run_time = S->t_run ? (double)(cs_now(S) - S->t_run) * 1e-6 : 0.0;
     res->bus_time_s = (double)res->tx_bits / S->c->bitrate;
@@ -748,14 +725,24 @@ int ef_can_stream(ef_gcode_t *r, const ef_can_stream_cfg_t *c, ef_can_stream_res
             return rc;
         }
     }
-    rc = ef_sockcan_open(&S->sk, c->iface, NULL, 0, c->log, m);
+    S->ci = c->canif ? *c->canif : ef_sockcan_canif(&S->sk);
+    ef_canif_cfg_t icfg = {.name = c->iface, .log = c->log};
+    rc = ef_canif_open(&S->ci, &icfg, m);
     if (rc != EF_OK) {
         if (S->trace)
             fclose(S->trace);
         free(S);
         return rc;
     }
-    S->t_prev = ef_sockcan_now_us();
+    ef_canpump_cfg_t pcfg;
+    ef_canpump_cfg_default(&pcfg);
+    pcfg.pending_wait_us = CS_BACKLOG_WAIT_US;
+    /* Bus-off is reported once; from then on the controller decides whether a frame can go
+     * (the transport would refuse every send while it believes the bus is off, and the
+     * master's controlled stop must still be tried: a bus that recovers carries it). */
+    pcfg.bus_clear = EF_CANIF_BUS_OFF;
+    const ef_canpump_node_t node = {cs_rx, cs_process, cs_bus, S};
+    (void)ef_canpump_init(&S->pump, &S->ci, &node, &pcfg); /* arguments are all set */
     ef_can_port_t port = {cs_send, S};
     rc = ef_comaster_init(&S->ms, &S->mc, &port);
     if (rc != EF_OK) {
@@ -775,7 +762,7 @@ int ef_can_stream(ef_gcode_t *r, const ef_can_stream_cfg_t *c, ef_can_stream_res
 
     /* Bring-up: boot, configuration, start, enable (errors come from the master). */
     uint64_t lim = (uint64_t)c->bringup_ms * 1000u;
-    while (!S->io_rc) {
+    while (!cs_io_rc(S)) {
         int st = ef_comaster_state(&S->ms);
         if (st == EF_COM_RUN || st == EF_COM_DONE || st == EF_COM_ERROR)
             break;
@@ -818,7 +805,7 @@ int ef_can_stream(ef_gcode_t *r, const ef_can_stream_cfg_t *c, ef_can_stream_res
                            (uint64_t)c->stop_timeout_ms * 1000u;
             if (c->mode == EF_COM_MODE_CSP)
                 fin += (uint64_t)EF_COM_TARGETQ * S->mc.cycle_us;
-            if (!cs_wait_end(S, fin) && !S->io_rc)
+            if (!cs_wait_end(S, fin) && !cs_io_rc(S))
                 rc = ef_fail(m, EF_ERR_TIMEOUT,
                              "stream: %s: the drives did not finish within %.1f s (master "
                              "state %d)",
@@ -836,8 +823,8 @@ out:
         char t[400];
         cs_error_text(S, t, sizeof t);
         rc = ef_fail(m, e->code, "stream: %s", t);
-    } else if (rc == EF_OK && S->io_rc) {
-        rc = ef_fail(m, S->io_rc, "stream: %s", S->io_msg.text);
+    } else if (rc == EF_OK && cs_io_rc(S)) {
+        rc = ef_fail(m, cs_io_rc(S), "stream: %s", ef_canpump_msg(&S->pump));
     } else if (rc == EF_OK && ef_comaster_state(&S->ms) != EF_COM_DONE) {
         rc = ef_fail(m, EF_ERR_TIMEOUT, "stream: %s: master ended in state %d", c->iface,
                      ef_comaster_state(&S->ms));
@@ -847,7 +834,7 @@ out:
         fclose(S->trace);
         S->trace = NULL;
     }
-    ef_sockcan_close(&S->sk);
+    ef_canif_close(&S->ci);
     pthread_cond_destroy(&S->cv);
     pthread_mutex_destroy(&S->mu);
     free(S);

@@ -7,8 +7,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "evenfeed/host/can/ef_canbus_sim.h"
+#include "evenfeed/canopen/ef_codrive.h"
 #include "evenfeed/host/can/ef_canhost.h"
+#include "evenfeed/host/can/ef_canmem.h"
+#include "evenfeed/host/can/ef_canpump.h"
 
 /** Simulated time step (us): a tenth of the fastest cycle. */
 #define CL_STEP_US 100u
@@ -87,12 +89,80 @@ void ef_canload_path_free(ef_canload_path_t *p)
     memset(p, 0, sizeof *p);
 }
 
-/* Everything one run needs, allocated together (the bus alone is large). */
+/* Everything one run needs, allocated together (the bus alone is large): the bus, the
+ * master on port 0 and the drives on ports 1..3, each run by its own pump, as
+ * `evenfeed stream --can` and `evenfeed sim-drive can` run them on SocketCAN. */
 typedef struct {
-    ef_sim_bus_t bus;
+    ef_canmem_t bus;
+    ef_canif_t ci[4];
+    ef_canpump_t pump[4];
     ef_comaster_t ms;
     ef_codrive_t d[3];
 } cl_rig_t;
+
+/* One simulated step: time passes, the master's pump runs, the bus carries what it can,
+ * then the drives' pumps, and the bus again (so a frame the master sends reaches the
+ * drives in the same step, and their answers the master at its next). */
+static void cl_step(cl_rig_t *g)
+{
+    ef_canmem_advance(&g->bus, CL_STEP_US);
+    (void)ef_canpump_poll(&g->pump[0], 0); /* the in-memory bus has no I/O errors */
+    ef_canmem_deliver(&g->bus);
+    for (int k = 1; k < 4; k++)
+        (void)ef_canpump_poll(&g->pump[k], 0);
+    ef_canmem_deliver(&g->bus);
+}
+
+/* Step until the master is in state st (or DONE / ERROR), at most max_us; its state. */
+static int cl_run_until(cl_rig_t *g, int st, uint32_t max_us)
+{
+    for (uint32_t t = 0; t < max_us; t += CL_STEP_US) {
+        int s = ef_comaster_state(&g->ms);
+        if (s == st || s == EF_COM_DONE || s == EF_COM_ERROR)
+            return s;
+        cl_step(g);
+    }
+    return ef_comaster_state(&g->ms);
+}
+
+/* Open the four ports and set the master and the drives up on them. */
+static int cl_setup(cl_rig_t *g, const ef_canload_path_t *p, const ef_com_cfg_t *mc, ef_msg_t *m)
+{
+    static const char *names[4] = {"master", "drive1", "drive2", "drive3"};
+    for (int k = 0; k < 4; k++) {
+        g->ci[k] = ef_canmem_canif(&g->bus, k);
+        ef_canif_cfg_t ic = {.name = names[k]};
+        int rc = ef_canif_open(&g->ci[k], &ic, m);
+        if (rc != EF_OK)
+            return rc;
+    }
+    ef_canpump_node_t node = ef_canpump_master_node(&g->ms);
+    int rc = ef_canpump_init(&g->pump[0], &g->ci[0], &node, NULL);
+    ef_can_port_t port = ef_canif_port(&g->ci[0]);
+    if (rc == EF_OK)
+        rc = ef_comaster_init(&g->ms, mc, &port);
+    for (int k = 0; k < 3 && rc == EF_OK; k++) {
+        ef_codrive_cfg_t dc;
+        ef_codrive_cfg_default(&dc, (uint8_t)(k + 1));
+        dc.home = (float)p->start[k];
+        node = ef_canpump_drive_node(&g->d[k]);
+        rc = ef_canpump_init(&g->pump[k + 1], &g->ci[k + 1], &node, NULL);
+        port = ef_canif_port(&g->ci[k + 1]);
+        if (rc == EF_OK)
+            rc = ef_codrive_init(&g->d[k], &dc, &port);
+    }
+    if (rc != EF_OK)
+        return ef_fail(m, rc, "canload: set-up refused (%d)", rc);
+    return EF_OK;
+}
+
+/* Close the ports and free the rig. */
+static void cl_free(cl_rig_t *g)
+{
+    for (int k = 0; k < 4; k++)
+        ef_canif_close(&g->ci[k]);
+    free(g);
+}
 
 /* The master's error as a message. */
 static int cl_fail(cl_rig_t *g, ef_com_cfg_t *mc, ef_msg_t *m, const char *when)
@@ -117,8 +187,7 @@ int ef_canload_run(const ef_canload_path_t *p, int mode, uint32_t bitrate, ef_ca
     cl_rig_t *g = calloc(1, sizeof *g);
     if (!g)
         return ef_fail(m, EF_ERR_NOMEM, "canload: out of memory");
-    ef_sim_init(&g->bus);
-    g->bus.bitrate = bitrate;
+    ef_canmem_init(&g->bus, bitrate);
     ef_com_cfg_t mc;
     ef_comaster_cfg_default(&mc, mode);
     mc.n_nodes = 3;
@@ -126,20 +195,14 @@ int ef_canload_run(const ef_canload_path_t *p, int mode, uint32_t bitrate, ef_ca
         mc.nodes[k] = (uint8_t)(k + 1);
     if (mode == EF_COM_MODE_CSP)
         mc.cycle_us = p->period_us;
-    int rc = ef_sim_add_master(&g->bus, &g->ms, &mc);
-    for (int k = 0; k < 3 && rc == EF_OK; k++) {
-        ef_codrive_cfg_t dc;
-        ef_codrive_cfg_default(&dc, (uint8_t)(k + 1));
-        dc.home = (float)p->start[k];
-        rc = ef_sim_add_drive(&g->bus, &g->d[k], &dc);
-    }
+    int rc = cl_setup(g, p, &mc, m);
     if (rc != EF_OK) {
-        free(g);
-        return ef_fail(m, rc, "canload: set-up refused (%d)", rc);
+        cl_free(g);
+        return rc;
     }
-    if (ef_sim_run_until(&g->bus, EF_COM_RUN, 10000000u, CL_STEP_US) != EF_COM_RUN) {
+    if (cl_run_until(g, EF_COM_RUN, 10000000u) != EF_COM_RUN) {
         rc = cl_fail(g, &mc, m, "bring-up");
-        free(g);
+        cl_free(g);
         return rc;
     }
     uint64_t t0 = g->bus.now_us, b0 = g->bus.bits, f0 = g->bus.frames, bits0[16], frames0[16];
@@ -159,12 +222,12 @@ int ef_canload_run(const ef_canload_path_t *p, int mode, uint32_t bitrate, ef_ca
         }
         if (rc != EF_ERR_FULL)
             break;
-        ef_sim_step(&g->bus, CL_STEP_US);
+        cl_step(g);
         steps++;
     }
     if (ef_comaster_state(&g->ms) == EF_COM_RUN)
         (void)ef_comaster_finish(&g->ms);
-    r->state = ef_sim_run_until(&g->bus, EF_COM_DONE, 60000000u, CL_STEP_US);
+    r->state = cl_run_until(g, EF_COM_DONE, 60000000u);
     r->seconds = (double)(g->bus.now_us - t0) * 1e-6;
     r->bits = (double)(g->bus.bits - b0);
     r->frames = (double)(g->bus.frames - f0);
@@ -186,7 +249,7 @@ int ef_canload_run(const ef_canload_path_t *p, int mode, uint32_t bitrate, ef_ca
     rc = EF_OK;
     if (next < total || r->state != EF_COM_DONE)
         rc = cl_fail(g, &mc, m, next < total ? "streaming" : "finishing");
-    free(g);
+    cl_free(g);
     return rc;
 }
 

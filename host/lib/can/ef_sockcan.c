@@ -321,21 +321,23 @@ static int sc_wait(int fd, uint64_t timeout_ns)
     return r > 0;
 }
 
-/* Receive one data frame within timeout_us, consuming error frames on the way. */
-int ef_sockcan_recv(ef_sockcan_t *s, ef_can_frame_t *f, uint32_t timeout_us)
+/* Receive one data frame within timeout_us, consuming error frames on the way; *t_ns: the
+ * clock's last reading before the frame was read (the frame's receive time, without a clock
+ * call of its own: under User-Mode Linux every system call costs tens of microseconds). */
+static int sc_recv(ef_sockcan_t *s, ef_can_frame_t *f, uint32_t timeout_us, uint64_t *t_ns)
 {
-    uint64_t deadline;
+    uint64_t deadline, now;
     int saw_error = 0;
 
     if (!s || !f || s->fd < 0)
         return EF_ERR_ARG;
-    deadline = sc_clock_ns(CLOCK_MONOTONIC) + (uint64_t)timeout_us * 1000u;
+    now = sc_clock_ns(CLOCK_MONOTONIC);
+    deadline = now + (uint64_t)timeout_us * 1000u;
     for (;;) {
         struct can_frame cf;
         ssize_t r = recv(s->fd, &cf, sizeof cf, MSG_DONTWAIT);
         if (r < 0) {
             int e = errno;
-            uint64_t now;
             if (e == EINTR)
                 continue;
             if (!sc_errno_full(e)) {
@@ -377,8 +379,16 @@ int ef_sockcan_recv(ef_sockcan_t *s, ef_can_frame_t *f, uint32_t timeout_us)
             memcpy(f->data, cf.data, cf.can_dlc);
         s->rx++;
         s->bus &= ~EF_SOCKCAN_DOWN;
+        if (t_ns)
+            *t_ns = now;
         return EF_OK;
     }
+}
+
+/* Receive one data frame within timeout_us (see ef_sockcan.h). */
+int ef_sockcan_recv(ef_sockcan_t *s, ef_can_frame_t *f, uint32_t timeout_us)
+{
+    return sc_recv(s, f, timeout_us, NULL);
 }
 
 /* HAL send operation over ef_sockcan_send(). */
@@ -392,4 +402,98 @@ ef_can_port_t ef_sockcan_port(ef_sockcan_t *s)
 {
     ef_can_port_t p = {sc_port_send, s};
     return p;
+}
+
+/* Error frame injection (see ef_sockcan.h): a plain write, bypassing log and counters. */
+int ef_sockcan_inject_error(ef_sockcan_t *s, uint32_t err_class)
+{
+    struct can_frame cf;
+    ssize_t n;
+
+    if (!s || s->fd < 0)
+        return EF_ERR_ARG;
+    memset(&cf, 0, sizeof cf);
+    cf.can_id = CAN_ERR_FLAG | (err_class & CAN_ERR_MASK);
+    cf.can_dlc = CAN_ERR_DLC;
+    n = write(s->fd, &cf, sizeof cf);
+    if (n == (ssize_t)sizeof cf)
+        return EF_OK;
+    return ef_fail(&s->msg, EF_ERR_IO, "%s", n < 0 ? strerror(errno) : strerror(EIO));
+}
+
+/* ---- The socket as an ef_canif_t ---------------------------------------------------- */
+
+static int sc_if_open(void *ctx, const ef_canif_cfg_t *c, ef_msg_t *m)
+{
+    return ef_sockcan_open(ctx, c->name, c->filters, c->n_filters, c->log, m);
+}
+
+static void sc_if_close(void *ctx)
+{
+    ef_sockcan_close(ctx);
+}
+
+static int sc_if_send(void *ctx, const ef_can_frame_t *f)
+{
+    return ef_sockcan_send(ctx, f);
+}
+
+static int sc_if_recv(void *ctx, ef_can_frame_t *f, uint32_t *ts_us, uint32_t timeout_us)
+{
+    /* The clock's reading just before the frame was read: SO_TIMESTAMP would give the
+     * kernel's, which vcan and most drivers only take at the same software moment anyway. */
+    uint64_t t_ns = 0;
+    int rc = sc_recv(ctx, f, timeout_us, &t_ns);
+    if (rc == EF_OK && ts_us)
+        *ts_us = (uint32_t)(t_ns / 1000u);
+    return rc;
+}
+
+static int sc_if_flush(void *ctx)
+{
+    return ef_sockcan_flush(ctx);
+}
+
+static void sc_if_status(void *ctx, uint32_t clear, ef_canif_status_t *st)
+{
+    ef_sockcan_t *s = ctx;
+    st->state = s->fd < 0 ? EF_CANIF_STATE_STOPPED : ef_canif_state_of(s->bus);
+    st->seen = s->bus;
+    st->err_frames = s->err_frames;
+    st->tx_pending = s->bl_count;
+    st->tx_full = s->enobufs;
+    st->tec = st->rec = -1;
+    st->tx = s->tx;
+    st->rx = s->rx;
+    st->tx_bits = s->tx_bits;
+    s->bus &= ~clear;
+}
+
+static const char *sc_if_error(void *ctx)
+{
+    return ((const ef_sockcan_t *)ctx)->msg.text;
+}
+
+static uint32_t sc_if_now_us(void *ctx)
+{
+    (void)ctx;
+    return ef_sockcan_now_us();
+}
+
+static const ef_canif_ops_t sc_if_ops = {
+    .name = "socketcan",
+    .open = sc_if_open,
+    .close = sc_if_close,
+    .send = sc_if_send,
+    .recv = sc_if_recv,
+    .flush = sc_if_flush,
+    .status = sc_if_status,
+    .error = sc_if_error,
+    .now_us = sc_if_now_us,
+};
+
+ef_canif_t ef_sockcan_canif(ef_sockcan_t *s)
+{
+    ef_canif_t ci = {&sc_if_ops, s};
+    return ci;
 }

@@ -20,6 +20,7 @@
 #include <stdio.h>
 
 #include "evenfeed/canopen/ef_comaster.h"
+#include "evenfeed/host/can/ef_canif.h"
 #include "evenfeed/host/program/ef_gcode.h"
 #include "evenfeed/host/core/ef_host.h"
 #include "evenfeed/host/program/ef_pipeline.h"
@@ -53,6 +54,8 @@ typedef struct {
     uint32_t stall_ms;        /**< a full queue that does not drain for this long plus the
                                    longest move's duration is an error (10000) */
     uint32_t bitrate;         /**< for the bus-load figure only (1000000; vcan has none) */
+    const ef_canif_t *canif;  /**< the transport (ef_canif.h), opened on iface and closed by
+                                   the stream; NULL: SocketCAN (ef_sockcan_canif()) */
 } ef_can_stream_cfg_t;
 
 /** Defaults as documented per field; the pipeline is ef_pipe_cfg_default() with the tables

@@ -14,6 +14,7 @@
 #include <stdio.h>
 
 #include "evenfeed/hal/ef_can.h"
+#include "evenfeed/host/can/ef_canif.h"
 #include "evenfeed/host/core/ef_host.h"
 
 #ifdef __cplusplus
@@ -21,7 +22,7 @@ extern "C" {
 #endif
 
 /** Receive filters at most. */
-#define EF_SOCKCAN_MAX_FILTERS 16
+#define EF_SOCKCAN_MAX_FILTERS EF_CANIF_MAX_FILTERS
 /** Frames held in user space while the kernel's TX queue is full. */
 #define EF_SOCKCAN_BACKLOG 256
 
@@ -31,21 +32,20 @@ extern "C" {
  * BUS_OFF (and sets RESTARTED), and a frame the kernel accepts or delivers clears DOWN.
  * While BUS_OFF is set ef_sockcan_send() refuses frames (EF_ERR_BUS).
  */
-#define EF_SOCKCAN_BUS_OFF       1u
-#define EF_SOCKCAN_ERROR_PASSIVE 2u
-#define EF_SOCKCAN_ERROR_WARNING 4u
-#define EF_SOCKCAN_RESTARTED     8u  /**< controller restarted after bus-off */
-#define EF_SOCKCAN_DOWN          16u /**< the interface is down (ENETDOWN) or gone */
+#define EF_SOCKCAN_BUS_OFF       EF_CANIF_BUS_OFF
+#define EF_SOCKCAN_ERROR_PASSIVE EF_CANIF_ERROR_PASSIVE
+#define EF_SOCKCAN_ERROR_WARNING EF_CANIF_ERROR_WARNING
+#define EF_SOCKCAN_RESTARTED     EF_CANIF_RESTARTED /**< controller restarted after bus-off */
+#define EF_SOCKCAN_DOWN          EF_CANIF_DOWN      /**< the interface is down (ENETDOWN) or gone */
 
 /**
  * Receive filter, exactly a struct can_filter: a frame matches when
  * (can_id & mask) == (id & mask), where can_id carries SocketCAN's flag bits (CAN_EFF_FLAG
  * 0x80000000, CAN_RTR_FLAG 0x40000000). A mask of 0x7FF thus matches base and extended
  * frames alike; add CAN_EFF_FLAG to the mask (and leave it out of id) for base frames only.
+ * The transport interface's filter (ef_canif.h) is the same thing under another name.
  */
-typedef struct {
-    uint32_t id, mask;
-} ef_sockcan_filter_t;
+typedef ef_canif_filter_t ef_sockcan_filter_t;
 
 /** An open socket. */
 typedef struct {
@@ -122,6 +122,25 @@ void ef_sockcan_log_frame(FILE *log, const char *ifname, const ef_can_frame_t *f
 
 /** @brief Monotonic microseconds (CLOCK_MONOTONIC, wraps at 2^32). */
 uint32_t ef_sockcan_now_us(void);
+
+/**
+ * @brief The socket as a CAN transport (ef_canif.h): open is ef_sockcan_open() with the
+ * configuration's name, filters and log (bitrate ignored: `ip link` sets it), send, recv
+ * (timestamp: the time of reading), flush, status (the conditions in s->bus, the state
+ * the worst of them; error counters not known), error (s->msg), the host's clock. The
+ * socket s stays the caller's; it must outlive the transport.
+ */
+ef_canif_t ef_sockcan_canif(ef_sockcan_t *s);
+
+/**
+ * @brief Write an error frame CAN_ERR_FLAG | err_class (e.g. CAN_ERR_BUSOFF) on the bus,
+ * as a controller driver reports one: fault injection on vcan, which has no physical
+ * layer to fail. Not logged, not counted.
+ * @retval EF_OK
+ * @retval EF_ERR_ARG NULL, socket not open
+ * @retval EF_ERR_IO  the kernel refused it (s->msg says why)
+ */
+int ef_sockcan_inject_error(ef_sockcan_t *s, uint32_t err_class);
 
 #ifdef __cplusplus
 }
