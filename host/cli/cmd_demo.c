@@ -23,40 +23,40 @@ static const char usage[] =
     "                                     plot goes next to it, PATH with -profile.svg)\n";
 
 /* Smooth one embedded program and write its plot. */
-static int ef_demo_one(const char *text, unsigned long len, const char *name, const char *svg)
+static int cdemo_one(const char *text, unsigned long len, const char *name, const char *svg)
 {
     static ef_gcode_t r; /* about 50 kB of parameters: not on the stack */
     printf("== samples/%s\n", name);
     fflush(stdout);
     int rc = ef_gcode_init(&r, text, (size_t)len, name);
     if (rc)
-        return ef_cli_error(rc, "demo: %s", ef_err_str(rc));
-    ef_smooth_opts_t o;
-    ef_smooth_opts_default(&o);
+        return cli_error(rc, "demo: %s", ef_err_str(rc));
+    cli_smooth_opts_t o;
+    cli_smooth_opts_default(&o);
     o.svg = svg;
     char label[64];
     snprintf(label, sizeof label, "samples/%s", name);
-    rc = ef_cli_smooth_run(&r, label, &o);
+    rc = cli_smooth_run(&r, label, &o);
     ef_gcode_free(&r);
     if (rc)
         return rc;
     printf("SVG plot written to %s\n\n", svg);
     fflush(stdout);
-    return 0;
+    return EF_OK;
 }
 
-static volatile sig_atomic_t ef_demo_stop;
+static volatile sig_atomic_t cdemo_stop;
 
 typedef struct {
     ef_mb_server_cfg_t c;
     ef_msg_t m;
     int rc;
-} ef_demo_srv_t;
+} cdemo_srv_t;
 
-/* The simulated drive's thread: serves until the demo sets ef_demo_stop. */
-static void *ef_demo_serve(void *arg)
+/* The simulated drive's thread: serves until the demo sets cdemo_stop. */
+static void *cdemo_serve(void *arg)
 {
-    ef_demo_srv_t *S = arg;
+    cdemo_srv_t *S = arg;
     S->rc = ef_mb_serve(&S->c, &S->m);
     if (S->c.ready)
         fclose(S->c.ready); /* unblocks the reader if the server never got ready */
@@ -65,21 +65,21 @@ static void *ef_demo_serve(void *arg)
 
 /* Stream the profile to a simulated drive (in a thread of this process) over real Modbus
  * TCP on loopback, with the drive's clock at 4x so it takes a few seconds. */
-static int ef_demo_stream(void)
+static int cdemo_stream(void)
 {
-    static ef_demo_srv_t S;
+    static cdemo_srv_t S;
     int fds[2];
     if (pipe(fds) != 0)
-        return ef_cli_error(EF_ERR_IO, "demo: pipe");
+        return cli_error(EF_ERR_IO, "demo: pipe");
     ef_mb_server_cfg_default(&S.c);
     S.c.mb.port = 0; /* any free port: the ready line says which */
     S.c.time_scale = 4.0;
-    S.c.stop = &ef_demo_stop;
+    S.c.stop = &cdemo_stop;
     S.c.ready = fdopen(fds[1], "w");
     FILE *rd = fdopen(fds[0], "r");
     pthread_t th;
-    if (!S.c.ready || !rd || pthread_create(&th, NULL, ef_demo_serve, &S) != 0)
-        return ef_cli_error(EF_ERR_IO, "demo: cannot start the simulated drive");
+    if (!S.c.ready || !rd || pthread_create(&th, NULL, cdemo_serve, &S) != 0)
+        return cli_error(EF_ERR_IO, "demo: cannot start the simulated drive");
     char line[256] = "";
     int port = 0;
     if (fgets(line, sizeof line, rd))
@@ -99,18 +99,18 @@ static int ef_demo_stream(void)
         fflush(stdout);
         static ef_gcode_t r;
         ef_mb_stream_cfg_t c;
-        ef_mb_stream_cfg_default(&c, ef_cli_default_table(EF_TABLE_G2_QUINTIC),
-                                 ef_cli_default_table(EF_TABLE_G1_CUBIC));
+        ef_mb_stream_cfg_default(&c, cli_default_table(EF_TABLE_G2_QUINTIC),
+                                 cli_default_table(EF_TABLE_G1_CUBIC));
         c.mb.port = port;
         rc = ef_gcode_init(&r, ef_sample_profile, (size_t)ef_sample_profile_len, "profile.ngc");
         if (rc == EF_OK)
             rc = ef_mb_stream(&r, &c, &res, &m);
         ef_gcode_free(&r);
     }
-    ef_demo_stop = 1;
+    cdemo_stop = 1;
     pthread_join(th, NULL);
     if (rc != EF_OK)
-        return ef_cli_error(rc, "demo: stream: %s", m.text);
+        return cli_error(rc, "demo: stream: %s", m.text);
     printf("stream           %u segments, path time %.2f s, %llu Modbus transactions, "
            "%llu retries\n",
            res.moves, res.path_time, (unsigned long long)res.io.transactions,
@@ -119,12 +119,12 @@ static int ef_demo_stream(void)
            "following error max %.4f mm\n",
            res.last.done_count, (double)res.last.act[0], (double)res.last.act[1],
            (double)res.last.act[2], (double)res.last.ferr_max);
-    return 0;
+    return EF_OK;
 }
 
 /* The profile over CANopen to three drives on an in-process bus: segment mode and CSP, with
  * the bus load of each (the firmware master and drives; no CAN kernel needed). */
-static int ef_demo_can(void)
+static int cdemo_can(void)
 {
     printf(
         "\n== samples/profile.ngc over CANopen to three simulated CiA 402 drives (one per axis),\n"
@@ -135,8 +135,8 @@ static int ef_demo_can(void)
     ef_msg_t m = {{0}};
     ef_pipe_cfg_t pc;
     ef_pipe_cfg_default(&pc);
-    pc.g2 = ef_cli_default_table(EF_TABLE_G2_QUINTIC);
-    pc.g1 = ef_cli_default_table(EF_TABLE_G1_CUBIC);
+    pc.g2 = cli_default_table(EF_TABLE_G2_QUINTIC);
+    pc.g1 = cli_default_table(EF_TABLE_G1_CUBIC);
     pc.period_us = 1000; /* the CSP cycle */
     ef_canload_path_t path;
     int rc = ef_gcode_init(&r, ef_sample_profile, (size_t)ef_sample_profile_len, "profile.ngc");
@@ -144,7 +144,7 @@ static int ef_demo_can(void)
         rc = ef_canload_path(&r, &pc, &path, &m);
     ef_gcode_free(&r);
     if (rc != EF_OK)
-        return ef_cli_error(rc, "demo: can: %s", m.text);
+        return cli_error(rc, "demo: can: %s", m.text);
     ef_canload_result_t res[2];
     static const int modes[2] = {EF_COM_MODE_SEGMENT, EF_COM_MODE_CSP};
     static const char *names[2] = {"segment mode", "CSP at 1 kHz"};
@@ -165,47 +165,54 @@ static int ef_demo_can(void)
     }
     ef_canload_path_free(&path);
     if (rc != EF_OK)
-        return ef_cli_error(rc, "demo: can: %s", m.text);
+        return cli_error(rc, "demo: can: %s", m.text);
     printf("segment mode needs 1/%.1f of CSP's bus load (docs/benchmarks-can.md)\n",
            (res[1].bits / res[1].seconds) / (res[0].bits / res[0].seconds));
-    return 0;
+    return EF_OK;
 }
 
-int ef_cmd_demo(int argc, char **argv)
+enum { O_SVG = CLI_LONG };
+
+int cli_cmd_demo(int argc, char **argv)
 {
+    static const struct option opts[] = {
+        {"svg", required_argument, NULL, O_SVG}, CLI_OPT_HELP, CLI_OPT_END};
     const char *svg = "evenfeed-demo.svg";
-    for (int k = 1; k < argc; k++) {
-        if (!strcmp(argv[k], "--help") || !strcmp(argv[k], "-h")) {
-            fputs(usage, stdout);
-            return 0;
-        } else if (!strcmp(argv[k], "--svg") && k + 1 < argc) {
-            svg = argv[++k];
-        } else {
+    cli_getopt_t g;
+    cli_getopt_init(&g, "demo", usage, argc, argv, "", opts);
+    int c;
+    while ((c = cli_getopt(&g)) > CLI_END) {
+        if (c == CLI_HELP)
+            return EF_OK;
+        if (c != O_SVG) {
             fputs(usage, stderr);
-            return ef_cli_error(EF_ERR_ARG, "demo: unexpected argument '%s'", argv[k]);
+            return cli_error(EF_ERR_ARG, "demo: unexpected argument '%s'", g.val);
         }
+        svg = g.val;
     }
-    if (!ef_cli_default_table(EF_TABLE_G1_CUBIC) || !ef_cli_default_table(EF_TABLE_G2_QUINTIC))
-        return ef_cli_error(EF_ERR_ARG, "demo: this build has no built-in tables");
+    if (c < 0)
+        return c;
+    if (!cli_default_table(EF_TABLE_G1_CUBIC) || !cli_default_table(EF_TABLE_G2_QUINTIC))
+        return cli_error(EF_ERR_ARG, "demo: this build has no built-in tables");
     /* The second plot's name: PATH without a trailing .svg, plus -profile.svg. */
     char svg2[4096];
     size_t n = strlen(svg);
     if (n >= 4 && !strcmp(svg + n - 4, ".svg"))
         n -= 4;
     if (n + sizeof "-profile.svg" > sizeof svg2)
-        return ef_cli_error(EF_ERR_ARG, "demo: --svg path too long");
+        return cli_error(EF_ERR_ARG, "demo: --svg path too long");
     memcpy(svg2, svg, n);
     memcpy(svg2 + n, "-profile.svg", sizeof "-profile.svg");
     printf("evenfeed demo: two sample part programs through the smoother, feed planner and\n"
            "interpolator (built-in G1/G2 tables, no hardware)\n\n");
-    int rc = ef_demo_one(ef_sample_bracket, ef_sample_bracket_len, "bracket.ngc", svg);
+    int rc = cdemo_one(ef_sample_bracket, ef_sample_bracket_len, "bracket.ngc", svg);
     if (rc)
         return rc;
-    rc = ef_demo_one(ef_sample_profile, ef_sample_profile_len, "profile.ngc", svg2);
+    rc = cdemo_one(ef_sample_profile, ef_sample_profile_len, "profile.ngc", svg2);
     if (rc)
         return rc;
-    rc = ef_demo_stream();
+    rc = cdemo_stream();
     if (rc)
         return rc;
-    return ef_demo_can();
+    return cdemo_can();
 }

@@ -11,35 +11,20 @@ static const char usage[] =
     "rapid, line, arc, zero (zero-length move), event, ignored, tolerance, end. Positions\n"
     "are in mm, feeds in mm/min. --json prints one JSON object per line instead.\n";
 
-/* Print a JSON string, escaping what JSON requires. */
-static void ef_json_str(FILE *f, const char *s)
-{
-    fputc('"', f);
-    for (; *s; s++) {
-        if (*s == '"' || *s == '\\')
-            fprintf(f, "\\%c", *s);
-        else if ((unsigned char)*s < 0x20)
-            fprintf(f, "\\u%04x", (unsigned)(unsigned char)*s);
-        else
-            fputc(*s, f);
-    }
-    fputc('"', f);
-}
-
 /* Print a 3-vector as a JSON array. */
-static void ef_json_vec(FILE *f, const char *key, const double *v)
+static void cgc_json_vec(FILE *f, const char *key, const double *v)
 {
     fprintf(f, ", \"%s\": [", key);
     for (int k = 0; k < 3; k++) {
         if (k)
             fputs(", ", f);
-        ef_cli_json_num(f, v[k]);
+        cli_json_num(f, v[k]);
     }
     fputc(']', f);
 }
 
 /* One item as a JSON object on one line. */
-static void ef_print_json(const ef_gcode_item_t *it)
+static void cgc_print_json(const ef_gcode_item_t *it)
 {
     printf("{\"kind\": \"%s\", \"line\": %u, \"col\": %u, \"units\": \"%s\"",
            ef_gcode_kind_name(it->kind), (unsigned)it->line, (unsigned)it->col,
@@ -48,44 +33,44 @@ static void ef_print_json(const ef_gcode_item_t *it)
     case EF_GC_RAPID:
     case EF_GC_LINE:
     case EF_GC_ZERO_MOVE:
-        ef_json_vec(stdout, "start", it->start);
-        ef_json_vec(stdout, "end", it->end);
+        cgc_json_vec(stdout, "start", it->start);
+        cgc_json_vec(stdout, "end", it->end);
         if (it->kind == EF_GC_LINE) {
             fputs(", \"feed\": ", stdout);
-            ef_cli_json_num(stdout, it->feed);
+            cli_json_num(stdout, it->feed);
         }
         break;
     case EF_GC_ARC:
-        ef_json_vec(stdout, "start", it->start);
-        ef_json_vec(stdout, "end", it->end);
-        ef_json_vec(stdout, "centre", it->centre);
+        cgc_json_vec(stdout, "start", it->start);
+        cgc_json_vec(stdout, "end", it->end);
+        cgc_json_vec(stdout, "centre", it->centre);
         printf(", \"dir\": %d, \"plane\": %d, \"turns\": %d, \"radius\": ", it->dir, it->plane,
                it->turns);
-        ef_cli_json_num(stdout, it->radius);
+        cli_json_num(stdout, it->radius);
         fputs(", \"sweep\": ", stdout);
-        ef_cli_json_num(stdout, it->sweep);
+        cli_json_num(stdout, it->sweep);
         fputs(", \"feed\": ", stdout);
-        ef_cli_json_num(stdout, it->feed);
+        cli_json_num(stdout, it->feed);
         break;
     case EF_GC_TOLERANCE:
         printf(", \"mode\": \"%s\", \"p\": ",
                it->path_mode == EF_GC_PATH_EXACT ? "exact" : "blend");
-        ef_cli_json_num(stdout, it->p_tol);
+        cli_json_num(stdout, it->p_tol);
         fputs(", \"q\": ", stdout);
-        ef_cli_json_num(stdout, it->q_tol);
+        cli_json_num(stdout, it->q_tol);
         break;
     default:
         break;
     }
     if (it->text[0]) {
         fputs(", \"text\": ", stdout);
-        ef_json_str(stdout, it->text);
+        cli_json_str(stdout, it->text);
     }
     puts("}");
 }
 
 /* One item as a line of text. */
-static void ef_print_text(const ef_gcode_item_t *it)
+static void cgc_print_text(const ef_gcode_item_t *it)
 {
     printf("%u:%u %-9s", (unsigned)it->line, (unsigned)it->col, ef_gcode_kind_name(it->kind));
     switch (it->kind) {
@@ -119,45 +104,49 @@ static void ef_print_text(const ef_gcode_item_t *it)
     putchar('\n');
 }
 
+enum { O_JSON = CLI_LONG };
+
 /* gcode FILE [--json] */
-int ef_cmd_gcode(int argc, char **argv)
+int cli_cmd_gcode(int argc, char **argv)
 {
+    static const struct option opts[] = {
+        {"json", no_argument, NULL, O_JSON}, CLI_OPT_HELP, CLI_OPT_END};
     const char *path = NULL;
-    int json = 0;
-    for (int k = 1; k < argc; k++) {
-        if (!strcmp(argv[k], "--help") || !strcmp(argv[k], "-h")) {
-            fputs(usage, stdout);
-            return 0;
-        } else if (!strcmp(argv[k], "--json")) {
+    int json = 0, c;
+    cli_getopt_t g;
+    cli_getopt_init(&g, "gcode", usage, argc, argv, "", opts);
+    while ((c = cli_getopt(&g)) > CLI_END) {
+        if (c == CLI_HELP)
+            return EF_OK;
+        if (c == O_JSON)
             json = 1;
-        } else if (argv[k][0] == '-' && argv[k][1]) {
-            return ef_cli_error(EF_ERR_ARG, "gcode: unknown option '%s'", argv[k]);
-        } else if (path) {
-            return ef_cli_error(EF_ERR_ARG, "usage: evenfeed gcode FILE [--json]");
-        } else {
-            path = argv[k];
-        }
+        else if (c == CLI_ARG && !path)
+            path = g.val;
+        else
+            return cli_error(EF_ERR_ARG, "usage: evenfeed gcode FILE [--json]");
     }
+    if (c < 0)
+        return c;
     if (!path)
-        return ef_cli_error(EF_ERR_ARG, "usage: evenfeed gcode FILE [--json]");
+        return cli_error(EF_ERR_ARG, "usage: evenfeed gcode FILE [--json]");
     static ef_gcode_t r; /* about 50 kB of parameters: not on the stack */
     ef_msg_t m = {{0}};
     int rc = ef_gcode_open(&r, path, &m);
     if (rc != EF_OK)
-        return ef_cli_error(rc, "%s", m.text);
+        return cli_error(rc, "%s", m.text);
     ef_gcode_item_t it;
     do {
         rc = ef_gcode_next(&r, &it, &m);
         if (rc != EF_OK) {
             fflush(stdout);
             ef_gcode_free(&r);
-            return ef_cli_error(rc, "%s", m.text);
+            return cli_error(rc, "%s", m.text);
         }
         if (json)
-            ef_print_json(&it);
+            cgc_print_json(&it);
         else
-            ef_print_text(&it);
+            cgc_print_text(&it);
     } while (it.kind != EF_GC_END);
     ef_gcode_free(&r);
-    return 0;
+    return EF_OK;
 }

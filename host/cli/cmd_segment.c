@@ -1,6 +1,5 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* evenfeed segment: one G1 cubic / G2 quintic (or optimized G1 quartic) segment. */
-#include <getopt.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -33,44 +32,31 @@ typedef struct {
     int dim;        /* 2 or 3 */
     ef_dend_t e0, e1;
     double cfg[4]; /* alpha, beta, k0, k1 as given (normalized form) */
-} ef_seg_args_t;
+} cseg_args_t;
 
-/* Parse "x,y" or "x,y,z" into v; returns the component count, or 0 after reporting. */
-static int ef_parse_vec(const char *opt, const char *s, ef_dvec3_t *v)
+/* Parse "x,y" or "x,y,z" into v and its component count into *dim. */
+static int cseg_vec(const char *opt, const char *s, ef_dvec3_t *v, int *dim)
 {
+    char buf[256], *item[3];
     double c[3] = {0, 0, 0};
-    int n = 0;
-    char buf[256];
-    if (strlen(s) >= sizeof buf)
-        goto bad;
-    strcpy(buf, s);
-    for (char *p = buf;;) {
-        char *comma = strchr(p, ',');
-        if (comma)
-            *comma = '\0';
-        if (n == 3)
-            goto bad;
-        if (ef_cli_double(opt, p, &c[n++]) != EF_OK)
-            return 0;
-        if (!comma)
-            break;
-        p = comma + 1;
-    }
-    if (n < 2)
-        goto bad;
+    int n = cli_split(s, ',', buf, sizeof buf, item, 3);
+    if (n < 2 || n > 3)
+        return cli_error(EF_ERR_ARG, "segment: %s: '%s' is not a 2-D (x,y) or 3-D (x,y,z) vector",
+                         opt, s);
+    for (int k = 0; k < n; k++)
+        if (cli_parse_double(item[k], &c[k]) != EF_OK)
+            return cli_error(EF_ERR_ARG, "segment: %s: '%s' is not a finite number", opt, item[k]);
     *v = (ef_dvec3_t){c[0], c[1], c[2]};
-    return n;
-bad:
-    fprintf(stderr, "evenfeed: error: %s: '%s' is not a 2-D (x,y) or 3-D (x,y,z) vector\n", opt, s);
-    return 0;
+    *dim = n;
+    return EF_OK;
 }
 
-/* Read options into a; returns EF_OK or an exit status already reported. */
-static int ef_segment_parse(int argc, char **argv, ef_seg_args_t *a, int *optimize, int *json,
-                            const char **table_path)
+/* Read options into a: EF_OK, CLI_HELP (usage printed) or an error (printed). */
+static int cseg_parse(int argc, char **argv, cseg_args_t *a, int *optimize, int *json,
+                      const char **table_path)
 {
     enum {
-        O_G1 = 256,
+        O_G1 = CLI_LONG,
         O_G2,
         O_QUARTIC,
         O_ALPHA,
@@ -85,8 +71,7 @@ static int ef_segment_parse(int argc, char **argv, ef_seg_args_t *a, int *optimi
         O_N1,
         O_OPT,
         O_TABLE,
-        O_JSON,
-        O_HELP
+        O_JSON
     };
     static const struct option opts[] = {{"g1", no_argument, 0, O_G1},
                                          {"g2", no_argument, 0, O_G2},
@@ -104,23 +89,20 @@ static int ef_segment_parse(int argc, char **argv, ef_seg_args_t *a, int *optimi
                                          {"optimize", no_argument, 0, O_OPT},
                                          {"table", required_argument, 0, O_TABLE},
                                          {"json", no_argument, 0, O_JSON},
-                                         {"help", no_argument, 0, O_HELP},
-                                         {0, 0, 0, 0}};
+                                         CLI_OPT_HELP,
+                                         CLI_OPT_END};
     unsigned seen = 0; /* bit per option id - O_G1 */
     int dims[6] = {0}, c;
     memset(a, 0, sizeof *a);
-    optind = 1;
-    opterr = 0;
-    while ((c = getopt_long(argc, argv, "", opts, NULL)) != -1) {
-        if (c == '?' || c == ':')
-            return ef_cli_error(EF_ERR_ARG, "segment: unknown option or missing value: '%s'",
-                                argv[optind - 1]);
-        if (c == O_HELP) {
-            fputs(usage, stdout);
-            exit(0);
-        }
+    cli_getopt_t g;
+    cli_getopt_init(&g, "segment", usage, argc, argv, "", opts);
+    while ((c = cli_getopt(&g)) > CLI_END) {
+        if (c == CLI_HELP)
+            return CLI_HELP;
+        if (c == CLI_ARG)
+            return cli_error(EF_ERR_ARG, "segment: unexpected argument '%s'", g.val);
         if (seen & (1u << (c - O_G1)))
-            return ef_cli_error(EF_ERR_ARG, "segment: option given twice: '%s'", argv[optind - 1]);
+            return cli_error(EF_ERR_ARG, "segment: option given twice: '%s'", g.opt);
         seen |= 1u << (c - O_G1);
         int rc = EF_OK;
         switch (c) {
@@ -134,82 +116,81 @@ static int ef_segment_parse(int argc, char **argv, ef_seg_args_t *a, int *optimi
             a->kind = a->kind ? -1 : EF_REF_G1_QUARTIC;
             break;
         case O_ALPHA:
-            rc = ef_cli_double("--alpha", optarg, &a->cfg[0]);
+            rc = cli_opt_double(&g, &a->cfg[0]);
             break;
         case O_BETA:
-            rc = ef_cli_double("--beta", optarg, &a->cfg[1]);
+            rc = cli_opt_double(&g, &a->cfg[1]);
             break;
         case O_K0:
-            rc = ef_cli_double("--k0", optarg, &a->cfg[2]);
+            rc = cli_opt_double(&g, &a->cfg[2]);
             break;
         case O_K1:
-            rc = ef_cli_double("--k1", optarg, &a->cfg[3]);
+            rc = cli_opt_double(&g, &a->cfg[3]);
             break;
         case O_P0:
-            rc = (dims[0] = ef_parse_vec("--p0", optarg, &a->e0.p)) ? EF_OK : EF_ERR_ARG;
+            rc = cseg_vec(g.opt, g.val, &a->e0.p, &dims[0]);
             break;
         case O_T0:
-            rc = (dims[1] = ef_parse_vec("--t0", optarg, &a->e0.t)) ? EF_OK : EF_ERR_ARG;
+            rc = cseg_vec(g.opt, g.val, &a->e0.t, &dims[1]);
             break;
         case O_N0:
-            rc = (dims[2] = ef_parse_vec("--n0", optarg, &a->e0.n)) ? EF_OK : EF_ERR_ARG;
+            rc = cseg_vec(g.opt, g.val, &a->e0.n, &dims[2]);
             break;
         case O_P1:
-            rc = (dims[3] = ef_parse_vec("--p1", optarg, &a->e1.p)) ? EF_OK : EF_ERR_ARG;
+            rc = cseg_vec(g.opt, g.val, &a->e1.p, &dims[3]);
             break;
         case O_T1:
-            rc = (dims[4] = ef_parse_vec("--t1", optarg, &a->e1.t)) ? EF_OK : EF_ERR_ARG;
+            rc = cseg_vec(g.opt, g.val, &a->e1.t, &dims[4]);
             break;
         case O_N1:
-            rc = (dims[5] = ef_parse_vec("--n1", optarg, &a->e1.n)) ? EF_OK : EF_ERR_ARG;
+            rc = cseg_vec(g.opt, g.val, &a->e1.n, &dims[5]);
             break;
         case O_OPT:
             *optimize = 1;
             break;
         case O_TABLE:
-            *table_path = optarg;
+            *table_path = g.val;
             break;
         case O_JSON:
             *json = 1;
             break;
         }
         if (rc != EF_OK)
-            return ef_cli_exit(rc);
+            return rc;
     }
-    if (optind < argc)
-        return ef_cli_error(EF_ERR_ARG, "segment: unexpected argument '%s'", argv[optind]);
+    if (c < 0)
+        return c;
 #define HAS(o) (seen & (1u << ((o)-O_G1)))
     if (a->kind <= 0)
-        return ef_cli_error(EF_ERR_ARG, "segment: give exactly one of --g1, --g2, --quartic");
+        return cli_error(EF_ERR_ARG, "segment: give exactly one of --g1, --g2, --quartic");
     int g2 = a->kind == EF_REF_G2_QUINTIC;
     if (!g2 && (HAS(O_K0) || HAS(O_K1) || HAS(O_N0) || HAS(O_N1)))
-        return ef_cli_error(EF_ERR_ARG,
-                            "segment: curvature and normals (--k0 --k1 --n0 --n1) need --g2");
+        return cli_error(EF_ERR_ARG,
+                         "segment: curvature and normals (--k0 --k1 --n0 --n1) need --g2");
     if (a->kind == EF_REF_G1_QUARTIC && !*optimize)
-        return ef_cli_error(EF_ERR_ARG, "segment: --quartic has no table; add --optimize");
+        return cli_error(EF_ERR_ARG, "segment: --quartic has no table; add --optimize");
     if (*optimize && *table_path)
-        return ef_cli_error(EF_ERR_ARG, "segment: --table and --optimize exclude each other");
+        return cli_error(EF_ERR_ARG, "segment: --table and --optimize exclude each other");
     int norm_form = HAS(O_ALPHA) || HAS(O_BETA);
     int expl_form = HAS(O_P0) || HAS(O_T0) || HAS(O_P1) || HAS(O_T1) || HAS(O_N0) || HAS(O_N1);
     if (norm_form && expl_form)
-        return ef_cli_error(EF_ERR_ARG,
-                            "segment: give either --alpha/--beta or --p0/--t0/--p1/--t1, not both");
+        return cli_error(EF_ERR_ARG,
+                         "segment: give either --alpha/--beta or --p0/--t0/--p1/--t1, not both");
     if (norm_form) {
         if (!HAS(O_ALPHA) || !HAS(O_BETA))
-            return ef_cli_error(EF_ERR_ARG,
-                                "segment: the normalized form needs both --alpha and --beta");
+            return cli_error(EF_ERR_ARG,
+                             "segment: the normalized form needs both --alpha and --beta");
         a->normalized = 1;
         a->dim = 2;
         ef_ref_config(a->cfg[0], a->cfg[1], a->cfg[2], a->cfg[3], &a->e0, &a->e1);
         return EF_OK;
     }
     if (!HAS(O_P0) || !HAS(O_T0) || !HAS(O_P1) || !HAS(O_T1))
-        return ef_cli_error(EF_ERR_ARG,
-                            "segment: give --alpha/--beta, or all of --p0 --t0 --p1 --t1");
+        return cli_error(EF_ERR_ARG, "segment: give --alpha/--beta, or all of --p0 --t0 --p1 --t1");
     a->dim = dims[0];
     for (int i = 0; i < 6; i++)
         if (dims[i] && dims[i] != a->dim)
-            return ef_cli_error(EF_ERR_ARG, "segment: mix of 2-D and 3-D vectors");
+            return cli_error(EF_ERR_ARG, "segment: mix of 2-D and 3-D vectors");
     a->e0.kappa = a->cfg[2];
     a->e1.kappa = a->cfg[3];
     if (a->dim == 2) { /* planar: normal = tangent turned +90 degrees unless given */
@@ -224,9 +205,9 @@ static int ef_segment_parse(int argc, char **argv, ef_seg_args_t *a, int *optimi
 }
 
 /* Print the result in the chosen format. */
-static void ef_segment_print(const ef_seg_args_t *a, const char *source, const double *dof,
-                             int ndof, const ef_dvec3_t *b, int degree, double C, uint32_t clamp,
-                             const ef_norm_t *nm, int json)
+static void cseg_print(const cseg_args_t *a, const char *source, const double *dof, int ndof,
+                       const ef_dvec3_t *b, int degree, double C, uint32_t clamp,
+                       const ef_norm_t *nm, int json)
 {
     ef_endpoint_t f0 = ef_ref_end_to_fw(&a->e0), f1 = ef_ref_end_to_fw(&a->e1);
     float twist = ef_norm_twist(nm, &f0, &f1);
@@ -244,39 +225,39 @@ static void ef_segment_print(const ef_seg_args_t *a, const char *source, const d
         printf("{\"kind\": \"%s\", \"source\": \"%s\", \"dim\": %d, \"degree\": %d,\n", kname,
                source, a->dim, degree);
         printf(" \"config\": {\"alpha\": ");
-        ef_cli_json_num(stdout, nm->alpha);
+        cli_json_num(stdout, nm->alpha);
         printf(", \"beta\": ");
-        ef_cli_json_num(stdout, nm->beta);
+        cli_json_num(stdout, nm->beta);
         printf(", \"k0\": ");
-        ef_cli_json_num(stdout, nm->k0);
+        cli_json_num(stdout, nm->k0);
         printf(", \"k1\": ");
-        ef_cli_json_num(stdout, nm->k1);
+        cli_json_num(stdout, nm->k1);
         printf(", \"chord\": ");
-        ef_cli_json_num(stdout, nm->chord);
+        cli_json_num(stdout, nm->chord);
         printf(", \"twist\": ");
-        ef_cli_json_num(stdout, twist);
+        cli_json_num(stdout, twist);
         printf("},\n \"dof_names\": [");
         for (int k = 0; k < ndof; k++)
             printf("%s\"%s\"", k ? ", " : "", names[k]);
         printf("],\n \"dofs\": [");
         for (int k = 0; k < ndof; k++) {
             printf(k ? ", " : "");
-            ef_cli_json_num(stdout, dof[k]);
+            cli_json_num(stdout, dof[k]);
         }
         printf("],\n \"control_points\": [");
         for (int i = 0; i <= degree; i++) {
             printf("%s[", i ? ", " : "");
-            ef_cli_json_num(stdout, b[i].x);
+            cli_json_num(stdout, b[i].x);
             printf(", ");
-            ef_cli_json_num(stdout, b[i].y);
+            cli_json_num(stdout, b[i].y);
             if (a->dim == 3) {
                 printf(", ");
-                ef_cli_json_num(stdout, b[i].z);
+                cli_json_num(stdout, b[i].z);
             }
             printf("]");
         }
         printf("],\n \"C\": ");
-        ef_cli_json_num(stdout, C);
+        cli_json_num(stdout, C);
         printf(",\n \"clamped\": [");
         for (int i = 0, first = 1; i < 4; i++)
             if (clamp & (1u << i)) {
@@ -313,21 +294,21 @@ static void ef_segment_print(const ef_seg_args_t *a, const char *source, const d
 }
 
 /* evenfeed segment ... */
-int ef_cmd_segment(int argc, char **argv)
+int cli_cmd_segment(int argc, char **argv)
 {
-    ef_seg_args_t a;
+    cseg_args_t a;
     int optimize = 0, json = 0;
     const char *table_path = NULL;
-    int rc = ef_segment_parse(argc, argv, &a, &optimize, &json, &table_path);
+    int rc = cseg_parse(argc, argv, &a, &optimize, &json, &table_path);
     if (rc != EF_OK)
-        return rc;
+        return rc == CLI_HELP ? EF_OK : rc;
     int g2 = a.kind == EF_REF_G2_QUINTIC;
     /* One validation for both paths: the firmware's, on the data a drive would get. */
     ef_endpoint_t f0 = ef_ref_end_to_fw(&a.e0), f1 = ef_ref_end_to_fw(&a.e1);
     ef_norm_t nm;
     rc = ef_normalize(&f0, &f1, g2, &nm);
     if (rc != EF_OK)
-        return ef_cli_error(rc, "segment: %s", ef_err_str(rc));
+        return cli_error(rc, "segment: %s", ef_err_str(rc));
 
     ef_dvec3_t b[EF_REF_MAX_DEGREE + 1];
     if (optimize) {
@@ -335,42 +316,42 @@ int ef_cmd_segment(int argc, char **argv)
         ef_msg_t m = {{0}};
         rc = ef_ref_optimize((ef_ref_kind_t)a.kind, &a.e0, &a.e1, NULL, &r, &m);
         if (rc != EF_OK)
-            return ef_cli_error(rc, "segment: %s", m.text);
+            return cli_error(rc, "segment: %s", m.text);
         ef_ref_ctrl((ef_ref_kind_t)a.kind, &a.e0, &a.e1, r.dof, b);
         int degree = ef_ref_degree((ef_ref_kind_t)a.kind);
-        ef_segment_print(&a, "optimize", r.dof, r.ndof, b, degree, ef_ref_functional(b, degree), 0,
-                         &nm, json);
-        return 0;
+        cseg_print(&a, "optimize", r.dof, r.ndof, b, degree, ef_ref_functional(b, degree), 0, &nm,
+                   json);
+        return EF_OK;
     }
     int tkind = g2 ? EF_TABLE_G2_QUINTIC : EF_TABLE_G1_CUBIC;
     ef_tfile_t tf;
     memset(&tf, 0, sizeof tf);
-    const ef_table_t *tbl = ef_cli_default_table(tkind);
+    const ef_table_t *tbl = cli_default_table(tkind);
     if (table_path) {
         ef_msg_t m = {{0}};
         rc = ef_tfile_load(table_path, &tf, &m);
         if (rc != EF_OK)
-            return ef_cli_error(rc, "%s", m.text);
+            return cli_error(rc, "%s", m.text);
         tbl = &tf.view;
     }
     if (!tbl)
-        return ef_cli_error(
+        return cli_error(
             EF_ERR_ARG,
             "segment: this build has no built-in table; use --table FILE or --optimize");
     ef_seg_t seg;
     rc = g2 ? ef_seg_g2_quintic(tbl, &f0, &f1, &seg) : ef_seg_g1_cubic(tbl, &f0, &f1, &seg);
     if (rc != EF_OK) {
         ef_tfile_free(&tf);
-        return ef_cli_error(rc, "segment: %s%s", ef_err_str(rc),
-                            rc == EF_ERR_KIND ? " (table kind does not match --g1/--g2)" : "");
+        return cli_error(rc, "segment: %s%s", ef_err_str(rc),
+                         rc == EF_ERR_KIND ? " (table kind does not match --g1/--g2)" : "");
     }
     double dof[4];
     for (int k = 0; k < seg.ndof; k++)
         dof[k] = seg.dof[k];
     for (int i = 0; i <= seg.degree; i++)
         b[i] = (ef_dvec3_t){seg.b[i].x, seg.b[i].y, seg.b[i].z};
-    ef_segment_print(&a, table_path ? "table file" : "built-in table", dof, seg.ndof, b, seg.degree,
-                     ef_ref_functional(b, seg.degree), seg.clamp, &seg.norm, json);
+    cseg_print(&a, table_path ? "table file" : "built-in table", dof, seg.ndof, b, seg.degree,
+               ef_ref_functional(b, seg.degree), seg.clamp, &seg.norm, json);
     ef_tfile_free(&tf);
-    return 0;
+    return EF_OK;
 }

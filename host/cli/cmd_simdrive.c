@@ -1,7 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* evenfeed sim-drive: a simulated drive for tests and demos (docs/modbus.md). */
 #include <signal.h>
-#include <stdlib.h>
 #include <string.h>
 #include "cli.h"
 #include "evenfeed/host/can/ef_canhost.h"
@@ -45,248 +44,301 @@ static const char usage[] =
     "  --bus-off-at MS      send a bus-off error frame\n"
     "  --drop-rx K[,K..]    drop the K-th (1-based) segment chunk frame received\n";
 
-static volatile sig_atomic_t sd_stop;
+static volatile sig_atomic_t csd_stop;
 
 /* SIGTERM/SIGINT end the server loop. */
-static void sd_on_signal(int sig)
+static void csd_on_signal(int sig)
 {
     (void)sig;
-    sd_stop = 1;
+    csd_stop = 1;
 }
 
-/* Parse a nonnegative whole number. */
-static int sd_long(const char *opt, const char *v, long hi, long *out)
+/* Stop on SIGTERM and SIGINT (csd_stop). */
+static void csd_signals(void)
 {
-    char *end;
-    if (!v)
-        return ef_cli_error(EF_ERR_ARG, "sim-drive: %s needs a value", opt);
-    long x = strtol(v, &end, 10);
-    if (end == v || *end || x < 0 || x > hi)
-        return ef_cli_error(EF_ERR_ARG, "sim-drive: %s '%s': a whole number 0..%ld", opt, v, hi);
-    *out = x;
-    return 0;
-}
-
-/* Parse a milliseconds option of sim-drive can (0 .. 2^31 - 1). */
-static int sd_ms(const char *opt, const char *v, long *out)
-{
-    return sd_long(opt, v, 0x7fffffffL, out);
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = csd_on_signal;
+    sigaction(SIGTERM, &sa, NULL);
+    sigaction(SIGINT, &sa, NULL);
 }
 
 /* Parse --drop-rx K[,K..]: 1-based chunk counts. */
-static int sd_drops(const char *v, ef_can_sim_cfg_t *c)
+static int csd_drops(const char *v, ef_can_sim_cfg_t *c)
 {
-    if (!v || !*v)
-        return ef_cli_error(EF_ERR_ARG, "sim-drive: --drop-rx needs K[,K..]");
-    const char *p = v;
-    c->n_drop = 0;
-    for (;;) {
-        char *end;
-        long x = strtol(p, &end, 10);
-        if (end == p || (*end && *end != ',') || x < 1 || x > 0x7fffffffL)
-            return ef_cli_error(
-                EF_ERR_ARG, "sim-drive: --drop-rx '%s': whole numbers >= 1, comma separated", v);
-        if (c->n_drop >= EF_CAN_SIM_MAX_DROPS)
-            return ef_cli_error(EF_ERR_ARG, "sim-drive: --drop-rx: at most %d entries",
-                                EF_CAN_SIM_MAX_DROPS);
-        c->drop_rx[c->n_drop++] = (uint32_t)x;
-        if (!*end)
-            return 0;
-        p = end + 1;
+    char buf[512], *item[EF_CAN_SIM_MAX_DROPS];
+    int n = *v ? cli_split(v, ',', buf, sizeof buf, item, EF_CAN_SIM_MAX_DROPS) : 0;
+    if (n == 0)
+        return cli_error(EF_ERR_ARG, "sim-drive: --drop-rx needs K[,K..]");
+    if (n > EF_CAN_SIM_MAX_DROPS)
+        return cli_error(EF_ERR_ARG, "sim-drive: --drop-rx: at most %d entries",
+                         EF_CAN_SIM_MAX_DROPS);
+    for (int k = 0; k < n; k++) {
+        long long x;
+        if (cli_parse_int(item[k], 1, 0x7fffffffL, &x) != EF_OK)
+            return cli_error(EF_ERR_ARG,
+                             "sim-drive: --drop-rx '%s': whole numbers >= 1, comma separated", v);
+        c->drop_rx[k] = (uint32_t)x;
     }
+    c->n_drop = (uint32_t)n;
+    return EF_OK;
 }
 
+/* Keys of the long options (both buses). */
+enum {
+    O_IFACE = CLI_LONG,
+    O_NODE,
+    O_HOME,
+    O_TRACE,
+    O_LOG,
+    O_RUN_MS,
+    O_FAULT_AT,
+    O_HB_STOP_AT,
+    O_BUS_OFF_AT,
+    O_DROP_RX,
+    O_TCP,
+    O_RTU,
+    O_SLAVE,
+    O_TIME_SCALE,
+    O_FERR_LIMIT,
+    O_WIRE_BAUD,
+    O_EXCEPTION_AT,
+    O_DROP_REPLY_AT,
+    O_DISCONNECT_AT
+};
+
 /* `evenfeed sim-drive can`: one simulated CANopen drive. */
-static int sd_can(int argc, char **argv)
+static int csd_can(int argc, char **argv)
 {
+    static const struct option opts[] = {{"iface", required_argument, NULL, O_IFACE},
+                                         {"node", required_argument, NULL, O_NODE},
+                                         {"home", required_argument, NULL, O_HOME},
+                                         {"trace", required_argument, NULL, O_TRACE},
+                                         {"log", required_argument, NULL, O_LOG},
+                                         {"run-ms", required_argument, NULL, O_RUN_MS},
+                                         {"fault-at", required_argument, NULL, O_FAULT_AT},
+                                         {"hb-stop-at", required_argument, NULL, O_HB_STOP_AT},
+                                         {"bus-off-at", required_argument, NULL, O_BUS_OFF_AT},
+                                         {"drop-rx", required_argument, NULL, O_DROP_RX},
+                                         CLI_OPT_HELP,
+                                         CLI_OPT_END};
     ef_can_sim_cfg_t c;
     ef_can_sim_cfg_default(&c);
     ef_msg_t m = {{0}};
-    int have_node = 0;
-    for (int k = 2; k < argc; k++) {
-        const char *a = argv[k], *v = k + 1 < argc ? argv[k + 1] : NULL;
-        long x = 0;
+    int have_node = 0, k;
+    cli_getopt_t g;
+    cli_getopt_init(&g, "sim-drive", usage, argc, argv, "", opts);
+    while ((k = cli_getopt(&g)) > CLI_END) {
+        long long x = 0;
         double d;
-        int rc;
-        if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
-            fputs(usage, stdout);
-            return 0;
-        } else if (!strcmp(a, "--iface")) {
-            if (!v || !*v || *v == '-' || strlen(v) >= 16)
-                return ef_cli_error(EF_ERR_ARG, "sim-drive: --iface needs an interface name "
-                                                "(at most 15 characters)");
-            c.iface = v;
-            k++;
-        } else if (!strcmp(a, "--node")) {
-            char *end;
-            x = v ? strtol(v, &end, 10) : 0;
-            if (!v || end == v || *end || x < 1 || x > 127)
-                return ef_cli_error(EF_ERR_ARG, "sim-drive: --node '%s': a node id 1..127",
-                                    v ? v : "");
-            c.node = (uint8_t)x;
-            have_node = 1;
-            k++;
-        } else if (!strcmp(a, "--home")) {
-            if (!v || ef_cli_double(a, v, &d) || !(d >= -1e6 && d <= 1e6))
-                return ef_cli_error(EF_ERR_ARG, "sim-drive: --home X: a position within +-1e6");
+        int rc = EF_OK;
+        switch (k) {
+        case CLI_HELP:
+            return EF_OK;
+        case O_IFACE:
+            if (!*g.val || *g.val == '-' || strlen(g.val) >= 16)
+                return cli_error(EF_ERR_ARG, "sim-drive: --iface needs an interface name "
+                                             "(at most 15 characters)");
+            c.iface = g.val;
+            break;
+        case O_NODE:
+            if ((rc = cli_opt_int(&g, 1, 127, &x)) == EF_OK) {
+                c.node = (uint8_t)x;
+                have_node = 1;
+            }
+            break;
+        case O_HOME:
+            if (cli_parse_double(g.val, &d) != EF_OK || !(d >= -1e6 && d <= 1e6))
+                return cli_error(EF_ERR_ARG, "sim-drive: --home X: a position within +-1e6");
             c.home = (float)d;
-            k++;
-        } else if (!strcmp(a, "--trace") || !strcmp(a, "--log")) {
-            if (!v)
-                return ef_cli_error(EF_ERR_ARG, "sim-drive: %s needs a file name", a);
-            if (a[2] == 't')
-                c.trace = v;
-            else
-                c.log = v;
-            k++;
-        } else if (!strcmp(a, "--run-ms")) {
-            if ((rc = sd_ms(a, v, &x)))
-                return rc;
-            c.run_ms = x;
-            k++;
-        } else if (!strcmp(a, "--fault-at") || !strcmp(a, "--hb-stop-at") ||
-                   !strcmp(a, "--bus-off-at")) {
-            if ((rc = sd_ms(a, v, &x)))
-                return rc;
-            if (a[2] == 'f')
-                c.fault_at_ms = x;
-            else if (a[2] == 'h')
-                c.hb_stop_at_ms = x;
-            else
-                c.bus_off_at_ms = x;
-            k++;
-        } else if (!strcmp(a, "--drop-rx")) {
-            if ((rc = sd_drops(v, &c)))
-                return rc;
-            k++;
-        } else {
-            return ef_cli_error(EF_ERR_ARG, "sim-drive: unknown option '%s'", a);
+            break;
+        case O_TRACE:
+            c.trace = g.val;
+            break;
+        case O_LOG:
+            c.log = g.val;
+            break;
+        case O_RUN_MS:
+            if ((rc = cli_opt_int(&g, 0, 0x7fffffffL, &x)) == EF_OK)
+                c.run_ms = (long)x;
+            break;
+        case O_FAULT_AT:
+            if ((rc = cli_opt_int(&g, 0, 0x7fffffffL, &x)) == EF_OK)
+                c.fault_at_ms = (long)x;
+            break;
+        case O_HB_STOP_AT:
+            if ((rc = cli_opt_int(&g, 0, 0x7fffffffL, &x)) == EF_OK)
+                c.hb_stop_at_ms = (long)x;
+            break;
+        case O_BUS_OFF_AT:
+            if ((rc = cli_opt_int(&g, 0, 0x7fffffffL, &x)) == EF_OK)
+                c.bus_off_at_ms = (long)x;
+            break;
+        case O_DROP_RX:
+            rc = csd_drops(g.val, &c);
+            break;
+        default: /* CLI_ARG */
+            return cli_error(EF_ERR_ARG, "sim-drive: unknown option '%s'", g.val);
         }
+        if (rc != EF_OK)
+            return rc;
     }
+    if (k < 0)
+        return k;
     if (!c.iface || !have_node)
-        return ef_cli_error(EF_ERR_ARG, "sim-drive: can needs --iface IFACE and --node N");
-    struct sigaction sa;
-    memset(&sa, 0, sizeof sa);
-    sa.sa_handler = sd_on_signal;
-    sigaction(SIGTERM, &sa, NULL);
-    sigaction(SIGINT, &sa, NULL);
-    c.stop = &sd_stop;
+        return cli_error(EF_ERR_ARG, "sim-drive: can needs --iface IFACE and --node N");
+    csd_signals();
+    c.stop = &csd_stop;
     int rc = ef_can_sim_run(&c, &m);
     if (rc != EF_OK)
-        return ef_cli_error(rc, "%s", m.text);
-    return 0;
+        return cli_error(rc, "%s", m.text);
+    return EF_OK;
 }
 
-/* Entry point of `evenfeed sim-drive`. */
-int ef_cmd_sim_drive(int argc, char **argv)
+/* Parse --home X,Y,Z. */
+static int csd_home3(const char *v, float home[3])
 {
-    if (argc >= 2 && (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h"))) {
-        fputs(usage, stdout);
-        return 0;
-    }
-    if (argc >= 2 && !strcmp(argv[1], "can"))
-        return sd_can(argc, argv);
-    if (argc < 2 || strcmp(argv[1], "modbus") != 0) {
-        fputs(usage, stderr);
-        return ef_cli_error(EF_ERR_ARG, "sim-drive: bus '%s' is not supported (modbus, can)",
-                            argc >= 2 ? argv[1] : "");
-    }
+    char buf[256], *item[3];
+    double h[3];
+    if (cli_split(v, ',', buf, sizeof buf, item, 3) != 3 ||
+        cli_parse_double(item[0], &h[0]) != EF_OK || cli_parse_double(item[1], &h[1]) != EF_OK ||
+        cli_parse_double(item[2], &h[2]) != EF_OK)
+        return cli_error(EF_ERR_ARG, "sim-drive: --home X,Y,Z");
+    for (int i = 0; i < 3; i++)
+        home[i] = (float)h[i];
+    return EF_OK;
+}
+
+/* Parse --exception-at SEQ[:CODE]. */
+static int csd_exception(const char *v, ef_mb_server_cfg_t *c)
+{
+    char buf[64], *item[2];
+    long long seq, code = EF_MB_EX_DEVICE_FAILURE;
+    int n = cli_split(v, ':', buf, sizeof buf, item, 2);
+    if (n < 1 || n > 2 || cli_parse_int(item[0], 0, 0x7fffffffL, &seq) != EF_OK ||
+        (n == 2 && cli_parse_int(item[1], 1, 11, &code) != EF_OK))
+        return cli_error(EF_ERR_ARG, "sim-drive: --exception-at SEQ[:CODE 1..11]");
+    c->exception_seq = (long)seq;
+    c->exception_code = (int)code;
+    return EF_OK;
+}
+
+/* `evenfeed sim-drive modbus`: one simulated Modbus drive. */
+static int csd_modbus(int argc, char **argv)
+{
+    static const struct option opts[] = {
+        {"tcp", required_argument, NULL, O_TCP},
+        {"rtu", required_argument, NULL, O_RTU},
+        {"slave", required_argument, NULL, O_SLAVE},
+        {"trace", required_argument, NULL, O_TRACE},
+        {"time-scale", required_argument, NULL, O_TIME_SCALE},
+        {"ferr-limit", required_argument, NULL, O_FERR_LIMIT},
+        {"home", required_argument, NULL, O_HOME},
+        {"wire-baud", required_argument, NULL, O_WIRE_BAUD},
+        {"exception-at", required_argument, NULL, O_EXCEPTION_AT},
+        {"drop-reply-at", required_argument, NULL, O_DROP_REPLY_AT},
+        {"disconnect-at", required_argument, NULL, O_DISCONNECT_AT},
+        {"fault-at", required_argument, NULL, O_FAULT_AT},
+        CLI_OPT_HELP,
+        CLI_OPT_END};
     ef_mb_server_cfg_t c;
     ef_mb_server_cfg_default(&c);
     ef_msg_t m = {{0}};
-    int have_addr = 0;
-    for (int k = 2; k < argc; k++) {
-        const char *a = argv[k], *v = k + 1 < argc ? argv[k + 1] : NULL;
-        long x = 0;
+    int have_addr = 0, k;
+    cli_getopt_t g;
+    cli_getopt_init(&g, "sim-drive", usage, argc, argv, "", opts);
+    while ((k = cli_getopt(&g)) > CLI_END) {
+        long long x = 0;
         double d;
-        int rc;
-        if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
-            fputs(usage, stdout);
-            return 0;
-        } else if (!strcmp(a, "--tcp") || !strcmp(a, "--rtu")) {
+        int rc = EF_OK;
+        switch (k) {
+        case CLI_HELP:
+            return EF_OK;
+        case O_TCP:
+        case O_RTU: {
             char url[300];
-            if (!v)
-                return ef_cli_error(EF_ERR_ARG, "sim-drive: %s needs an address", a);
-            snprintf(url, sizeof url, "%s%s", a[2] == 't' ? "tcp://" : "rtu:", v);
+            snprintf(url, sizeof url, "%s%s", k == O_TCP ? "tcp://" : "rtu:", g.val);
             if (ef_mb_url_parse(url, &c.mb, &m) != EF_OK)
-                return ef_cli_error(EF_ERR_ARG, "sim-drive: %s", m.text);
+                return cli_error(EF_ERR_ARG, "sim-drive: %s", m.text);
             have_addr = 1;
-            k++;
-        } else if (!strcmp(a, "--slave")) {
-            if ((rc = sd_long(a, v, 247, &x)))
-                return rc;
-            if (x < 1)
-                return ef_cli_error(EF_ERR_ARG, "sim-drive: --slave 1..247");
-            c.mb.slave = (int)x;
-            k++;
-        } else if (!strcmp(a, "--trace")) {
-            if (!v)
-                return ef_cli_error(EF_ERR_ARG, "sim-drive: --trace needs a file name");
-            c.trace = v;
-            k++;
-        } else if (!strcmp(a, "--time-scale")) {
-            if (!v || ef_cli_double(a, v, &d) || !(d >= 0.01 && d <= 1000.0))
-                return ef_cli_error(EF_ERR_ARG, "sim-drive: --time-scale 0.01..1000");
-            c.time_scale = d;
-            k++;
-        } else if (!strcmp(a, "--ferr-limit")) {
-            if (!v || ef_cli_double(a, v, &d) || !(d > 0.0))
-                return ef_cli_error(EF_ERR_ARG, "sim-drive: --ferr-limit must be > 0");
-            c.servo.ferr_lim = (float)d;
-            k++;
-        } else if (!strcmp(a, "--home")) {
-            double h[3];
-            if (!v || sscanf(v, "%lf,%lf,%lf", &h[0], &h[1], &h[2]) != 3)
-                return ef_cli_error(EF_ERR_ARG, "sim-drive: --home X,Y,Z");
-            for (int i = 0; i < 3; i++)
-                c.home[i] = (float)h[i];
-            k++;
-        } else if (!strcmp(a, "--wire-baud")) {
-            if ((rc = sd_long(a, v, 4000000, &x)))
-                return rc;
-            c.wire_baud = (int)x;
-            k++;
-        } else if (!strcmp(a, "--exception-at")) {
-            long code = EF_MB_EX_DEVICE_FAILURE;
-            char *end;
-            x = v ? strtol(v, &end, 10) : -1;
-            if (!v || end == v || x < 0 ||
-                (*end &&
-                 (*end != ':' || (code = strtol(end + 1, &end, 10)) < 1 || code > 11 || *end)))
-                return ef_cli_error(EF_ERR_ARG, "sim-drive: --exception-at SEQ[:CODE 1..11]");
-            c.exception_seq = x;
-            c.exception_code = (int)code;
-            k++;
-        } else if (!strcmp(a, "--drop-reply-at")) {
-            if ((rc = sd_long(a, v, 0x7fffffffL, &x)))
-                return rc;
-            c.drop_reply_seq = x;
-            k++;
-        } else if (!strcmp(a, "--disconnect-at")) {
-            if ((rc = sd_long(a, v, 0x7fffffffL, &x)))
-                return rc;
-            c.disconnect_seq = x;
-            k++;
-        } else if (!strcmp(a, "--fault-at")) {
-            if (!v || ef_cli_double(a, v, &d) || !(d >= 0.0))
-                return ef_cli_error(EF_ERR_ARG, "sim-drive: --fault-at needs seconds >= 0");
-            c.fault_at_s = d;
-            k++;
-        } else {
-            return ef_cli_error(EF_ERR_ARG, "sim-drive: unknown option '%s'", a);
+            break;
         }
+        case O_SLAVE:
+            if ((rc = cli_opt_int(&g, 1, 247, &x)) == EF_OK)
+                c.mb.slave = (int)x;
+            break;
+        case O_TRACE:
+            c.trace = g.val;
+            break;
+        case O_TIME_SCALE:
+            if (cli_parse_double(g.val, &d) != EF_OK || !(d >= 0.01 && d <= 1000.0))
+                return cli_error(EF_ERR_ARG, "sim-drive: --time-scale 0.01..1000");
+            c.time_scale = d;
+            break;
+        case O_FERR_LIMIT:
+            if (cli_parse_double(g.val, &d) != EF_OK || !(d > 0.0))
+                return cli_error(EF_ERR_ARG, "sim-drive: --ferr-limit must be > 0");
+            c.servo.ferr_lim = (float)d;
+            break;
+        case O_HOME:
+            rc = csd_home3(g.val, c.home);
+            break;
+        case O_WIRE_BAUD:
+            if ((rc = cli_opt_int(&g, 0, 4000000, &x)) == EF_OK)
+                c.wire_baud = (int)x;
+            break;
+        case O_EXCEPTION_AT:
+            rc = csd_exception(g.val, &c);
+            break;
+        case O_DROP_REPLY_AT:
+            if ((rc = cli_opt_int(&g, 0, 0x7fffffffL, &x)) == EF_OK)
+                c.drop_reply_seq = (long)x;
+            break;
+        case O_DISCONNECT_AT:
+            if ((rc = cli_opt_int(&g, 0, 0x7fffffffL, &x)) == EF_OK)
+                c.disconnect_seq = (long)x;
+            break;
+        case O_FAULT_AT:
+            if (cli_parse_double(g.val, &d) != EF_OK || !(d >= 0.0))
+                return cli_error(EF_ERR_ARG, "sim-drive: --fault-at needs seconds >= 0");
+            c.fault_at_s = d;
+            break;
+        default: /* CLI_ARG */
+            return cli_error(EF_ERR_ARG, "sim-drive: unknown option '%s'", g.val);
+        }
+        if (rc != EF_OK)
+            return rc;
     }
+    if (k < 0)
+        return k;
     if (!have_addr)
-        return ef_cli_error(EF_ERR_ARG, "sim-drive: give --tcp HOST:PORT or --rtu DEVICE");
-    struct sigaction sa;
-    memset(&sa, 0, sizeof sa);
-    sa.sa_handler = sd_on_signal;
-    sigaction(SIGTERM, &sa, NULL);
-    sigaction(SIGINT, &sa, NULL);
+        return cli_error(EF_ERR_ARG, "sim-drive: give --tcp HOST:PORT or --rtu DEVICE");
+    csd_signals();
     signal(SIGPIPE, SIG_IGN); /* a client that vanishes must not kill the drive */
-    c.stop = &sd_stop;
+    c.stop = &csd_stop;
     int rc = ef_mb_serve(&c, &m);
     if (rc != EF_OK)
-        return ef_cli_error(rc, "sim-drive: %s", m.text);
-    return 0;
+        return cli_error(rc, "sim-drive: %s", m.text);
+    return EF_OK;
+}
+
+static const cli_cmd_t csd_buses[] = {
+    {"modbus", csd_modbus, "a Modbus drive (3 axes) on TCP or RTU"},
+    {"can", csd_can, "a CANopen CiA 402 drive (one axis) on a SocketCAN interface"},
+    {NULL, NULL, NULL}};
+
+/* Entry point of `evenfeed sim-drive`. */
+int cli_cmd_sim_drive(int argc, char **argv)
+{
+    if (argc >= 2 && (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h"))) {
+        fputs(usage, stdout);
+        return EF_OK;
+    }
+    const cli_cmd_t *bus = argc >= 2 ? cli_cmd_find(csd_buses, argv[1]) : NULL;
+    if (!bus) {
+        fputs(usage, stderr);
+        return cli_error(EF_ERR_ARG, "sim-drive: bus '%s' is not supported (modbus, can)",
+                         argc >= 2 ? argv[1] : "");
+    }
+    return bus->fn(argc - 1, argv + 1);
 }

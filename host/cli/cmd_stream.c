@@ -1,8 +1,7 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* evenfeed stream: smooth a part program and stream it to a drive (docs/modbus.md). */
-#include <math.h>
+#include <limits.h>
 #include <net/if.h>
-#include <stdlib.h>
 #include <string.h>
 #include "cli.h"
 #include "evenfeed/host/can/ef_canhost.h"
@@ -44,59 +43,41 @@ static const char usage[] =
     "Exit status 0 when every segment executed; otherwise the negated error code, with\n"
     "the drives told to stop under control.\n";
 
-/* Parse an integer option within [lo, hi]. */
-static int st_int(const char *opt, const char *v, long lo, long hi, long *out)
-{
-    char *end;
-    if (!v)
-        return ef_cli_error(EF_ERR_ARG, "stream: %s needs a value", opt);
-    long x = strtol(v, &end, 10);
-    if (end == v || *end || x < lo || x > hi)
-        return ef_cli_error(EF_ERR_ARG, "stream: %s '%s': a whole number %ld..%ld", opt, v, lo, hi);
-    *out = x;
-    return 0;
-}
-
 /* Parse --nodes A[,B[,C]]: ids 1..127, no repeats, 1..3 of them. */
-static int st_nodes(const char *v, ef_can_stream_cfg_t *cc)
+static int cstrm_nodes(const char *v, ef_can_stream_cfg_t *cc)
 {
-    if (!v || !*v)
-        return ef_cli_error(EF_ERR_ARG, "stream: --nodes needs a list, e.g. 1,2,3");
+    if (!*v)
+        return cli_error(EF_ERR_ARG, "stream: --nodes needs a list, e.g. 1,2,3");
+    char buf[128], *item[EF_CAN_STREAM_MAX_NODES];
     uint8_t ids[EF_CAN_STREAM_MAX_NODES];
-    int n = 0;
-    const char *p = v;
-    for (;;) {
-        char *end;
-        long x = strtol(p, &end, 10);
-        if (end == p || (*end && *end != ','))
-            return ef_cli_error(EF_ERR_ARG, "stream: --nodes '%s': node ids separated by commas",
-                                v);
+    int n = cli_split(v, ',', buf, sizeof buf, item, EF_CAN_STREAM_MAX_NODES);
+    if (n > EF_CAN_STREAM_MAX_NODES)
+        return cli_error(EF_ERR_ARG, "stream: --nodes '%s': at most %d nodes (x, y, z)", v,
+                         EF_CAN_STREAM_MAX_NODES);
+    for (int k = 0; k < n; k++) {
+        long long x;
+        if (cli_parse_int(item[k], LLONG_MIN, LLONG_MAX, &x) != EF_OK)
+            return cli_error(EF_ERR_ARG, "stream: --nodes '%s': node ids separated by commas", v);
         if (x < 1 || x > 127)
-            return ef_cli_error(EF_ERR_ARG, "stream: --nodes '%s': node id %ld not 1..127", v, x);
-        if (n >= EF_CAN_STREAM_MAX_NODES)
-            return ef_cli_error(EF_ERR_ARG, "stream: --nodes '%s': at most %d nodes (x, y, z)", v,
-                                EF_CAN_STREAM_MAX_NODES);
-        for (int j = 0; j < n; j++)
+            return cli_error(EF_ERR_ARG, "stream: --nodes '%s': node id %lld not 1..127", v, x);
+        for (int j = 0; j < k; j++)
             if (ids[j] == x)
-                return ef_cli_error(EF_ERR_ARG, "stream: --nodes '%s': node %ld given twice", v, x);
-        ids[n++] = (uint8_t)x;
-        if (!*end)
-            break;
-        p = end + 1;
+                return cli_error(EF_ERR_ARG, "stream: --nodes '%s': node %lld given twice", v, x);
+        ids[k] = (uint8_t)x;
     }
     memcpy(cc->nodes, ids, sizeof ids);
     cc->n_nodes = (uint8_t)n;
-    return 0;
+    return EF_OK;
 }
 
-/* Stream over CAN with the parsed options; print the summary; the exit status. */
-static int st_run_can(const ef_can_stream_cfg_t *cc, const char *path)
+/* Stream over CAN with the parsed options; print the summary. */
+static int cstrm_run_can(const ef_can_stream_cfg_t *cc, const char *path)
 {
     static ef_gcode_t r; /* about 50 kB: not on the stack */
     ef_msg_t m = {{0}};
     int rc = ef_gcode_open(&r, path, &m);
     if (rc != EF_OK)
-        return ef_cli_error(rc, "%s", m.text);
+        return cli_error(rc, "%s", m.text);
     ef_can_stream_result_t res;
     rc = ef_can_stream(&r, cc, &res, &m);
     ef_gcode_free(&r);
@@ -128,153 +109,177 @@ static int st_run_can(const ef_can_stream_cfg_t *cc, const char *path)
     printf("; master state %d\n", res.state);
     fflush(stdout);
     if (rc != EF_OK)
-        return ef_cli_error(rc, "%s", m.text);
-    return 0;
+        return cli_error(rc, "%s", m.text);
+    return EF_OK;
 }
 
+/* Keys of the long options. */
+enum {
+    O_MODBUS = CLI_LONG,
+    O_CAN,
+    O_NODES,
+    O_CYCLE,
+    O_HB,
+    O_LOG,
+    O_TRACE,
+    O_SLAVE,
+    O_MODE,
+    O_DIRECT_HZ,
+    O_TIMEOUT,
+    O_RETRIES,
+    O_WATCHDOG,
+    O_FAULT_RESET
+};
+
 /* Entry point of `evenfeed stream`. */
-int ef_cmd_stream(int argc, char **argv)
+int cli_cmd_stream(int argc, char **argv)
 {
+    static const struct option opts[] = {{"modbus", required_argument, NULL, O_MODBUS},
+                                         {"can", required_argument, NULL, O_CAN},
+                                         {"nodes", required_argument, NULL, O_NODES},
+                                         {"cycle-us", required_argument, NULL, O_CYCLE},
+                                         {"hb-timeout", required_argument, NULL, O_HB},
+                                         {"log", required_argument, NULL, O_LOG},
+                                         {"trace", required_argument, NULL, O_TRACE},
+                                         {"slave", required_argument, NULL, O_SLAVE},
+                                         {"mode", required_argument, NULL, O_MODE},
+                                         {"direct-hz", required_argument, NULL, O_DIRECT_HZ},
+                                         {"timeout", required_argument, NULL, O_TIMEOUT},
+                                         {"retries", required_argument, NULL, O_RETRIES},
+                                         {"watchdog", required_argument, NULL, O_WATCHDOG},
+                                         {"fault-reset", no_argument, NULL, O_FAULT_RESET},
+                                         CLI_PIPE_OPTIONS,
+                                         CLI_OPT_HELP,
+                                         CLI_OPT_END};
     ef_mb_stream_cfg_t c;
-    ef_mb_stream_cfg_default(&c, ef_cli_default_table(EF_TABLE_G2_QUINTIC),
-                             ef_cli_default_table(EF_TABLE_G1_CUBIC));
+    ef_mb_stream_cfg_default(&c, cli_default_table(EF_TABLE_G2_QUINTIC),
+                             cli_default_table(EF_TABLE_G1_CUBIC));
     ef_can_stream_cfg_t cc;
     ef_can_stream_cfg_default(&cc, c.pipe.g2, c.pipe.g1);
     const char *path = NULL, *addr = NULL, *iface = NULL, *mode = NULL;
-    const char *mb_only = NULL, *can_only = NULL; /* an option of one transport, given */
+    char mb_only[48] = "", can_only[48] = ""; /* an option of one transport, given */
     ef_msg_t m = {{0}};
-    for (int k = 1; k < argc; k++) {
-        const char *a = argv[k], *v = k + 1 < argc ? argv[k + 1] : NULL;
-        long x = 0;
-        int rc, used;
-        if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
-            fputs(usage, stdout);
-            return 0;
-        } else if (!strcmp(a, "--modbus")) {
-            if (!v)
-                return ef_cli_error(EF_ERR_ARG, "stream: --modbus needs an address");
-            if (ef_mb_url_parse(v, &c.mb, &m) != EF_OK)
-                return ef_cli_error(EF_ERR_ARG, "stream: --modbus: %s", m.text);
-            addr = v;
-            k++;
-        } else if (!strcmp(a, "--can")) {
-            if (!v || !*v || *v == '-')
-                return ef_cli_error(EF_ERR_ARG, "stream: --can needs an interface, e.g. vcan0");
-            if (strlen(v) >= 16) /* IFNAMSIZ */
-                return ef_cli_error(EF_ERR_ARG, "stream: --can '%s': interface name too long", v);
-            iface = v;
-            k++;
-        } else if (!strcmp(a, "--nodes")) {
-            if ((rc = st_nodes(v, &cc)))
-                return rc;
-            can_only = a;
-            k++;
-        } else if (!strcmp(a, "--cycle-us")) {
-            if ((rc = st_int(a, v, 100, 1000000, &x)))
-                return rc;
-            cc.cycle_us = (uint32_t)x;
-            can_only = a;
-            k++;
-        } else if (!strcmp(a, "--hb-timeout")) {
-            if ((rc = st_int(a, v, 100, 60000, &x)))
-                return rc;
-            cc.hb_timeout_ms = (uint32_t)x;
-            can_only = a;
-            k++;
-        } else if (!strcmp(a, "--log") || !strcmp(a, "--trace")) {
-            if (!v)
-                return ef_cli_error(EF_ERR_ARG, "stream: %s needs a file name", a);
-            if (a[2] == 'l')
-                cc.log = v;
-            else
-                cc.trace = v;
-            can_only = a;
-            k++;
-        } else if (!strcmp(a, "--slave")) {
-            if ((rc = st_int(a, v, 1, 247, &x)))
-                return rc;
-            c.mb.slave = (int)x;
-            mb_only = a;
-            k++;
-        } else if (!strcmp(a, "--mode")) {
-            if (!v || (strcmp(v, "segment") && strcmp(v, "direct") && strcmp(v, "csp")))
-                return ef_cli_error(EF_ERR_ARG,
-                                    "stream: --mode segment|direct (Modbus), segment|csp (CAN)");
-            mode = v;
-            k++;
-        } else if (!strcmp(a, "--direct-hz")) {
-            if ((rc = st_int(a, v, 1, 10000, &x)))
-                return rc;
-            c.direct_hz = (double)x;
-            mb_only = a;
-            k++;
-        } else if (!strcmp(a, "--timeout")) {
-            if ((rc = st_int(a, v, 1, 60000, &x)))
-                return rc;
-            c.mb.timeout_s = x * 1e-3;
-            mb_only = a;
-            k++;
-        } else if (!strcmp(a, "--retries")) {
-            if ((rc = st_int(a, v, 0, 100, &x)))
-                return rc;
-            c.mb.retries = (int)x;
-            mb_only = a;
-            k++;
-        } else if (!strcmp(a, "--watchdog")) {
-            if ((rc = st_int(a, v, 0, 65535, &x)))
-                return rc;
-            c.mb.watchdog_ms = (uint16_t)x;
-            mb_only = a;
-            k++;
-        } else if (!strcmp(a, "--fault-reset")) {
+    cli_getopt_t g;
+    cli_getopt_init(&g, "stream", usage, argc, argv, "v", opts);
+    int k;
+    while ((k = cli_getopt(&g)) > CLI_END) {
+        long long x = 0;
+        int rc = EF_OK;
+        switch (k) {
+        case CLI_HELP:
+            return EF_OK;
+        case O_MODBUS:
+            if (ef_mb_url_parse(g.val, &c.mb, &m) != EF_OK)
+                return cli_error(EF_ERR_ARG, "stream: --modbus: %s", m.text);
+            addr = g.val;
+            break;
+        case O_CAN:
+            if (!*g.val || *g.val == '-')
+                return cli_error(EF_ERR_ARG, "stream: --can needs an interface, e.g. vcan0");
+            if (strlen(g.val) >= 16) /* IFNAMSIZ */
+                return cli_error(EF_ERR_ARG, "stream: --can '%s': interface name too long", g.val);
+            iface = g.val;
+            break;
+        case O_NODES:
+            rc = cstrm_nodes(g.val, &cc);
+            break;
+        case O_CYCLE:
+            if ((rc = cli_opt_int(&g, 100, 1000000, &x)) == EF_OK)
+                cc.cycle_us = (uint32_t)x;
+            break;
+        case O_HB:
+            if ((rc = cli_opt_int(&g, 100, 60000, &x)) == EF_OK)
+                cc.hb_timeout_ms = (uint32_t)x;
+            break;
+        case O_LOG:
+            cc.log = g.val;
+            break;
+        case O_TRACE:
+            cc.trace = g.val;
+            break;
+        case O_SLAVE:
+            if ((rc = cli_opt_int(&g, 1, 247, &x)) == EF_OK)
+                c.mb.slave = (int)x;
+            break;
+        case O_MODE:
+            if (strcmp(g.val, "segment") && strcmp(g.val, "direct") && strcmp(g.val, "csp"))
+                return cli_error(EF_ERR_ARG,
+                                 "stream: --mode segment|direct (Modbus), segment|csp (CAN)");
+            mode = g.val;
+            break;
+        case O_DIRECT_HZ:
+            if ((rc = cli_opt_int(&g, 1, 10000, &x)) == EF_OK)
+                c.direct_hz = (double)x;
+            break;
+        case O_TIMEOUT:
+            if ((rc = cli_opt_int(&g, 1, 60000, &x)) == EF_OK)
+                c.mb.timeout_s = (double)x * 1e-3;
+            break;
+        case O_RETRIES:
+            if ((rc = cli_opt_int(&g, 0, 100, &x)) == EF_OK)
+                c.mb.retries = (int)x;
+            break;
+        case O_WATCHDOG:
+            if ((rc = cli_opt_int(&g, 0, 65535, &x)) == EF_OK)
+                c.mb.watchdog_ms = (uint16_t)x;
+            break;
+        case O_FAULT_RESET:
             c.fault_reset = 1;
-        } else if (!strcmp(a, "-v")) {
+            break;
+        case 'v':
             c.verbose = 1;
-        } else if ((rc = ef_cli_pipe_opt("stream", a, v, &c.pipe, &used)) >= 0) {
-            if (rc)
-                return rc;
-            k += used;
-        } else if (a[0] == '-' && a[1]) {
-            return ef_cli_error(EF_ERR_ARG, "stream: unknown option '%s'", a);
-        } else if (path) {
-            return ef_cli_error(EF_ERR_ARG, "stream: one program only ('%s')", a);
-        } else {
-            path = a;
+            break;
+        case CLI_ARG:
+            if (path)
+                return cli_error(EF_ERR_ARG, "stream: one program only ('%s')", g.val);
+            path = g.val;
+            break;
+        default:
+            rc = cli_pipe_opt(&g, k, &c.pipe);
+            break;
         }
+        if (rc != EF_OK)
+            return rc;
+        if (k == O_NODES || k == O_CYCLE || k == O_HB || k == O_LOG || k == O_TRACE)
+            snprintf(can_only, sizeof can_only, "%s", g.opt);
+        else if (k == O_SLAVE || k == O_DIRECT_HZ || k == O_TIMEOUT || k == O_RETRIES ||
+                 k == O_WATCHDOG)
+            snprintf(mb_only, sizeof mb_only, "%s", g.opt);
     }
+    if (k < 0)
+        return k;
     if (addr && iface)
-        return ef_cli_error(EF_ERR_ARG, "stream: --modbus or --can, not both");
+        return cli_error(EF_ERR_ARG, "stream: --modbus or --can, not both");
     if ((!addr && !iface) || !path) {
         fputs(usage, stderr);
-        return ef_cli_error(EF_ERR_ARG, "stream: %s",
-                            !addr && !iface ? "no --modbus address or --can interface"
-                                            : "no program");
+        return cli_error(EF_ERR_ARG, "stream: %s",
+                         !addr && !iface ? "no --modbus address or --can interface" : "no program");
     }
-    if (iface && mb_only)
-        return ef_cli_error(EF_ERR_ARG, "stream: %s is a Modbus option (not with --can)", mb_only);
-    if (addr && can_only)
-        return ef_cli_error(EF_ERR_ARG, "stream: %s is a CAN option (not with --modbus)", can_only);
+    if (iface && mb_only[0])
+        return cli_error(EF_ERR_ARG, "stream: %s is a Modbus option (not with --can)", mb_only);
+    if (addr && can_only[0])
+        return cli_error(EF_ERR_ARG, "stream: %s is a CAN option (not with --modbus)", can_only);
     if (mode && !strcmp(mode, iface ? "direct" : "csp"))
-        return ef_cli_error(EF_ERR_ARG, "stream: --mode %s is not a %s mode (%s)", mode,
-                            iface ? "CAN" : "Modbus", iface ? "segment|csp" : "segment|direct");
+        return cli_error(EF_ERR_ARG, "stream: --mode %s is not a %s mode (%s)", mode,
+                         iface ? "CAN" : "Modbus", iface ? "segment|csp" : "segment|direct");
     if (!c.pipe.g2 || (c.pipe.smooth_degree == 3 && !c.pipe.g1))
-        return ef_cli_error(EF_ERR_ARG, "stream: this binary has no built-in tables");
+        return cli_error(EF_ERR_ARG, "stream: this binary has no built-in tables");
     if (iface) {
         if (if_nametoindex(iface) == 0) /* before the program: name the interface first */
-            return ef_cli_error(EF_ERR_IO, "stream: --can %s: no such network interface", iface);
+            return cli_error(EF_ERR_IO, "stream: --can %s: no such network interface", iface);
         cc.iface = iface;
         cc.pipe = c.pipe;
         cc.mode = mode && !strcmp(mode, "csp") ? EF_COM_MODE_CSP : EF_COM_MODE_SEGMENT;
         cc.fault_reset = (uint8_t)c.fault_reset;
         cc.verbose = (uint8_t)c.verbose;
-        return st_run_can(&cc, path);
+        return cstrm_run_can(&cc, path);
     }
     if (mode)
         c.mode = !strcmp(mode, "direct") ? EF_MB_MODE_DIRECT : EF_MB_MODE_SEGMENT;
     static ef_gcode_t r; /* about 50 kB: not on the stack */
     int rc = ef_gcode_open(&r, path, &m);
     if (rc != EF_OK)
-        return ef_cli_error(rc, "%s", m.text);
+        return cli_error(rc, "%s", m.text);
     ef_mb_stream_result_t res;
     rc = ef_mb_stream(&r, &c, &res, &m);
     ef_gcode_free(&r);
@@ -299,6 +304,6 @@ int ef_cmd_stream(int argc, char **argv)
            res.last.duplicates, res.last.rejected);
     fflush(stdout);
     if (rc != EF_OK)
-        return ef_cli_error(rc, "stream: %s", m.text);
-    return 0;
+        return cli_error(rc, "stream: %s", m.text);
+    return EF_OK;
 }
