@@ -8,13 +8,13 @@
  * failed port; the caller's SDO transfers (segmented download frames, wrong toggle, retry and
  * timeout).
  *
- * Integration parts: the master and real ef_codrive drives on the in-memory bus of
- * ef_canbus_sim.h (CSP ramp and circle, segment-mode moves, go-back-N after a lost chunk,
- * EMCY mid-path, heartbeat loss, the caller's SDO transfers while streaming). */
+ * Integration parts: the master and real ef_codrive drives, each on its own pump, on the
+ * in-memory bus (ef_canrig.h: CSP ramp and circle, segment-mode moves, go-back-N after a lost
+ * chunk, EMCY mid-path, heartbeat loss, the caller's SDO transfers while streaming). */
 #include <stdint.h>
 #include <string.h>
 #include "ef_test.h"
-#include "evenfeed/host/can/ef_canbus_sim.h"
+#include "evenfeed/host/can/ef_canrig.h"
 #include "evenfeed/canopen/ef_comaster.h"
 #include "evenfeed/core/ef_err.h"
 
@@ -1014,20 +1014,20 @@ static void t_sdo_segdl_fake(void)
 
 /* ------------------------------------------------------------------ integration */
 
-static ef_sim_bus_t B;
+static ef_canrig_t B;
 static ef_comaster_t M;
 static ef_codrive_t D[3];
 
 /* Master and three real drives (nodes 1..3 homed at x 0, y 1, z 2) on the simulated bus. */
 static void sim_setup(const ef_com_cfg_t *c)
 {
-    ef_sim_init(&B);
-    EF_CHECK_EQ(ef_sim_add_master(&B, &M, c), EF_OK);
+    ef_canrig_init(&B, 0);
+    EF_CHECK_EQ(ef_canrig_add_master(&B, &M, c), EF_OK);
     for (int k = 0; k < 3; k++) {
         ef_codrive_cfg_t dc;
         ef_codrive_cfg_default(&dc, (uint8_t)(k + 1));
         dc.home = (float)k;
-        EF_CHECK_EQ(ef_sim_add_drive(&B, &D[k], &dc), EF_OK);
+        EF_CHECK_EQ(ef_canrig_add_drive(&B, &D[k], &dc), EF_OK);
     }
 }
 
@@ -1056,7 +1056,7 @@ static void t_csp(void)
 {
     ef_com_cfg_t c = sim_cfg(EF_COM_MODE_CSP);
     sim_setup(&c);
-    EF_CHECK_EQ(ef_sim_run_until(&B, EF_COM_RUN, 3000000, 100), EF_COM_RUN);
+    EF_CHECK_EQ(ef_canrig_run_until(&B, EF_COM_RUN, 3000000, 100), EF_COM_RUN);
     EF_CHECK_NEAR(ef_comaster_node(&M, 1)->pos, 1.0, 1e-4);
     EF_CHECK(ef_comaster_name(&M, 0)[0] != 0);
     const int N = 3000; /* 3 s at 1 ms */
@@ -1069,7 +1069,7 @@ static void t_csp(void)
             EF_CHECK_EQ(ef_comaster_push_target(&M, tg[pushed]), EF_OK);
             pushed++;
         }
-        ef_sim_step(&B, 100);
+        ef_canrig_step(&B, 100);
         /* Actual positions follow: near one of the recent targets (lag + queue). */
         if (pushed > 40) {
             double best = 1e9;
@@ -1088,15 +1088,15 @@ static void t_csp(void)
     EF_CHECK(worst < 0.2);
     EF_CHECK_EQ(M.starved, 0);
     EF_CHECK_EQ(ef_comaster_finish(&M), EF_OK);
-    EF_CHECK_EQ(ef_sim_run_until(&B, EF_COM_DONE, 2000000, 100), EF_COM_DONE);
+    EF_CHECK_EQ(ef_canrig_run_until(&B, EF_COM_DONE, 2000000, 100), EF_COM_DONE);
     for (int k = 0; k < 3; k++) {
         EF_CHECK_NEAR(ef_codrive_position(&D[k]), tg[N - 1][k], 2e-3);
         EF_CHECK_NEAR(ef_comaster_node(&M, k)->pos, tg[N - 1][k], 2e-3);
         EF_CHECK(D[k].power != EF_CO_PS_OP_ENABLED);
     }
     EF_CHECK_EQ(ef_comaster_error(&M)->code, 0);
-    printf("csp: %llu frames, %llu bits, worst lag %.4f\n", (unsigned long long)B.frames,
-           (unsigned long long)B.bits, worst);
+    printf("csp: %llu frames, %llu bits, worst lag %.4f\n", (unsigned long long)B.bus.frames,
+           (unsigned long long)B.bus.bits, worst);
 }
 
 /* A straight move p0 -> p1 with one constant-acceleration phase from speed v0 to v1. */
@@ -1157,7 +1157,7 @@ static int seg_stream(int n, uint32_t max_us, void (*mid)(uint32_t t_us))
             EF_CHECK_EQ(ef_comaster_finish(&M), EF_OK);
         if (mid)
             mid(t);
-        ef_sim_step(&B, 100);
+        ef_canrig_step(&B, 100);
         int s = ef_comaster_state(&M);
         if (s == EF_COM_DONE || s == EF_COM_ERROR)
             return s;
@@ -1181,7 +1181,7 @@ static void t_seg(void)
     seg_moves();
     ef_com_cfg_t c = sim_cfg(EF_COM_MODE_SEGMENT);
     sim_setup(&c);
-    EF_CHECK_EQ(ef_sim_run_until(&B, EF_COM_RUN, 3000000, 100), EF_COM_RUN);
+    EF_CHECK_EQ(ef_canrig_run_until(&B, EF_COM_RUN, 3000000, 100), EF_COM_RUN);
     EF_CHECK_EQ(seg_stream(SEG_MOVES, 30000000, NULL), EF_COM_DONE);
     EF_CHECK_EQ(ef_comaster_error(&M)->code, 0);
     seg_check_end();
@@ -1191,8 +1191,8 @@ static void t_seg(void)
         EF_CHECK_EQ(ef_comaster_node(&M, k)->resends, 0);
         EF_CHECK_EQ(ef_comaster_node(&M, k)->next_seq, SEG_MOVES);
     }
-    printf("seg: %llu frames, %llu bits, %.1f s\n", (unsigned long long)B.frames,
-           (unsigned long long)B.bits, (double)B.now_us * 1e-6);
+    printf("seg: %llu frames, %llu bits, %.1f s\n", (unsigned long long)B.bus.frames,
+           (unsigned long long)B.bus.bits, (double)B.bus.now_us * 1e-6);
 }
 
 /* Drop hook: lose the second (last) chunk on RPDO2 of node 2 of the record with sequence nibble 5
@@ -1220,12 +1220,12 @@ static void t_gobackn(void)
     ef_com_cfg_t c = sim_cfg(EF_COM_MODE_SEGMENT);
     sim_setup(&c);
     drop_state = 0;
-    B.drop = drop_some;
-    EF_CHECK_EQ(ef_sim_run_until(&B, EF_COM_RUN, 3000000, 100), EF_COM_RUN);
+    B.bus.drop = drop_some;
+    EF_CHECK_EQ(ef_canrig_run_until(&B, EF_COM_RUN, 3000000, 100), EF_COM_RUN);
     EF_CHECK_EQ(seg_stream(SEG_MOVES, 30000000, NULL), EF_COM_DONE);
     EF_CHECK_EQ(ef_comaster_error(&M)->code, 0);
     EF_CHECK_EQ(drop_state, 3);
-    EF_CHECK(B.dropped == 2);
+    EF_CHECK(B.bus.dropped == 2);
     seg_check_end();
     EF_CHECK(ef_comaster_node(&M, 1)->resends >= 1);
     EF_CHECK(D[1].seg_dropped >= 1);
@@ -1269,22 +1269,22 @@ static void t_resend_limit(void)
     c.max_resends = 1;
     sim_setup(&c);
     drop_seen = 0;
-    B.drop = drop_spread;
-    EF_CHECK_EQ(ef_sim_run_until(&B, EF_COM_RUN, 3000000, 100), EF_COM_RUN);
+    B.bus.drop = drop_spread;
+    EF_CHECK_EQ(ef_canrig_run_until(&B, EF_COM_RUN, 3000000, 100), EF_COM_RUN);
     EF_CHECK_EQ(seg_stream(SEG_MOVES, 30000000, NULL), EF_COM_DONE);
     EF_CHECK_EQ(ef_comaster_error(&M)->code, 0);
     seg_check_end();
     printf("resend limit: %llu chunks lost, %u go-back-N rounds in all (limit 1 in a row)\n",
-           (unsigned long long)B.dropped, M.resends);
-    EF_CHECK_EQ(B.dropped, 5);
+           (unsigned long long)B.bus.dropped, M.resends);
+    EF_CHECK_EQ(B.bus.dropped, 5);
     EF_CHECK(M.resends > 1);
 
     seg_moves();
     c = sim_cfg(EF_COM_MODE_SEGMENT);
     c.max_resends = 3;
     sim_setup(&c);
-    B.drop = drop_all;
-    EF_CHECK_EQ(ef_sim_run_until(&B, EF_COM_RUN, 3000000, 100), EF_COM_RUN);
+    B.bus.drop = drop_all;
+    EF_CHECK_EQ(ef_canrig_run_until(&B, EF_COM_RUN, 3000000, 100), EF_COM_RUN);
     EF_CHECK_EQ(seg_stream(SEG_MOVES, 30000000, NULL), EF_COM_ERROR);
     const ef_com_error_t *e = ef_comaster_error(&M);
     EF_CHECK_EQ(e->code, EF_ERR_PROTO);
@@ -1304,7 +1304,7 @@ static void t_emcy(void)
     seg_moves();
     ef_com_cfg_t c = sim_cfg(EF_COM_MODE_SEGMENT);
     sim_setup(&c);
-    EF_CHECK_EQ(ef_sim_run_until(&B, EF_COM_RUN, 3000000, 100), EF_COM_RUN);
+    EF_CHECK_EQ(ef_canrig_run_until(&B, EF_COM_RUN, 3000000, 100), EF_COM_RUN);
     EF_CHECK_EQ(seg_stream(SEG_MOVES, 30000000, emcy_mid), EF_COM_ERROR);
     const ef_com_error_t *e = ef_comaster_error(&M);
     EF_CHECK_EQ(e->code, EF_ERR_DRIVE);
@@ -1321,14 +1321,14 @@ static void t_emcy(void)
     EF_CHECK_EQ(D[1].power, EF_CO_PS_FAULT);
     EF_CHECK(D[0].power != EF_CO_PS_FAULT);
     /* stopped soon after the fault, not at the end of the program */
-    EF_CHECK(B.now_us < 3000000u + 3000000u);
+    EF_CHECK(B.bus.now_us < 3000000u + 3000000u);
 }
 
 static void t_heartbeat(void)
 {
     ef_com_cfg_t c = sim_cfg(EF_COM_MODE_CSP);
     sim_setup(&c);
-    EF_CHECK_EQ(ef_sim_run_until(&B, EF_COM_RUN, 3000000, 100), EF_COM_RUN);
+    EF_CHECK_EQ(ef_canrig_run_until(&B, EF_COM_RUN, 3000000, 100), EF_COM_RUN);
     uint64_t t0 = 0;
     int i = 0;
     for (uint32_t step = 0; step < 30000; step++) {
@@ -1339,9 +1339,9 @@ static void t_heartbeat(void)
         }
         if (step == 5000) {
             ef_codrive_heartbeat_off(&D[2], 1);
-            t0 = B.now_us;
+            t0 = B.bus.now_us;
         }
-        ef_sim_step(&B, 100);
+        ef_canrig_step(&B, 100);
         if (ef_comaster_state(&M) == EF_COM_ERROR)
             break;
     }
@@ -1360,7 +1360,7 @@ static int sim_sdo_wait(void)
 {
     int rc = ef_comaster_sdo_result(&M, NULL, NULL, NULL);
     for (int i = 0; i < 20000 && rc == EF_ERR_AGAIN; i++) {
-        ef_sim_step(&B, 100);
+        ef_canrig_step(&B, 100);
         rc = ef_comaster_sdo_result(&M, NULL, NULL, NULL);
     }
     return rc;
@@ -1390,7 +1390,7 @@ static void t_sdo_user(void)
     seg_moves();
     ef_com_cfg_t c = sim_cfg(EF_COM_MODE_SEGMENT);
     sim_setup(&c);
-    EF_CHECK_EQ(ef_sim_run_until(&B, EF_COM_RUN, 3000000, 100), EF_COM_RUN);
+    EF_CHECK_EQ(ef_canrig_run_until(&B, EF_COM_RUN, 3000000, 100), EF_COM_RUN);
     /* The axis record of the first move (sequence 0, x) in its two 8-byte chunks: the drive
      * takes 0x2100 chunks over SDO as by RPDO2. */
     ef_move_t mv = SM[0];
@@ -1444,7 +1444,7 @@ static void t_sdo_user(void)
     /* Stream every move; during motion an abort and a statusword read change nothing. */
     for (int i = 0; i < SEG_MOVES; i++)
         EF_CHECK_EQ(ef_comaster_push_move(&M, &SM[i]), EF_OK);
-    ef_sim_run(&B, 1000000, 100);
+    ef_canrig_run(&B, 1000000, 100);
     EF_CHECK_EQ(ef_comaster_state(&M), EF_COM_RUN);
     EF_CHECK(M.running);
     EF_CHECK(D[0].drv.done_any >= 1);
@@ -1458,7 +1458,7 @@ static void t_sdo_user(void)
     EF_CHECK_EQ(ef_comaster_state(&M), EF_COM_RUN);
     EF_CHECK_EQ(ef_comaster_error(&M)->code, 0);
     EF_CHECK_EQ(ef_comaster_finish(&M), EF_OK);
-    EF_CHECK_EQ(ef_sim_run_until(&B, EF_COM_DONE, 30000000, 100), EF_COM_DONE);
+    EF_CHECK_EQ(ef_canrig_run_until(&B, EF_COM_DONE, 30000000, 100), EF_COM_DONE);
     EF_CHECK_EQ(ef_comaster_error(&M)->code, 0);
     seg_check_end();
     for (int k = 0; k < 3; k++) {

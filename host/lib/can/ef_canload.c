@@ -9,8 +9,7 @@
 
 #include "evenfeed/canopen/ef_codrive.h"
 #include "evenfeed/host/can/ef_canhost.h"
-#include "evenfeed/host/can/ef_canmem.h"
-#include "evenfeed/host/can/ef_canpump.h"
+#include "evenfeed/host/can/ef_canrig.h"
 
 /** Simulated time step (us): a tenth of the fastest cycle. */
 #define CL_STEP_US 100u
@@ -89,67 +88,22 @@ void ef_canload_path_free(ef_canload_path_t *p)
     memset(p, 0, sizeof *p);
 }
 
-/* Everything one run needs, allocated together (the bus alone is large): the bus, the
- * master on port 0 and the drives on ports 1..3, each run by its own pump, as
- * `evenfeed stream --can` and `evenfeed sim-drive can` run them on SocketCAN. */
+/* Everything one run needs, allocated together (the bus alone is large). */
 typedef struct {
-    ef_canmem_t bus;
-    ef_canif_t ci[4];
-    ef_canpump_t pump[4];
+    ef_canrig_t rig;
     ef_comaster_t ms;
     ef_codrive_t d[3];
 } cl_rig_t;
 
-/* One simulated step: time passes, the master's pump runs, the bus carries what it can,
- * then the drives' pumps, and the bus again (so a frame the master sends reaches the
- * drives in the same step, and their answers the master at its next). */
-static void cl_step(cl_rig_t *g)
-{
-    ef_canmem_advance(&g->bus, CL_STEP_US);
-    (void)ef_canpump_poll(&g->pump[0], 0); /* the in-memory bus has no I/O errors */
-    ef_canmem_deliver(&g->bus);
-    for (int k = 1; k < 4; k++)
-        (void)ef_canpump_poll(&g->pump[k], 0);
-    ef_canmem_deliver(&g->bus);
-}
-
-/* Step until the master is in state st (or DONE / ERROR), at most max_us; its state. */
-static int cl_run_until(cl_rig_t *g, int st, uint32_t max_us)
-{
-    for (uint32_t t = 0; t < max_us; t += CL_STEP_US) {
-        int s = ef_comaster_state(&g->ms);
-        if (s == st || s == EF_COM_DONE || s == EF_COM_ERROR)
-            return s;
-        cl_step(g);
-    }
-    return ef_comaster_state(&g->ms);
-}
-
-/* Open the four ports and set the master and the drives up on them. */
+/* Set the master and the drives (homed at the path's start) up on the rig. */
 static int cl_setup(cl_rig_t *g, const ef_canload_path_t *p, const ef_com_cfg_t *mc, ef_msg_t *m)
 {
-    static const char *names[4] = {"master", "drive1", "drive2", "drive3"};
-    for (int k = 0; k < 4; k++) {
-        g->ci[k] = ef_canmem_canif(&g->bus, k);
-        ef_canif_cfg_t ic = {.name = names[k]};
-        int rc = ef_canif_open(&g->ci[k], &ic, m);
-        if (rc != EF_OK)
-            return rc;
-    }
-    ef_canpump_node_t node = ef_canpump_master_node(&g->ms);
-    int rc = ef_canpump_init(&g->pump[0], &g->ci[0], &node, NULL);
-    ef_can_port_t port = ef_canif_port(&g->ci[0]);
-    if (rc == EF_OK)
-        rc = ef_comaster_init(&g->ms, mc, &port);
+    int rc = ef_canrig_add_master(&g->rig, &g->ms, mc);
     for (int k = 0; k < 3 && rc == EF_OK; k++) {
         ef_codrive_cfg_t dc;
         ef_codrive_cfg_default(&dc, (uint8_t)(k + 1));
         dc.home = (float)p->start[k];
-        node = ef_canpump_drive_node(&g->d[k]);
-        rc = ef_canpump_init(&g->pump[k + 1], &g->ci[k + 1], &node, NULL);
-        port = ef_canif_port(&g->ci[k + 1]);
-        if (rc == EF_OK)
-            rc = ef_codrive_init(&g->d[k], &dc, &port);
+        rc = ef_canrig_add_drive(&g->rig, &g->d[k], &dc);
     }
     if (rc != EF_OK)
         return ef_fail(m, rc, "canload: set-up refused (%d)", rc);
@@ -159,8 +113,7 @@ static int cl_setup(cl_rig_t *g, const ef_canload_path_t *p, const ef_com_cfg_t 
 /* Close the ports and free the rig. */
 static void cl_free(cl_rig_t *g)
 {
-    for (int k = 0; k < 4; k++)
-        ef_canif_close(&g->ci[k]);
+    ef_canrig_close(&g->rig);
     free(g);
 }
 
@@ -187,7 +140,7 @@ int ef_canload_run(const ef_canload_path_t *p, int mode, uint32_t bitrate, ef_ca
     cl_rig_t *g = calloc(1, sizeof *g);
     if (!g)
         return ef_fail(m, EF_ERR_NOMEM, "canload: out of memory");
-    ef_canmem_init(&g->bus, bitrate);
+    ef_canrig_init(&g->rig, bitrate);
     ef_com_cfg_t mc;
     ef_comaster_cfg_default(&mc, mode);
     mc.n_nodes = 3;
@@ -200,14 +153,15 @@ int ef_canload_run(const ef_canload_path_t *p, int mode, uint32_t bitrate, ef_ca
         cl_free(g);
         return rc;
     }
-    if (cl_run_until(g, EF_COM_RUN, 10000000u) != EF_COM_RUN) {
+    if (ef_canrig_run_until(&g->rig, EF_COM_RUN, 10000000u, CL_STEP_US) != EF_COM_RUN) {
         rc = cl_fail(g, &mc, m, "bring-up");
         cl_free(g);
         return rc;
     }
-    uint64_t t0 = g->bus.now_us, b0 = g->bus.bits, f0 = g->bus.frames, bits0[16], frames0[16];
-    memcpy(bits0, g->bus.bits_fn, sizeof bits0);
-    memcpy(frames0, g->bus.frames_fn, sizeof frames0);
+    uint64_t t0 = g->rig.bus.now_us, b0 = g->rig.bus.bits, f0 = g->rig.bus.frames, bits0[16],
+             frames0[16];
+    memcpy(bits0, g->rig.bus.bits_fn, sizeof bits0);
+    memcpy(frames0, g->rig.bus.frames_fn, sizeof frames0);
     size_t next = 0;
     /* Bounded: the path's time plus a margin, in simulated steps. */
     uint64_t steps = 0, max_steps = (uint64_t)(p->duration * 1e6 / CL_STEP_US) * 4u + 1000000u;
@@ -222,18 +176,18 @@ int ef_canload_run(const ef_canload_path_t *p, int mode, uint32_t bitrate, ef_ca
         }
         if (rc != EF_ERR_FULL)
             break;
-        cl_step(g);
+        ef_canrig_step(&g->rig, CL_STEP_US);
         steps++;
     }
     if (ef_comaster_state(&g->ms) == EF_COM_RUN)
         (void)ef_comaster_finish(&g->ms);
-    r->state = cl_run_until(g, EF_COM_DONE, 60000000u);
-    r->seconds = (double)(g->bus.now_us - t0) * 1e-6;
-    r->bits = (double)(g->bus.bits - b0);
-    r->frames = (double)(g->bus.frames - f0);
+    r->state = ef_canrig_run_until(&g->rig, EF_COM_DONE, 60000000u, CL_STEP_US);
+    r->seconds = (double)(g->rig.bus.now_us - t0) * 1e-6;
+    r->bits = (double)(g->rig.bus.bits - b0);
+    r->frames = (double)(g->rig.bus.frames - f0);
     for (int i = 0; i < 16; i++) {
-        r->bits_fn[i] = (double)(g->bus.bits_fn[i] - bits0[i]);
-        r->frames_fn[i] = (double)(g->bus.frames_fn[i] - frames0[i]);
+        r->bits_fn[i] = (double)(g->rig.bus.bits_fn[i] - bits0[i]);
+        r->frames_fn[i] = (double)(g->rig.bus.frames_fn[i] - frames0[i]);
     }
     double e2 = 0;
     for (int k = 0; k < 3; k++) {
