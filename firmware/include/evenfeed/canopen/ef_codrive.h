@@ -42,6 +42,33 @@
  * the new frame, counted in txq.lost like the others. A frame the port refuses outright
  * stays queued (::EF_TXQ_REFUSED_KEEP).
  *
+ * ## CiA 402 power states (::ef_codrive_t::power, ::ef_co_power_t; numbers are CiA 402's)
+ *
+ *     state               event                                   next
+ *     SWITCH ON DISABLED  controlword shutdown (0x06)             READY TO SWITCH ON (2)
+ *     READY TO SWITCH ON  switch on (0x07)                        SWITCHED ON (3)
+ *     READY TO SWITCH ON  enable operation (0x0F)                 OPERATION ENABLED (3 + 4)
+ *     READY TO SWITCH ON  disable voltage / quick stop            SWITCH ON DISABLED (7)
+ *     SWITCHED ON         enable operation                        OPERATION ENABLED (4)
+ *     SWITCHED ON         shutdown                                READY TO SWITCH ON (6)
+ *     SWITCHED ON         disable voltage / quick stop            SWITCH ON DISABLED (10)
+ *     OPERATION ENABLED   switch on / shutdown / disable voltage  the same state until the
+ *                                                                 controlled stop is at rest,
+ *                                                                 then SWITCHED ON (5) /
+ *                                                                 READY (8) / DISABLED (9)
+ *     OPERATION ENABLED   enable operation during such a stop     stays (the stop cancelled)
+ *     OPERATION ENABLED   quick stop                              QUICK STOP ACTIVE (11)
+ *     QUICK STOP ACTIVE   at rest (quick stop option 2)           SWITCH ON DISABLED (12)
+ *     any                 a fault of the drive model (ef_drive.h) FAULT REACTION ACTIVE (13,
+ *                         or the SYNC-loss watchdog               EMCY sent), then FAULT (14)
+ *                                                                 at rest
+ *     FAULT               fault reset (rising edge of bit 7)      SWITCH ON DISABLED (15)
+ *     any                 reset node                              SWITCH ON DISABLED
+ *
+ * Entering OPERATION ENABLED in segment mode clears the segment queue (sequence numbers
+ * start at 0); there, controlword bit 4 (run, a level) starts the queue and clearing it
+ * while moving is a quick stop of the drive model (the power state stays).
+ *
  * ## SDO server (::ef_codrive_t::sdo_state, ::ef_codrive_sdo_t)
  *
  *     state     request (client)                              next      answer
