@@ -174,7 +174,7 @@ static int crep_move(void *user, const ef_move_t *m, const ef_pipe_move_info_t *
         fputs("], \"c\": [", fp);
         for (int k = 0; k < EF_TIMELAW_PHASES; k++) {
             fputs(k ? ", [" : "[", fp);
-            for (int j = 0; j < 5; j++) {
+            for (int j = 0; j < EF_TIMELAW_COEFFS; j++) {
                 if (j)
                     fputs(", ", fp);
                 cli_json_num(fp, m->law.c[k][j]);

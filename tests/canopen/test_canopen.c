@@ -50,10 +50,12 @@ static ef_move_t rnd_move(uint32_t seq)
         if (rnd() % 3 == 0)
             continue;
         m.law.dt[k] = (float)uni(0, 3);
-        for (int i = 0; i < 5; i++)
+        for (int i = 0; i < EF_TIMELAW_COEFFS; i++)
             m.law.c[k][i] = (float)uni(-1e4, 1e4);
     }
-    m.duration = m.law.dt[0] + m.law.dt[1] + m.law.dt[2];
+    m.duration = 0.0f;
+    for (int k = 0; k < EF_TIMELAW_PHASES; k++)
+        m.duration += m.law.dt[k];
     for (int i = 0; i <= m.degree; i++)
         m.b[i] = ef_v3((float)uni(-1e5, 1e5), (float)uni(-1, 1), (float)uni(-1e-30, 1e-30));
     return m;
@@ -155,7 +157,7 @@ static void test_roundtrip(void)
               fbits(r.duration) == fbits(m.duration);
         for (int k = 0; k < EF_TIMELAW_PHASES; k++) {
             ok &= fbits(r.law.dt[k]) == fbits(m.law.dt[k]);
-            for (int j = 0; j < 5; j++)
+            for (int j = 0; j < EF_TIMELAW_COEFFS; j++)
                 ok &= fbits(r.law.c[k][j]) == fbits(m.law.c[k][j]);
         }
         for (int a = 0; a < 3; a++) {
@@ -240,10 +242,10 @@ static void test_loss(void)
     ef_co_asm_init(&l, 1);
     ef_co_law_encode(&m, rec, &len);
     ef_co_chunk(rec, len, 0, d);
-    d[4] = 9;
+    d[4] = 1u << EF_TIMELAW_PHASES; /* a phase that does not exist */
     EF_CHECK_EQ(ef_co_asm_feed(&l, d), EF_ERR_PROTO);
     ef_co_chunk(rec, len, 0, d);
-    d[0] ^= 0x10;
+    d[0] ^= 1u << EF_CO_CHUNK_INDEX_BITS; /* the sequence bits no longer match */
     EF_CHECK_EQ(ef_co_asm_feed(&l, d), EF_ERR_PROTO);
     EF_CHECK_EQ(pass_record(&l, rec, len), EF_OK);
     EF_CHECK_EQ(ef_co_asm_feed(NULL, d), EF_ERR_ARG);

@@ -1197,17 +1197,21 @@ static void t_seg(void)
 
 /* Drop hook: lose the second (last) chunk on RPDO2 of node 2 of the record with sequence nibble 5
  * (once), and the first law chunk of sequence 9 (once). */
+/* A chunk's header byte: the sequence number's low bits and the chunk index. */
+#define CHUNK_HDR(seq, k)                                                                          \
+    ((uint8_t)((((seq)&EF_CO_CHUNK_SEQ_MASK) << EF_CO_CHUNK_INDEX_BITS) | (k)))
+
 static int drop_state;
 static int drop_some(void *ctx, const ef_can_frame_t *f, int src, uint64_t n)
 {
     (void)ctx;
     (void)src;
     (void)n;
-    if (!(drop_state & 1) && f->id == EF_CO_COB_RPDO2 + 2 && f->data[0] == 0x51) {
+    if (!(drop_state & 1) && f->id == EF_CO_COB_RPDO2 + 2 && f->data[0] == CHUNK_HDR(5, 1)) {
         drop_state |= 1;
         return 1;
     }
-    if (!(drop_state & 2) && f->id == EF_CO_LAW_COBID && f->data[0] == 0x90) {
+    if (!(drop_state & 2) && f->id == EF_CO_LAW_COBID && f->data[0] == CHUNK_HDR(9, 0)) {
         drop_state |= 2;
         return 1;
     }
@@ -1241,7 +1245,7 @@ static int drop_spread(void *ctx, const ef_can_frame_t *f, int src, uint64_t n)
     (void)ctx;
     (void)src;
     (void)n;
-    if (f->id != EF_CO_COB_RPDO2 + 2 || (f->data[0] & 0x0F) != 0)
+    if (f->id != EF_CO_COB_RPDO2 + 2 || (f->data[0] & EF_CO_CHUNK_INDEX_MASK) != 0)
         return 0;
     uint32_t seq = ef_co_get16(&f->data[1]);
     if (seq < 8 || seq > 20 || (seq - 8) % 3 != 0 || (drop_seen & (1u << seq)))
@@ -1250,14 +1254,14 @@ static int drop_spread(void *ctx, const ef_can_frame_t *f, int src, uint64_t n)
     return 1;
 }
 
-/* Drop hook: every axis chunk to node 2 from sequence nibble 3 on (a node that never gets
+/* Drop hook: every axis chunk to node 2 from sequence bits 3 on (a node that never gets
  * its records). */
 static int drop_all(void *ctx, const ef_can_frame_t *f, int src, uint64_t n)
 {
     (void)ctx;
     (void)src;
     (void)n;
-    return f->id == EF_CO_COB_RPDO2 + 2 && (f->data[0] >> 4) >= 3;
+    return f->id == EF_CO_COB_RPDO2 + 2 && (f->data[0] >> EF_CO_CHUNK_INDEX_BITS) >= 3;
 }
 
 /* Go-back-N gives up only after max_resends rounds in a row without progress: many

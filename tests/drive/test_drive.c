@@ -123,7 +123,7 @@ static ef_move_t rnd_move(unsigned long long *rs)
     m.v_exit = (float)ef_t_uniform(rs, 0, 500);
     for (int k = 0; k < EF_TIMELAW_PHASES; k++) {
         m.law.dt[k] = (float)ef_t_uniform(rs, 0, 3);
-        for (int i = 0; i < 5; i++)
+        for (int i = 0; i < EF_TIMELAW_COEFFS; i++)
             m.law.c[k][i] = (float)ef_t_uniform(rs, -1e4, 1e4);
     }
     for (int i = 0; i <= m.degree; i++)
@@ -140,7 +140,7 @@ static int same_move(const ef_move_t *a, const ef_move_t *b)
              fbits(a->v_exit) == fbits(b->v_exit);
     for (int k = 0; k < EF_TIMELAW_PHASES; k++) {
         ok &= fbits(a->law.dt[k]) == fbits(b->law.dt[k]);
-        for (int i = 0; i < 5; i++)
+        for (int i = 0; i < EF_TIMELAW_COEFFS; i++)
             ok &= fbits(a->law.c[k][i]) == fbits(b->law.c[k][i]);
     }
     for (int i = 0; i <= a->degree; i++)
@@ -179,13 +179,13 @@ static void test_codec(void)
     m.seq = 0x00010002u;
     m.duration = 1.0f;
     m.b[5].z = -2.0f;
-    m.law.c[2][4] = 0.5f;
+    m.law.c[2][3] = 0.5f;
     EF_CHECK_EQ(ef_mb_slot_encode(&m, w), EF_OK);
     EF_CHECK_EQ(w[0], 1);
     EF_CHECK_EQ(w[1], 2);
     EF_CHECK_EQ(w[4], 0x3F80);
     EF_CHECK(ef_mb_get_f32(&w[EF_MB_SLOT_POINTS + 5 * 6 + 4]) == -2.0f);
-    EF_CHECK(ef_mb_get_f32(&w[EF_MB_SLOT_LAW_C + 2 * 14]) == 0.5f);
+    EF_CHECK(ef_mb_get_f32(&w[EF_MB_SLOT_LAW_C + 2 * (2 * EF_TIMELAW_COEFFS + 3)]) == 0.5f);
     EF_CHECK_EQ(w[EF_MB_SLOT_CRC], ef_mb_crc_words(w, EF_MB_SLOT_CRC));
 
     /* Every single-bit flip anywhere in the slot is caught by the CRC. */

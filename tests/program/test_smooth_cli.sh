@@ -41,7 +41,7 @@ for k, s in enumerate(segs):
     prev = s["control_points"][-1]
     assert s["duration"] > 0 and s["length"] > 0
     assert abs(sum(s["time_law"]["dt"]) - s["duration"]) <= 1e-4 * s["duration"] + 1e-6
-    assert len(s["time_law"]["c"]) == 3 and all(len(c) == 5 for c in s["time_law"]["c"])
+    assert len(s["time_law"]["c"]) == 7 and all(len(c) == 4 for c in s["time_law"]["c"])
     assert s["dev"] <= d["tolerance"] + 1e-6
     assert isinstance(s["line"], int)
 assert max(abs(a - b) for a, b in zip(prev, [75, 40, 25])) < 1e-4

@@ -187,7 +187,7 @@ static float coc_getf(const uint8_t *p)
 static int coc_phase_used(const ef_timelaw_t *law, int k)
 {
     int used = law->dt[k] != 0.0f;
-    for (int j = 0; j < 5; j++)
+    for (int j = 0; j < EF_TIMELAW_COEFFS; j++)
         used |= law->c[k][j] != 0.0f;
     return used;
 }
@@ -211,9 +211,9 @@ int ef_co_law_encode(const ef_move_t *m, uint8_t rec[EF_CO_REC_MAX], uint32_t *l
         if (!(mask & (1u << k)))
             continue;
         coc_putf(rec + n, m->law.dt[k]);
-        for (int j = 0; j < 5; j++)
+        for (int j = 0; j < EF_TIMELAW_COEFFS; j++)
             coc_putf(rec + n + 4u + 4u * (uint32_t)j, m->law.c[k][j]);
-        n += 24u;
+        n += EF_CO_PHASE_BYTES;
     }
     *len = n;
     return EF_OK;
@@ -247,8 +247,8 @@ uint32_t ef_co_chunk_count(uint32_t len)
 /* Data bytes of chunk k: header byte, then 7 record bytes (zero padded). */
 void ef_co_chunk(const uint8_t *rec, uint32_t len, uint32_t k, uint8_t data[8])
 {
-    uint32_t seq4 = len >= 1u ? (uint32_t)(rec[0] & 0xFu) : 0u;
-    data[0] = (uint8_t)((seq4 << 4) | (k & 0xFu));
+    uint32_t seq3 = len >= 1u ? (uint32_t)(rec[0] & EF_CO_CHUNK_SEQ_MASK) : 0u;
+    data[0] = (uint8_t)((seq3 << EF_CO_CHUNK_INDEX_BITS) | (k & EF_CO_CHUNK_INDEX_MASK));
     for (uint32_t i = 0; i < EF_CO_CHUNK_BYTES; i++) {
         uint32_t at = k * EF_CO_CHUNK_BYTES + i;
         data[1 + i] = at < len ? rec[at] : 0u;
@@ -272,12 +272,12 @@ static uint32_t coc_asm_len(const ef_co_asm_t *a, const uint8_t *d)
 {
     if (a->law) {
         uint8_t mask = d[4]; /* record byte 3 */
-        if (mask > 7u)
+        if (mask >= (1u << EF_TIMELAW_PHASES))
             return 0;
         uint32_t n = 0;
-        for (int k = 0; k < 3; k++)
+        for (int k = 0; k < EF_TIMELAW_PHASES; k++)
             n += (mask >> k) & 1u;
-        return 12u + 24u * n;
+        return 12u + EF_CO_PHASE_BYTES * n;
     }
     uint8_t deg = d[3]; /* record byte 2 */
     if (deg != 1 && deg != 3 && deg != 5)
@@ -290,8 +290,8 @@ int ef_co_asm_feed(ef_co_asm_t *a, const uint8_t data[8])
 {
     if (!a || !data)
         return EF_ERR_ARG;
-    uint32_t k = data[0] & 0xFu;
-    uint8_t seq4 = (uint8_t)(data[0] >> 4);
+    uint32_t k = data[0] & EF_CO_CHUNK_INDEX_MASK;
+    uint8_t seq4 = (uint8_t)(data[0] >> EF_CO_CHUNK_INDEX_BITS);
     int rc = EF_ERR_AGAIN;
     if (k == 0u) {
         rc = a->len ? EF_ERR_SEQ : EF_ERR_AGAIN; /* a partial record is dropped */
@@ -300,8 +300,8 @@ int ef_co_asm_feed(ef_co_asm_t *a, const uint8_t data[8])
             a->len = 0;
             return EF_ERR_PROTO;
         }
-        /* The nibble must match the record's own sequence number (record byte 0). */
-        if ((data[1] & 0xFu) != seq4) {
+        /* The bits must match the record's own sequence number (record byte 0). */
+        if ((data[1] & EF_CO_CHUNK_SEQ_MASK) != seq4) {
             a->len = 0;
             return EF_ERR_PROTO;
         }
@@ -335,12 +335,12 @@ int ef_co_law_decode(const uint8_t *rec, uint32_t len, ef_move_t *m)
     if (!rec || !m || len < 12u)
         return EF_ERR_ARG;
     uint8_t mask = rec[3];
-    if (mask > 7u)
+    if (mask >= (1u << EF_TIMELAW_PHASES))
         return EF_ERR_ARG;
     uint32_t n = 0;
-    for (int k = 0; k < 3; k++)
+    for (int k = 0; k < EF_TIMELAW_PHASES; k++)
         n += (mask >> k) & 1u;
-    if (len != 12u + 24u * n)
+    if (len != 12u + EF_CO_PHASE_BYTES * n)
         return EF_ERR_ARG;
     ef_timelaw_t law;
     float length = coc_getf(rec + 4), v_exit = coc_getf(rec + 8), dur = 0.0f;
@@ -348,17 +348,17 @@ int ef_co_law_decode(const uint8_t *rec, uint32_t len, ef_move_t *m)
     uint32_t at = 12;
     for (int k = 0; k < EF_TIMELAW_PHASES; k++) {
         law.dt[k] = 0.0f;
-        for (int j = 0; j < 5; j++)
+        for (int j = 0; j < EF_TIMELAW_COEFFS; j++)
             law.c[k][j] = 0.0f;
         if (!(mask & (1u << k)))
             continue;
         law.dt[k] = coc_getf(rec + at);
         fin &= ef_finitef(law.dt[k]);
-        for (int j = 0; j < 5; j++) {
+        for (int j = 0; j < EF_TIMELAW_COEFFS; j++) {
             law.c[k][j] = coc_getf(rec + at + 4u + 4u * (uint32_t)j);
             fin &= ef_finitef(law.c[k][j]);
         }
-        at += 24u;
+        at += EF_CO_PHASE_BYTES;
     }
     if (!fin)
         return EF_ERR_NONFINITE;

@@ -1210,7 +1210,7 @@ static int com_move_ok(const ef_move_t *mv)
     int ok = ef_finitef(mv->duration) & ef_finitef(mv->length) & ef_finitef(mv->v_exit);
     for (int p = 0; p < EF_TIMELAW_PHASES; p++) {
         ok &= ef_finitef(mv->law.dt[p]);
-        for (int i = 0; i < 5; i++)
+        for (int i = 0; i < EF_TIMELAW_COEFFS; i++)
             ok &= ef_finitef(mv->law.c[p][i]);
     }
     for (int i = 0; i <= mv->degree; i++)

@@ -1,5 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* Branch-free scalar functions for the firmware (no libm). */
+#include <stdint.h>
 #include "evenfeed/core/ef_math.h"
 
 /* atan(a) ~ a * P(a^2) on [0,1]; least-squares fit from tools/gen_fw_constants.c,
@@ -31,4 +32,25 @@ float ef_atan2f(float y, float x)
     r = ef_selectf(steep, 0.5f * EF_PI_F - r, r);
     r = ef_selectf(x < 0.0f, EF_PI_F - r, r);
     return ef_selectf(y < 0.0f, -r, r);
+}
+
+/* Cube root (contract in ef_math.h): the exponent divided by three through the bit
+ * pattern gives a start within a few per cent, and Newton's step y = (2 y + x / y^2) / 3
+ * squares the error each time: four steps reach float resolution from there. */
+float ef_cbrtf(float x)
+{
+    if (!(x > 0.0f))
+        return 0.0f;
+    if (!(x <= 3.4028235e38f))
+        return x;
+    union {
+        float f;
+        uint32_t u;
+    } b;
+    b.f = x;
+    b.u = b.u / 3u + 709921077u;
+    float y = b.f;
+    for (int i = 0; i < 4; i++)
+        y = (2.0f * y + x / (y * y)) * (1.0f / 3.0f);
+    return y;
 }

@@ -20,7 +20,7 @@
 /** End (exclusive) of the writable control block. */
 #define EF_MB_CONTROL_END (EF_MB_REG_WATCHDOG + 1)
 /** Time-law coefficients per phase in a slot. */
-#define EF_MB_LAW_COEFFS 5
+#define EF_MB_LAW_COEFFS EF_TIMELAW_COEFFS
 /** Control points a slot carries (degree 5). */
 #define EF_MB_POINTS 6
 

@@ -14,6 +14,12 @@
 #define EF_INTERP_RESYNC (1.0f / 64.0f)
 /** Newton steps of a resynchronisation. */
 #define EF_INTERP_RESYNC_ITER 3
+/** Largest parameter step of the corrected mode in law steps (the law's distance per period
+ *  over L): where the parametric speed |f'| is a small share of L (a blend whose end x1
+ *  sits at the table's lower bound, 0.1 of the chord: |f'(0)| ~ L / 12) one period needs
+ *  up to about L / |f'| law steps; a smaller cap makes the setpoint lag there and then
+ *  catch up, a speed jump (issue 18). */
+#define EF_INTERP_STEP_CAP 16.0f
 
 /* A point finite and within EF_MAX_COORD on every axis. */
 static int ip_vok(ef_vec3_t v)
@@ -59,7 +65,7 @@ int ef_interp_check(const ef_move_t *m, ef_vec3_t start)
         ok &= ip_vok(m->b[i]);
     for (int k = 0; k < EF_TIMELAW_PHASES; k++) {
         ok &= ef_finitef(m->law.dt[k]) & (m->law.dt[k] >= 0.0f);
-        for (int i = 0; i < 5; i++)
+        for (int i = 0; i < EF_TIMELAW_COEFFS; i++)
             ok &= ef_finitef(m->law.c[k][i]);
     }
     if (!ok || !(m->duration > 0.0f) || !(m->length > 0.0f) || !(m->v_exit >= 0.0f))
@@ -129,7 +135,7 @@ static void ip_eval(ef_interp_t *ip, const ef_move_t *m, float *v)
      * float32 resolves one servo period's step far better than at machine coordinates,
      * where the evaluation's rounding (several ulps of ~100 mm) is a few per cent of a
      * slow 1 um step. The corrected step's chords need the same resolution. */
-    ef_vec3_t d[2], lb[6];
+    ef_vec3_t d[3], lb[6];
     for (int i = 0; i <= m->degree && i < 6; i++)
         lb[i] = ef_v3_sub(m->b[i], m->b[0]);
     if (ip->mode != EF_STEP_CORRECTED) {
@@ -138,8 +144,9 @@ static void ip_eval(ef_interp_t *ip, const ef_move_t *m, float *v)
         ip->pos = ef_v3_add(m->b[0], d[0]);
         return;
     }
-    /* One Newton-like step on arc length: S (chords so far) towards s(t) = L tau_law. */
-    ef_bezier_eval(lb, m->degree, ip->tau, 1, d);
+    /* One step on arc length: S (chords so far) towards s(t) = L tau_law. */
+    d[2] = ef_v3(0.0f, 0.0f, 0.0f); /* f'' (a line has none) */
+    ef_bezier_eval(lb, m->degree, ip->tau, m->degree >= 2 ? 2 : 1, d);
     float s = tau_law * m->length;
     float gap = s - ip->s_done;
     float law_ds = *v * (float)ip->period_us * 1e-6f; /* the law's distance per period */
@@ -167,21 +174,47 @@ static void ip_eval(ef_interp_t *ip, const ef_move_t *m, float *v)
         ip->pos = ef_v3_add(m->b[0], q0);
         return;
     }
+    /* Second-order step: along the curve |f'| changes at k = <f', f''> / |f'| per unit of
+     * parameter, so the arc from tau is about sp h + k h^2 / 2; h solves that for the gap
+     * (the root continuous in k; a plain Newton step h = gap / sp where the quadratic has
+     * no root). At a move's start where |f'| is a small share of L and rising fast (a blend
+     * with x1 at the table's bound) the Newton step alone overshot by up to half a period's
+     * distance and, never stepping back, left a speed jump at the junction (issue 18). */
     float sp = ef_v3_norm(d[1]);
     float tn = tau_law;
-    if (sp > EF_INTERP_MIN_DERIV)
-        tn = ip->tau + gap / sp;
+    if (sp > EF_INTERP_MIN_DERIV) {
+        float k = ef_v3_dot(d[1], d[2]) / sp;
+        float disc = sp * sp + 2.0f * k * gap;
+        float h = gap / sp;
+        if (gap > 0.0f && disc > 0.0f)
+            h = 2.0f * gap / (sp + ef_sqrtf(disc));
+        tn = ip->tau + h;
+    }
     if (!ef_finitef(tn))
         tn = tau_law;
-    /* Never step back; never more than the larger of EF_INTERP_RESYNC of the curve and four
-     * times the law's own step per servo period (where |f'| is small the Newton step would
-     * overshoot; a fixed cap alone would hold back a short curve that slows parametrically). */
+    /* Never step back; never more than the larger of EF_INTERP_RESYNC of the curve and
+     * EF_INTERP_STEP_CAP times the law's own step per servo period (where |f'| is near 0 a
+     * step would run away; a fixed cap alone would hold back a short curve that slows
+     * parametrically). */
     float law_step = law_ds / ef_maxf(m->length, 1e-30f);
-    float cap = ef_maxf(EF_INTERP_RESYNC, 4.0f * law_step);
-    tn = ef_maxf(ip->tau, ef_minf(ef_minf(1.0f, ip->tau + cap), tn));
+    float cap = ef_maxf(EF_INTERP_RESYNC, EF_INTERP_STEP_CAP * law_step);
+    float hi = ef_minf(1.0f, ip->tau + cap);
+    tn = ef_maxf(ip->tau, ef_minf(hi, tn));
     ef_vec3_t p[1];
     ef_bezier_eval(lb, m->degree, tn, 0, p);
-    ip_kahan(&ip->s_done, &ip->s_c, ef_v3_norm(ef_v3_sub(p[0], d[0])));
+    float chord = ef_v3_norm(ef_v3_sub(p[0], d[0]));
+    /* One secant correction on the chord itself: the step scaled by gap / chord takes out
+     * what the quadratic model missed (f''' on a quintic), for one more evaluation. */
+    if (gap > 0.0f && chord > 0.0f && tn > ip->tau) {
+        float t2 = ip->tau + (tn - ip->tau) * (gap / chord);
+        t2 = ef_maxf(ip->tau, ef_minf(hi, t2));
+        if (ef_finitef(t2) && t2 != tn) {
+            tn = t2;
+            ef_bezier_eval(lb, m->degree, tn, 0, p);
+            chord = ef_v3_norm(ef_v3_sub(p[0], d[0]));
+        }
+    }
+    ip_kahan(&ip->s_done, &ip->s_c, chord);
     ip->tau = tn;
     ip->pos = ef_v3_add(m->b[0], p[0]);
 }

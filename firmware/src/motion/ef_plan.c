@@ -28,6 +28,13 @@ static int pl_vfinite(ef_vec3_t v)
            (ef_fabsf(v.y) <= EF_MAX_COORD) & (ef_fabsf(v.z) <= EF_MAX_COORD);
 }
 
+/* All three components finite (curvature and jerk bounds grow without bound as a curve
+ * shrinks: no coordinate range applies). */
+static int pl_v3ok(ef_vec3_t v)
+{
+    return ef_finitef(v.x) & ef_finitef(v.y) & ef_finitef(v.z);
+}
+
 /* Validate machine limits (contract in ef_plan.h). */
 int ef_limits_check(const ef_limits_t *lim)
 {
@@ -50,34 +57,40 @@ int ef_limits_check(const ef_limits_t *lim)
 
 /* ---------------------------------------------------------------- ramp geometry */
 
-/** Duration of a ramp changing the speed by dv >= 0. */
+/** Duration of a ramp changing the speed by dv >= 0 at acceleration limit a and jerk limit j
+ *  (0: none). With a jerk limit it is the time-optimal S-curve from and to zero
+ *  acceleration: dv / a + a / j when the speed change reaches a (dv >= a^2 / j), else
+ *  2 sqrt(dv / j) (a triangular acceleration peaking at sqrt(dv j) < a). */
 static float pl_ramp_time(float dv, float a, float j)
 {
-    float t = dv / a;
-    if (j > 0.0f)
-        t = ef_maxf(1.5f * t, ef_sqrtf(6.0f * dv / j));
-    return t;
+    if (!(j > 0.0f))
+        return dv / a;
+    if (dv >= a * a / j)
+        return dv / a + a / j;
+    return 2.0f * ef_sqrtf(dv / j);
 }
 
-/** Distance of a ramp from va to vb (either direction). */
+/** Distance of a ramp from va to vb (either direction): the S-curve's speed is point
+ *  symmetric about its midpoint, so the mean speed is (va + vb) / 2. */
 static float pl_ramp_dist(float va, float vb, float a, float j)
 {
     return 0.5f * (va + vb) * pl_ramp_time(ef_fabsf(vb - va), a, j);
 }
 
 /** Largest distance a ramp from v0 down to any speed in [e, v0] needs. With a jerk limit the
- * ramp distance is not monotone in the target: (v0 + v) sqrt(6 (v0 - v) / J) peaks at
- * v = v0 / 3, so slowing to v0 / 3 can take longer than stopping. The backward pass bounds
- * entries with this, so that a later rise of the exit bound (more moves pushed) never makes
- * a committed entry speed unable to reach it. */
+ *  ramp distance d(v) = (v0 + v) T(v0 - v) / 2 is not monotone in the target: it is concave
+ *  (C1 across dv = a^2 / j, concave on both sides) with its peak at v0 / 3 when
+ *  v0 <= 1.5 a^2 / j, else at a^2 / (2 j); so slowing to there can take longer than
+ *  stopping. The backward pass bounds entries with this, so that a later rise of the exit
+ *  bound (more moves pushed) never makes a committed entry speed unable to reach it. */
 static float pl_ramp_dist_down(float v0, float e, float a, float j)
 {
-    float d = pl_ramp_dist(v0, e, a, j);
-    if (j > 0.0f && v0 > e) {
-        float v = ef_maxf(e, v0 * (1.0f / 3.0f));
-        d = ef_maxf(d, 0.5f * (v0 + v) * ef_sqrtf(6.0f * (v0 - v) / j));
-    }
-    return d;
+    if (!(j > 0.0f) || !(v0 > e))
+        return pl_ramp_dist(v0, e, a, j);
+    float a2j = a * a / j;
+    float peak = v0 >= 1.5f * a2j ? 0.5f * a2j : v0 * (1.0f / 3.0f);
+    float v = ef_minf(v0, ef_maxf(e, peak));
+    return ef_maxf(pl_ramp_dist(v0, e, a, j), pl_ramp_dist(v0, v, a, j));
 }
 
 /** Steps of the closed-form answers' downward correction (a few ulps at most). */
@@ -145,26 +158,64 @@ static float pl_ramp_bottom(float v0, float len, float a, float j)
 
 /* ---------------------------------------------------------------- time law */
 
-/** Fill phase k as a ramp from va to vb lasting T, starting at distance s0. */
-static void pl_law_ramp(ef_timelaw_t *law, int k, float va, float vb, float T, float s0, float len,
-                        float j)
+/** Zero phase k (unused: skipped by the evaluation and not sent to drives). */
+static void pl_law_zero(ef_timelaw_t *law, int k)
 {
-    float *c = law->c[k];
-    c[0] = s0 / len;
-    c[1] = va / len;
-    c[2] = c[3] = c[4] = 0.0f;
+    law->dt[k] = 0.0f;
+    for (int i = 0; i < EF_TIMELAW_COEFFS; i++)
+        law->c[k][i] = 0.0f;
+}
+
+/** One phase starting at distance s0 with speed v0, acceleration a0 and jerk jk, lasting
+ *  T: s(u) = s0 + v0 u + a0 u^2 / 2 + jk u^3 / 6, stored as tau = s / len. */
+static void pl_law_phase(ef_timelaw_t *law, int k, float T, float s0, float v0, float a0, float jk,
+                         float len)
+{
+    float il = 1.0f / len;
     law->dt[k] = T;
+    law->c[k][0] = s0 * il;
+    law->c[k][1] = v0 * il;
+    law->c[k][2] = 0.5f * a0 * il;
+    law->c[k][3] = jk * (1.0f / 6.0f) * il;
+}
+
+/** Fill phases k..k+2 with a ramp from va to vb starting at distance s0, at acceleration
+ *  limit a and jerk limit j (0: one constant-acceleration phase). With a jerk limit: jerk
+ *  phase, constant-acceleration phase (absent below dv = a^2 / j), jerk phase; the jerk is
+ *  recomputed from the durations, dv / (Tj (Tj + Ta)), so the ramp ends exactly at vb.
+ *  Returns the ramp's distance. */
+static float pl_law_ramp(ef_timelaw_t *law, int k, float va, float vb, float s0, float len, float a,
+                         float j)
+{
+    pl_law_zero(law, k);
+    pl_law_zero(law, k + 1);
+    pl_law_zero(law, k + 2);
+    float dv = ef_fabsf(vb - va), sg = vb >= va ? 1.0f : -1.0f;
+    float T = pl_ramp_time(dv, a, j);
     if (!(T > 0.0f))
-        return;
-    float dv = vb - va;
-    if (j > 0.0f) {
-        /* v = va + dv (3 r^2 - 2 r^3): s = va u + dv (u^3 / T^2 - u^4 / (2 T^3)) */
-        float iT2 = 1.0f / (T * T);
-        c[3] = dv * iT2 / len;
-        c[4] = -0.5f * dv * iT2 / (T * len);
-    } else {
-        c[2] = 0.5f * (dv / T) / len;
+        return 0.0f;
+    if (!(j > 0.0f)) {
+        pl_law_phase(law, k, T, s0, va, sg * dv / T, 0.0f, len);
+        return 0.5f * (va + vb) * T;
     }
+    float tj, ta;
+    if (dv >= a * a / j) {
+        tj = a / j;
+        ta = ef_maxf(0.0f, T - 2.0f * tj);
+    } else {
+        tj = 0.5f * T;
+        ta = 0.0f;
+    }
+    float jj = sg * dv / (tj * (tj + ta)), ap = jj * tj;
+    float s1 = s0 + tj * (va + jj * tj * tj * (1.0f / 6.0f));
+    float v1 = va + 0.5f * jj * tj * tj;
+    float s2 = s1 + ta * (v1 + 0.5f * ap * ta);
+    float v2 = v1 + ap * ta;
+    pl_law_phase(law, k, tj, s0, va, 0.0f, jj, len);
+    if (ta > 0.0f)
+        pl_law_phase(law, k + 1, ta, s1, v1, ap, 0.0f, len);
+    pl_law_phase(law, k + 2, tj, s2, v2, ap, -jj, len);
+    return 0.5f * (va + vb) * (2.0f * tj + ta);
 }
 
 /** ef_plan_timelaw() with, when up >= 0, pl_ramp_top(v_entry, length, a_max, j_max, 0)
@@ -219,34 +270,38 @@ static int pl_timelaw_up(ef_move_t *m, float j_max, float up)
     float eps = EF_PLAN_DV_REL * vc;
     if (vc - v1 <= eps)
         vc = v1;
-    float T0 = 0.0f, T2 = 0.0f, d0 = 0.0f, d2 = 0.0f;
-    if (ef_fabsf(vc - v0) > eps) {
-        T0 = pl_ramp_time(ef_fabsf(vc - v0), a, j);
-        d0 = 0.5f * (v0 + vc) * T0;
-    }
-    if (vc - v1 > eps) {
-        T2 = pl_ramp_time(vc - v1, a, j);
-        d2 = 0.5f * (vc + v1) * T2;
-    }
+    int up0 = ef_fabsf(vc - v0) > eps, dn2 = vc - v1 > eps;
+    float T2 = dn2 ? pl_ramp_time(vc - v1, a, j) : 0.0f;
+    float d2 = dn2 ? 0.5f * (vc + v1) * T2 : 0.0f;
+
+    ef_timelaw_t law;
+    float d0 = 0.0f;
+    if (up0)
+        d0 = pl_law_ramp(&law, 0, v0, vc, 0.0f, len, a, j);
+    else
+        for (int k = 0; k < 3; k++)
+            pl_law_zero(&law, k);
     float dc = len - d0 - d2;
     if (dc < 0.0f)
         dc = 0.0f;
     float Tc = 0.0f;
     if (dc > 0.0f && vc > 0.0f)
         Tc = dc / vc;
+    pl_law_zero(&law, 3);
+    if (Tc > 0.0f)
+        pl_law_phase(&law, 3, Tc, d0, vc, 0.0f, 0.0f, len);
+    if (dn2)
+        (void)pl_law_ramp(&law, 4, vc, v1, d0 + dc, len, a, j);
+    else
+        for (int k = 4; k < 7; k++)
+            pl_law_zero(&law, k);
 
-    ef_timelaw_t law;
-    pl_law_ramp(&law, 0, T0 > 0.0f ? v0 : vc, vc, T0, 0.0f, len, j);
-    law.dt[1] = Tc;
-    law.c[1][0] = d0 / len;
-    law.c[1][1] = vc / len;
-    law.c[1][2] = law.c[1][3] = law.c[1][4] = 0.0f;
-    pl_law_ramp(&law, 2, vc, v1, T2, d0 + dc, len, j);
-
-    float dur = T0 + Tc + T2;
+    float dur = 0.0f;
+    for (int k = 0; k < EF_TIMELAW_PHASES; k++)
+        dur += law.dt[k];
     int ok = ef_finitef(dur) & (dur > 0.0f);
     for (int k = 0; k < EF_TIMELAW_PHASES; k++)
-        for (int i = 0; i < 5; i++)
+        for (int i = 0; i < EF_TIMELAW_COEFFS; i++)
             ok &= ef_finitef(law.c[k][i]);
     if (!ok)
         return EF_ERR_ARG;
@@ -272,18 +327,28 @@ int ef_timelaw_eval(const ef_move_t *m, float t, float *tau, float *v)
     const ef_timelaw_t *law = &m->law;
     int done = !(t < m->duration); /* NaN t counts as the end */
     float u = t > 0.0f ? t : 0.0f;
-    int k = 0;
-    for (; k < EF_TIMELAW_PHASES - 1; k++) {
-        if (u <= law->dt[k])
+    /* Unused phases (dt 0) are skipped: the time falls in the first used phase it does not
+     * exceed, else in the last used one (clamped to its end). */
+    int last = 0;
+    for (int k = 0; k < EF_TIMELAW_PHASES; k++)
+        if (law->dt[k] > 0.0f)
+            last = k;
+    int k = last;
+    for (int i = 0; i < last; i++) {
+        if (!(law->dt[i] > 0.0f))
+            continue;
+        if (u <= law->dt[i]) {
+            k = i;
             break;
-        u -= law->dt[k];
+        }
+        u -= law->dt[i];
     }
     if (u > law->dt[k] || done)
         u = law->dt[k];
     if (!(u >= 0.0f))
         u = 0.0f;
     const float *c = law->c[k];
-    float x = c[0] + u * (c[1] + u * (c[2] + u * (c[3] + u * c[4])));
+    float x = c[0] + u * (c[1] + u * (c[2] + u * c[3]));
     x = ef_maxf(0.0f, ef_minf(1.0f, x));
     if (done)
         x = 1.0f;
@@ -291,7 +356,7 @@ int ef_timelaw_eval(const ef_move_t *m, float t, float *tau, float *v)
         x = 0.0f;
     *tau = x;
     if (v) {
-        float d = c[1] + u * (2.0f * c[2] + u * (3.0f * c[3] + u * 4.0f * c[4]));
+        float d = c[1] + u * (2.0f * c[2] + u * 3.0f * c[3]);
         float s = d * m->length;
         *v = s > 0.0f ? s : 0.0f; /* also maps NaN to 0 */
     }
@@ -300,26 +365,26 @@ int ef_timelaw_eval(const ef_move_t *m, float t, float *tau, float *v)
 
 /* ---------------------------------------------------------------- planner */
 
-/** Backward-pass bound of the move at window position n (0 = oldest) given the bound on the
- *  entry of the move after it (0 for the newest, which is assumed to end at rest): the
- *  largest entry speed from which every later move can still be followed and the newest
+/** Backward-pass bound of the group at window position n (0 = oldest) given the bound on
+ *  the entry of the group after it (0 for the newest, which is assumed to end at rest): the
+ *  largest entry speed from which every later group can still be followed and the newest
  *  stopped at its end. */
 static float pl_bound(const ef_plan_t *p, uint32_t n, float v_next)
 {
-    const ef_move_t *q = &p->q[(p->head + n) % EF_LOOKAHEAD];
+    const ef_plan_group_t *q = &p->q[(p->head + n) % EF_LOOKAHEAD];
     if (n > 0 && (p->q[(p->head + n - 1u) % EF_LOOKAHEAD].flags & EF_MOVE_STOP_END))
         return 0.0f;
     float exit_b = (q->flags & EF_MOVE_STOP_END) ? 0.0f : v_next;
-    float v = ef_minf(q->v_max, pl_ramp_top(exit_b, q->length, q->a_max, p->lim.j_max, 1));
+    float v = ef_minf(q->v_max, pl_ramp_top(exit_b, q->length, q->a_max, q->j_max, 1));
     if (n > 0)
         v = ef_minf(v, p->q[(p->head + n - 1u) % EF_LOOKAHEAD].v_max);
     return v;
 }
 
-/** Incremental backward pass after a push: the newest move's bound, then the earlier ones
- *  while they change. A bound depends only on its move, the move before it and the next
+/** Incremental backward pass after a push: the newest group's bound, then the earlier ones
+ *  while they change. A bound depends only on its group, the group before it and the next
  *  bound, so an unchanged bound leaves every earlier one unchanged: v_lim always equals a
- *  from-scratch pass over the window (the oldest move's bound is never read, so releasing
+ *  from-scratch pass over the window (the oldest group's bound is never read, so releasing
  *  it changes nothing). At most count bound computations. */
 static void pl_backward(ef_plan_t *p)
 {
@@ -348,8 +413,11 @@ int ef_plan_init(ef_plan_t *p, const ef_limits_t *lim)
         return rc;
     p->lim = *lim;
     p->head = p->count = p->nstops = p->seq = 0;
+    p->mhead = p->mcount = 0;
     p->v_last = 0.0f;
     p->finished = 0;
+    p->open = 0;
+    p->rel_n = 0;
     for (uint32_t i = 0; i < EF_LOOKAHEAD; i++)
         p->v_lim[i] = 0.0f;
     return EF_OK;
@@ -358,7 +426,70 @@ int ef_plan_init(ef_plan_t *p, const ef_limits_t *lim)
 /* Free look-ahead slots, so callers push only when there is room (see ef_plan.h). */
 uint32_t ef_plan_space(const ef_plan_t *p)
 {
-    return p ? (uint32_t)EF_LOOKAHEAD - p->count : 0u;
+    return p ? (uint32_t)EF_LOOKAHEAD - p->mcount : 0u;
+}
+
+/** A move's speed limit, tangential acceleration and tangential jerk (ef_plan.h, "Limits of
+ *  a move"). Per axis i, with tangent bound t_i = tabs_i, curvature-vector bound k_i = kabs_i
+ *  and third-derivative bound g_i = kjerk_i, the axis acceleration is at most
+ *  t_i a + k_i v^2 and its jerk at most t_i j + 3 k_i v a + g_i v^3; the limits keep both
+ *  within a_axis_i and j_max at every speed up to v_max. */
+static void pl_limits(const ef_limits_t *l, const ef_move_t *m, float *v_out, float *a_out,
+                      float *j_out)
+{
+    float t[3] = {m->tabs.x, m->tabs.y, m->tabs.z};
+    float k[3] = {m->kabs.x, m->kabs.y, m->kabs.z};
+    float g[3] = {m->kjerk.x, m->kjerk.y, m->kjerk.z};
+    if (m->kappa_max > 0.0f && !(k[0] > 0.0f || k[1] > 0.0f || k[2] > 0.0f))
+        k[0] = k[1] = k[2] = m->kappa_max; /* a move measured without its axis parts */
+    float J = l->j_max, v = m->feed;
+    for (int i = 0; i < 3; i++) {
+        if (t[i] > 0.0f)
+            v = ef_minf(v, l->v_axis[i] / t[i]);
+        if (k[i] > 0.0f)
+            v = ef_minf(v, ef_sqrtf(l->a_normal_frac * l->a_axis[i] / k[i]));
+        if (J > 0.0f && g[i] > 0.0f)
+            v = ef_minf(v, ef_cbrtf(EF_PLAN_JG_SHARE * J / g[i]));
+    }
+    float a = 0.0f, j = 0.0f;
+    int have = 0;
+    for (int i = 0; i < 3; i++) {
+        if (!(t[i] > 0.0f))
+            continue;
+        float ai = (l->a_axis[i] - k[i] * v * v) / t[i];
+        a = have ? ef_minf(a, ai) : ai;
+        have = 1;
+    }
+    if (J > 0.0f) {
+        have = 0;
+        for (int i = 0; i < 3; i++) {
+            float gv = J - g[i] * v * v * v;
+            if (t[i] > 0.0f) {
+                /* Lower a where the centripetal growth term leaves less than the minimum. */
+                /* > 0: gv >= (1 - EF_PLAN_JG_SHARE) J, and the ramps' share stays below it
+                 * whatever the two macros are set to */
+                float jt = ef_minf(EF_PLAN_JT_MIN, 0.9f * (1.0f - EF_PLAN_JG_SHARE));
+                float room = gv - jt * J * ef_minf(t[i], 1.0f);
+                if (k[i] > 0.0f && v > 0.0f && 3.0f * k[i] * v * a > room)
+                    a = ef_maxf(0.0f, room / (3.0f * k[i] * v));
+                float ji = (gv - 3.0f * k[i] * v * a) / t[i];
+                j = have ? ef_minf(j, ji) : ji;
+                have = 1;
+            }
+        }
+        /* Each later lowering of a only frees jerk: recompute with the final a. */
+        have = 0;
+        for (int i = 0; i < 3; i++) {
+            if (!(t[i] > 0.0f))
+                continue;
+            float ji = (J - g[i] * v * v * v - 3.0f * k[i] * v * a) / t[i];
+            j = have ? ef_minf(j, ji) : ji;
+            have = 1;
+        }
+    }
+    *v_out = v;
+    *a_out = a;
+    *j_out = j;
 }
 
 /* Queue a move with its speed/acceleration limits, update bounds (see ef_plan.h). */
@@ -369,58 +500,77 @@ int ef_plan_push(ef_plan_t *p, const ef_move_t *m)
     if (m->degree != 1 && m->degree != 3 && m->degree != 5)
         return EF_ERR_ARG;
     int fin = ef_finitef(m->length) & ef_finitef(m->kappa_max) & ef_finitef(m->feed) &
-              pl_vfinite(m->tabs);
+              pl_vfinite(m->tabs) & pl_v3ok(m->kabs) & pl_v3ok(m->kjerk);
     for (int i = 0; i <= m->degree; i++)
         fin &= pl_vfinite(m->b[i]);
     if (!fin)
         return EF_ERR_NONFINITE;
     if (!(m->length >= EF_MIN_CHORD) || !(m->kappa_max >= 0.0f) || !(m->tabs.x >= 0.0f) ||
-        !(m->tabs.y >= 0.0f) || !(m->tabs.z >= 0.0f) ||
+        !(m->tabs.y >= 0.0f) || !(m->tabs.z >= 0.0f) || !(m->kabs.x >= 0.0f) ||
+        !(m->kabs.y >= 0.0f) || !(m->kabs.z >= 0.0f) || !(m->kjerk.x >= 0.0f) ||
+        !(m->kjerk.y >= 0.0f) || !(m->kjerk.z >= 0.0f) ||
         !(ef_maxf(m->tabs.x, ef_maxf(m->tabs.y, m->tabs.z)) >= EF_PLAN_TABS_MIN))
         return EF_ERR_ARG;
     if (!(m->feed > 0.0f))
         return EF_ERR_FEED;
-    if (p->count >= EF_LOOKAHEAD)
-        return EF_ERR_FULL;
+    if (p->mcount >= EF_LOOKAHEAD)
+        return EF_ERR_FULL; /* (groups never outnumber moves) */
 
-    /* Limits (ef_plan.h): axis speeds and accelerations through tabs, centripetal share. */
-    const ef_limits_t *l = &p->lim;
-    float tabs[3] = {m->tabs.x, m->tabs.y, m->tabs.z};
-    float vmax = m->feed, apath = 0.0f;
-    int have_a = 0;
-    for (int i = 0; i < 3; i++) {
-        if (tabs[i] > 0.0f) {
-            vmax = ef_minf(vmax, l->v_axis[i] / tabs[i]);
-            float ai = l->a_axis[i] / tabs[i];
-            apath = have_a ? ef_minf(apath, ai) : ai;
-            have_a = 1;
-        }
-    }
-    float an = l->a_normal_frac * apath;
-    if (m->kappa_max > 0.0f)
-        vmax = ef_minf(vmax, ef_sqrtf(an / m->kappa_max));
-    float amax = (1.0f - l->a_normal_frac) * apath;
-    if (!(vmax > 0.0f) || !(amax > 0.0f) || !ef_finitef(vmax) || !ef_finitef(amax))
+    float vmax, amax, jmax;
+    pl_limits(&p->lim, m, &vmax, &amax, &jmax);
+    if (!(vmax > 0.0f) || !(amax > 0.0f) || !ef_finitef(vmax) || !ef_finitef(amax) ||
+        !ef_finitef(jmax))
         return EF_ERR_FEED;
 
-    uint32_t idx = (p->head + p->count) % EF_LOOKAHEAD;
-    ef_move_t *q = &p->q[idx];
+    ef_move_t *q = &p->mv[(p->mhead + p->mcount) % EF_LOOKAHEAD];
     *q = *m;
     q->flags = (uint16_t)(m->flags & (EF_MOVE_STOP_END | EF_MOVE_CLAMPED | EF_MOVE_BLEND_CLAMPED));
     q->seq = p->seq++;
     q->v_max = vmax;
     q->a_max = amax;
+    q->j_max = jmax;
     q->v_entry = q->v_exit = 0.0f;
     q->duration = 0.0f;
     for (int k = 0; k < EF_TIMELAW_PHASES; k++) {
         q->law.dt[k] = 0.0f;
-        for (int i = 0; i < 5; i++)
+        for (int i = 0; i < EF_TIMELAW_COEFFS; i++)
             q->law.c[k][i] = 0.0f;
     }
-    p->v_lim[idx] = 0.0f;
-    p->count++;
-    if (q->flags & EF_MOVE_STOP_END)
+    p->mcount++;
+
+    /* Join the newest group while it is shorter than a full ramp and the limits agree
+     * (ef_plan.h, "Ramp groups"); else start a group. */
+    ef_plan_group_t *g = p->count ? &p->q[(p->head + p->count - 1u) % EF_LOOKAHEAD] : 0;
+    int join = p->open && g && !(g->flags & EF_MOVE_STOP_END) && g->n < EF_PLAN_GROUP_MAX;
+    if (join) {
+        const float vr = EF_PLAN_GROUP_VRATIO, ar = EF_PLAN_GROUP_ARATIO;
+        join = vmax >= vr * g->v_max && g->v_max >= vr * vmax && amax >= ar * g->a_max &&
+               g->a_max >= ar * amax && jmax >= ar * g->j_max && g->j_max >= ar * jmax &&
+               g->length < pl_ramp_dist(0.0f, g->v_max, g->a_max, g->j_max);
+    }
+    if (join) {
+        g->length += q->length;
+        g->v_max = ef_minf(g->v_max, vmax);
+        g->a_max = ef_minf(g->a_max, amax);
+        g->j_max = ef_minf(g->j_max, jmax);
+        g->n++;
+    } else {
+        uint32_t idx = (p->head + p->count) % EF_LOOKAHEAD;
+        g = &p->q[idx];
+        g->length = q->length;
+        g->v_max = vmax;
+        g->a_max = amax;
+        g->j_max = jmax;
+        g->flags = 0;
+        g->n = 1;
+        p->v_lim[idx] = 0.0f;
+        p->count++;
+    }
+    if (q->flags & EF_MOVE_STOP_END) {
+        g->flags |= EF_MOVE_STOP_END;
         p->nstops++;
+    }
+    p->open = 1;
     p->finished = 0;
     pl_backward(p);
     return EF_OK;
@@ -431,14 +581,122 @@ int ef_plan_finish(ef_plan_t *p)
 {
     if (!p)
         return EF_ERR_ARG;
-    if (p->count > 0) {
-        ef_move_t *last = &p->q[(p->head + p->count - 1u) % EF_LOOKAHEAD];
-        if (!(last->flags & EF_MOVE_STOP_END)) {
+    if (p->count > 0 && p->open) {
+        ef_plan_group_t *g = &p->q[(p->head + p->count - 1u) % EF_LOOKAHEAD];
+        ef_move_t *last = &p->mv[(p->mhead + p->mcount - 1u) % EF_LOOKAHEAD];
+        if (!(g->flags & EF_MOVE_STOP_END)) {
+            g->flags |= EF_MOVE_STOP_END;
             last->flags |= EF_MOVE_STOP_END;
             p->nstops++;
         }
     }
+    p->open = 0;
     p->finished = 1;
+    return EF_OK;
+}
+
+/** Group distance reached at time u into phase k of a group law, as the phase's start
+ *  distance and the distance covered since (kept apart: a member's own distance is their
+ *  sum less its start, with less rounding than one sum), and speed, acceleration, jerk. */
+static void pl_law_at(const ef_move_t *g, uint32_t k, float u, float *s0, float *ds, float *d)
+{
+    const float *c = g->law.c[k];
+    float L = g->length;
+    *s0 = L * c[0];
+    *ds = L * (u * (c[1] + u * (c[2] + u * c[3])));
+    d[0] = L * (c[1] + u * (2.0f * c[2] + u * 3.0f * c[3]));
+    d[1] = L * (2.0f * c[2] + u * 6.0f * c[3]);
+    d[2] = L * 6.0f * c[3];
+}
+
+/** Where a group law reaches group distance `target`, searching on from phase k at time u:
+ *  the first used phase whose end reaches it (else the last used phase), then a fixed-count
+ *  bisection in it; (k, u) are updated. */
+static void pl_law_cross(const ef_move_t *g, uint32_t last, float target, uint32_t *k, float *u)
+{
+    float s0, ds, d[3];
+    uint32_t kk = *k;
+    float lo = *u;
+    for (; kk < last; kk++, lo = 0.0f) {
+        if (!(g->law.dt[kk] > 0.0f))
+            continue;
+        pl_law_at(g, kk, g->law.dt[kk], &s0, &ds, d);
+        if (s0 + ds >= target)
+            break;
+    }
+    float hi = g->law.dt[kk];
+    for (int i = 0; i < EF_PLAN_BISECT && lo < hi; i++) {
+        float mid = 0.5f * (lo + hi);
+        pl_law_at(g, kk, mid, &s0, &ds, d);
+        if (s0 + ds >= target)
+            hi = mid;
+        else
+            lo = mid;
+    }
+    *k = kk;
+    *u = hi;
+}
+
+/** The law of one member of the group being released: the group law between the crossing
+ *  (rel_k, rel_u) and (k1, u1), in the member's own parameter. Returns the duration. */
+static float pl_law_slice(const ef_plan_t *p, uint32_t k1, float u1, float s_start, float len,
+                          ef_timelaw_t *law)
+{
+    const ef_move_t *g = &p->rel;
+    for (int k = 0; k < EF_TIMELAW_PHASES; k++)
+        pl_law_zero(law, k);
+    float il = 1.0f / len, dur = 0.0f;
+    int slot = 0;
+    for (uint32_t k = p->rel_k; k <= k1 && k < EF_TIMELAW_PHASES; k++) {
+        if (!(g->law.dt[k] > 0.0f))
+            continue;
+        float u0 = k == p->rel_k ? p->rel_u : 0.0f;
+        float ue = k == k1 ? u1 : g->law.dt[k];
+        if (!(ue > u0))
+            continue;
+        float s0, ds, d[3];
+        pl_law_at(g, k, u0, &s0, &ds, d);
+        law->dt[slot] = ue - u0;
+        law->c[slot][0] = slot == 0 ? 0.0f : ((s0 - s_start) + ds) * il;
+        law->c[slot][1] = d[0] * il;
+        law->c[slot][2] = 0.5f * d[1] * il;
+        law->c[slot][3] = d[2] * (1.0f / 6.0f) * il;
+        dur += ue - u0;
+        slot++;
+    }
+    return dur;
+}
+
+/** Start releasing the oldest group: its law over its whole length, from the committed
+ *  entry speed to what the rest of the window allows. */
+static int pl_release_start(ef_plan_t *p)
+{
+    const ef_plan_group_t *g = &p->q[p->head];
+    if (p->count == 1u)
+        p->open = 0; /* nothing joins a group under release */
+    float exit_b = 0.0f;
+    if (!(g->flags & EF_MOVE_STOP_END) && p->count > 1)
+        exit_b = p->v_lim[(p->head + 1u) % EF_LOOKAHEAD];
+    ef_move_t *r = &p->rel;
+    r->length = g->length;
+    r->v_max = g->v_max;
+    r->a_max = g->a_max;
+    r->j_max = g->j_max;
+    r->flags = g->flags;
+    float v0 = p->v_last;
+    float up = pl_ramp_top(v0, r->length, r->a_max, r->j_max, 0);
+    r->v_entry = v0;
+    r->v_exit = ef_minf(ef_minf(exit_b, up), r->v_max);
+    int rc = pl_timelaw_up(r, r->j_max, up);
+    if (rc != EF_OK)
+        return rc; /* not reachable for data push accepted; state unchanged */
+    if (g->flags & EF_MOVE_STOP_END)
+        r->v_exit = 0.0f; /* exact: the ramp ends at rest (dropped ramps only for vc ~ 0) */
+    p->rel_n = g->n;
+    p->rel_s = 0.0f;
+    p->rel_k = 0;
+    p->rel_u = 0.0f;
+    p->rel_v = v0;
     return EF_OK;
 }
 
@@ -447,30 +705,71 @@ int ef_plan_pull(ef_plan_t *p, ef_move_t *out)
 {
     if (!p || !out)
         return EF_ERR_ARG;
-    if (p->count == 0 || !(p->count >= EF_LOOKAHEAD || p->nstops > 0 || p->finished))
-        return EF_ERR_AGAIN;
-
-    ef_move_t m = p->q[p->head];
-    /* Forward pass for the head: entry committed, exit what the entry can reach within the
-     * move and what the rest of the window allows. */
-    float exit_b = 0.0f;
-    if (!(m.flags & EF_MOVE_STOP_END) && p->count > 1)
-        exit_b = p->v_lim[(p->head + 1u) % EF_LOOKAHEAD];
-    float v0 = p->v_last;
-    float up = pl_ramp_top(v0, m.length, m.a_max, p->lim.j_max, 0);
-    float v1 = ef_minf(exit_b, up);
-    m.v_entry = v0;
-    m.v_exit = ef_minf(v1, m.v_max);
-    int rc = pl_timelaw_up(&m, p->lim.j_max, up);
-    if (rc != EF_OK)
-        return rc; /* not reachable for data push accepted; state unchanged */
-    if (m.flags & EF_MOVE_STOP_END) {
-        m.v_exit = 0.0f; /* exact: the ramp ends at rest (dropped ramps only for vc ~ 0) */
-        p->nstops--;
+    if (p->rel_n == 0u) {
+        if (p->count == 0 || !(p->mcount >= EF_LOOKAHEAD || p->nstops > 0 || p->finished))
+            return EF_ERR_AGAIN;
+        int rc = pl_release_start(p);
+        if (rc != EF_OK)
+            return rc;
     }
-    p->v_last = m.v_exit;
-    p->head = (p->head + 1u) % EF_LOOKAHEAD;
-    p->count--;
+    const ef_move_t *r = &p->rel;
+    ef_move_t m = p->mv[p->mhead];
+    m.v_max = r->v_max;
+    m.a_max = r->a_max;
+    m.j_max = r->j_max;
+    m.v_entry = p->rel_v;
+    if (p->rel_n == 1u && p->rel_s == 0.0f) {
+        /* A group of one: its law as it is. */
+        m.law = r->law;
+        m.duration = r->duration;
+        m.v_exit = r->v_exit;
+    } else {
+        uint32_t last = 0;
+        for (uint32_t k = 0; k < EF_TIMELAW_PHASES; k++)
+            if (r->law.dt[k] > 0.0f)
+                last = k;
+        uint32_t k1 = p->rel_k;
+        float u1 = p->rel_u, v1;
+        if (p->rel_n == 1u) {
+            k1 = last; /* the last member ends where the law does, at its exit speed */
+            u1 = r->law.dt[last];
+            v1 = r->v_exit;
+        } else {
+            pl_law_cross(r, last, p->rel_s + m.length, &k1, &u1);
+            float s0, ds, d[3];
+            pl_law_at(r, k1, u1, &s0, &ds, d);
+            v1 = ef_maxf(0.0f, d[0]);
+        }
+        float dur = pl_law_slice(p, k1, u1, p->rel_s, m.length, &m.law);
+        if (!(dur > 0.0f)) {
+            /* Shorter than the time resolution at this point of the law: one cruise phase
+             * at the speed there (adds at most that resolution to the program). */
+            float v = ef_maxf(ef_maxf(m.v_entry, v1), 1e-3f);
+            for (int k = 0; k < EF_TIMELAW_PHASES; k++)
+                pl_law_zero(&m.law, k);
+            dur = m.length / v;
+            m.law.dt[0] = dur;
+            m.law.c[0][1] = 1.0f / dur;
+        }
+        m.duration = dur;
+        m.v_exit = v1;
+        p->rel_k = k1;
+        p->rel_u = u1;
+        p->rel_v = v1;
+        p->rel_s += m.length;
+    }
+    if (p->rel_n == 1u && (m.flags & EF_MOVE_STOP_END))
+        m.v_exit = 0.0f;
+    p->mhead = (p->mhead + 1u) % EF_LOOKAHEAD;
+    p->mcount--;
+    p->rel_n--;
+    if (p->rel_n == 0u) {
+        if (p->q[p->head].flags & EF_MOVE_STOP_END)
+            p->nstops--;
+        p->v_last = m.v_exit;
+        p->head = (p->head + 1u) % EF_LOOKAHEAD;
+        p->count--;
+    }
     *out = m;
     return EF_OK;
 }

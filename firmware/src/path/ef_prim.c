@@ -244,6 +244,15 @@ static ef_vec3_t prim_mm_b3(const ef_vec3_t *p, float t)
     return ef_v3_axpy(r, t * t * t, p[3]);
 }
 
+/* Quadratic Bernstein combination of p[0..2] at t. */
+static ef_vec3_t prim_mm_b2(const ef_vec3_t *p, float t)
+{
+    float u = 1.0f - t;
+    ef_vec3_t r = ef_v3_scale(p[0], u * u);
+    r = ef_v3_axpy(r, 2.0f * u * t, p[1]);
+    return ef_v3_axpy(r, t * t, p[2]);
+}
+
 /* Degree elevation of p (degree n, n + 1 points) in place to degree n + 1. */
 static void prim_mm_elevate(ef_vec3_t *p, int n)
 {
@@ -259,7 +268,7 @@ static int prim_move_measure_fail(ef_move_t *m, int rc)
 {
     m->length = 0.0f;
     m->kappa_max = 0.0f;
-    m->tabs = ef_v3(0.0f, 0.0f, 0.0f);
+    m->tabs = m->kabs = m->kjerk = ef_v3(0.0f, 0.0f, 0.0f);
     return rc;
 }
 
@@ -284,6 +293,7 @@ int ef_move_measure(ef_move_t *m)
         m->length = l;
         m->kappa_max = 0.0f;
         m->tabs = ef_v3(ef_fabsf(d.x) * inv, ef_fabsf(d.y) * inv, ef_fabsf(d.z) * inv);
+        m->kabs = m->kjerk = ef_v3(0.0f, 0.0f, 0.0f);
         if (!prim_finite(l))
             return prim_move_measure_fail(m, EF_ERR_NONFINITE);
         return EF_OK;
@@ -293,16 +303,19 @@ int ef_move_measure(ef_move_t *m)
      * cubic elevated to degrees 4 and 3, exact up to rounding); then every node is a
      * Bernstein combination of them: the same nodes and samples as evaluating the curve's
      * derivatives by de Casteljau's algorithm, in about a sixth of the instructions. */
-    ef_vec3_t h1[5], h2[4];
+    ef_vec3_t h1[5], h2[4], h3[3];
     for (int i = 0; i < deg; i++)
         h1[i] = ef_v3_scale(ef_v3_sub(m->b[i + 1], m->b[i]), (float)deg);
     for (int i = 0; i + 1 < deg; i++)
         h2[i] = ef_v3_scale(ef_v3_sub(h1[i + 1], h1[i]), (float)(deg - 1));
+    for (int i = 0; i + 2 < deg; i++)
+        h3[i] = ef_v3_scale(ef_v3_sub(h2[i + 1], h2[i]), (float)(deg - 2));
     if (deg == 3) {
         prim_mm_elevate(h1, 2);
         prim_mm_elevate(h1, 3);
         prim_mm_elevate(h2, 1);
         prim_mm_elevate(h2, 2);
+        h3[1] = h3[2] = h3[0]; /* a constant, as a quadratic */
     }
     float len = 0.0f;
     for (int i = 0; i < 8; i++) {
@@ -312,14 +325,26 @@ int ef_move_measure(ef_move_t *m)
     }
     float kmax = 0.0f;
     float ilen = 1.0f / ef_maxf(len, 1e-30f);
-    ef_vec3_t tabs = ef_v3(0.0f, 0.0f, 0.0f);
+    float ilen2 = ilen * ilen, ilen3 = ilen2 * ilen;
+    ef_vec3_t tabs = ef_v3(0.0f, 0.0f, 0.0f), kabs = tabs, kjerk = tabs;
     for (int i = 0; i <= EF_MOVE_SAMPLES; i++) {
         float t = (float)i * (1.0f / (float)EF_MOVE_SAMPLES);
-        ef_vec3_t d1 = prim_mm_b4(h1, t), d2 = prim_mm_b3(h2, t);
+        ef_vec3_t d1 = prim_mm_b4(h1, t), d2 = prim_mm_b3(h2, t), d3 = prim_mm_b2(h3, t);
         float sp = ef_v3_norm(d1);
         float isp = 1.0f / ef_maxf(sp, 1e-30f);
         float k = ef_v3_norm(ef_v3_cross(d1, d2)) * isp * isp * isp;
         kmax = ef_maxf(kmax, k);
+        /* Curvature vector (d2 less its tangential part, / sp^2): what arc-length stepping
+         * accelerates each axis by per unit v^2; f'' / L^2 is what uniform stepping does.
+         * The planner takes the larger per axis (its centripetal and jerk limits). */
+        ef_vec3_t tn = ef_v3_scale(d1, isp);
+        ef_vec3_t kv = ef_v3_scale(ef_v3_axpy(d2, -ef_v3_dot(d2, tn), tn), isp * isp);
+        kabs.x = ef_maxf(kabs.x, ef_maxf(ef_fabsf(kv.x), ef_fabsf(d2.x) * ilen2));
+        kabs.y = ef_maxf(kabs.y, ef_maxf(ef_fabsf(kv.y), ef_fabsf(d2.y) * ilen2));
+        kabs.z = ef_maxf(kabs.z, ef_maxf(ef_fabsf(kv.z), ef_fabsf(d2.z) * ilen2));
+        kjerk.x = ef_maxf(kjerk.x, ef_fabsf(d3.x) * ilen3);
+        kjerk.y = ef_maxf(kjerk.y, ef_fabsf(d3.y) * ilen3);
+        kjerk.z = ef_maxf(kjerk.z, ef_fabsf(d3.z) * ilen3);
         /* Per axis, the larger of |t_i| (what arc-length stepping moves the axis by per unit
          * path speed) and |f'_i| / L (what stepping tau uniformly by the time law does, where
          * the curve's parametric speed exceeds its mean): the planner's axis limits then
@@ -329,10 +354,18 @@ int ef_move_measure(ef_move_t *m)
         tabs.y = ef_maxf(tabs.y, ef_fabsf(d1.y) * w);
         tabs.z = ef_maxf(tabs.z, ef_fabsf(d1.z) * w);
     }
-    if (!prim_finite(len) || !prim_finite(kmax))
+    /* A tiny curve's bounds are huge (curvature ~ 1 / L, its rate ~ 1 / L^2) but finite:
+     * saturate rather than overflow, so the planner gets a small positive speed limit. */
+    const float big = 1e30f;
+    kabs = ef_v3(ef_minf(kabs.x, big), ef_minf(kabs.y, big), ef_minf(kabs.z, big));
+    kjerk = ef_v3(ef_minf(kjerk.x, big), ef_minf(kjerk.y, big), ef_minf(kjerk.z, big));
+    int fin = prim_finite(len) & prim_finite(kmax) & prim_v3_finite(kabs) & prim_v3_finite(kjerk);
+    if (!fin)
         return prim_move_measure_fail(m, EF_ERR_NONFINITE);
     m->length = len;
     m->kappa_max = kmax;
     m->tabs = tabs;
+    m->kabs = kabs;
+    m->kjerk = kjerk;
     return EF_OK;
 }

@@ -22,10 +22,12 @@
  * receives (COB-ID ::EF_CO_LAW_COBID, RPDO3, object 0x2101), and one **axis record** per drive
  * (its axis's control points, RPDO2 at 0x300 + node, object 0x2100). A record is cut into
  * chunks of 7 bytes; each chunk travels in an 8-byte PDO whose first byte is
- * `(seq & 0xF) << 4 | chunk index`. Records, little-endian:
+ * `(seq & 0x7) << 5 | chunk index` (up to 32 chunks; a full law record takes 22). Records,
+ * little-endian:
  *
- *     law:  u16 seq, u8 flags (bit 0: EF_MOVE_STOP_END), u8 phase mask (bit k: phase k sent),
- *           f32 length, f32 v_exit, then per sent phase: f32 dt, f32 c[5]     (12 + 24 n bytes)
+ *     law:  u16 seq, u8 flags (bit 0: EF_MOVE_STOP_END), u8 phase mask (bit k: phase k sent,
+ *           k < 7), f32 length, f32 v_exit, then per sent phase: f32 dt, f32 c[4]
+ *                                                                          (12 + 20 n bytes)
  *     axis: u16 seq, u8 degree (1, 3, 5), u8 0, f32 b[0..degree]            (8 + 4 degree bytes)
  *
  * A phase is sent unless its dt and all its coefficients are 0 (a phase not sent decodes as
@@ -230,16 +232,23 @@ int ef_co_pos_to_inc(float x, uint32_t inc_per_unit, int32_t *out);
 float ef_co_inc_to_pos(int32_t inc, uint32_t inc_per_unit);
 
 /* --- Segment-mode codec -------------------------------------------------------------------- */
+/** Chunk header byte: the low bits carry the chunk index, the high bits the record's
+ *  sequence number's low bits. */
+#define EF_CO_CHUNK_INDEX_BITS 5u
+#define EF_CO_CHUNK_INDEX_MASK 0x1Fu
+#define EF_CO_CHUNK_SEQ_MASK   0x07u
 /** Payload bytes per chunk. */
 #define EF_CO_CHUNK_BYTES 7u
-/** Largest record (a law record with three phases). */
-#define EF_CO_REC_MAX 84u
+/** Bytes of one time-law phase in a law record: its duration and its coefficients. */
+#define EF_CO_PHASE_BYTES (4u + 4u * EF_TIMELAW_COEFFS)
+/** Largest record (a law record with every phase used: 12 + 7 x 20 bytes). */
+#define EF_CO_REC_MAX (12u + EF_CO_PHASE_BYTES * EF_TIMELAW_PHASES)
 /** Most chunks of one record: ceil(EF_CO_REC_MAX / 7). */
-#define EF_CO_CHUNKS_MAX 12u
+#define EF_CO_CHUNKS_MAX ((EF_CO_REC_MAX + EF_CO_CHUNK_BYTES - 1u) / EF_CO_CHUNK_BYTES)
 
 /**
  * @brief Encode a move's law record (seq's low 16 bits, flags, length, v_exit, law).
- * @param len out: record bytes (12 + 24 n)
+ * @param len out: record bytes (12 + EF_CO_PHASE_BYTES n, n the phases used)
  * @retval EF_OK
  * @retval EF_ERR_ARG NULL
  */
@@ -262,7 +271,7 @@ typedef struct {
     uint32_t len;     /**< record length (known after chunk 0), 0 while idle */
     uint32_t next;    /**< chunk index expected next */
     uint32_t rec_len; /**< after ef_co_asm_feed() returned EF_OK: the record's length */
-    uint8_t seq4;     /**< the record's sequence nibble */
+    uint8_t seq4;     /**< the record's sequence bits (EF_CO_CHUNK_SEQ_MASK) */
     uint8_t law;      /**< this stream carries law records (else axis records) */
 } ef_co_asm_t;
 /** @brief Idle reassembly of law (law != 0) or axis records. */

@@ -100,6 +100,12 @@ static inline float ef_v3_norm(ef_vec3_t a)
  */
 float ef_atan2f(float y, float x);
 
+/**
+ * @brief Cube root of x >= 0 with a fixed instruction count (exponent estimate and four
+ * Newton steps; relative error below 1e-6). Returns 0 for x <= 0 or NaN, x for +inf.
+ */
+float ef_cbrtf(float x);
+
 #ifdef __cplusplus
 }
 #endif

@@ -94,17 +94,17 @@ extern "C" {
 /* Word offsets inside a slot. */
 #define EF_MB_SLOT_SEQ 0 /**< u32 sequence number; the slot index is seq % slots */
 #define EF_MB_SLOT_FORMAT                                                                          \
-    2                           /**< low byte: degree (1, 3, 5); high byte: flags, bit 0 =         \
-                                     ends at rest (exact stop) */
-#define EF_MB_SLOT_RESERVED  3  /**< 0 */
-#define EF_MB_SLOT_DURATION  4  /**< float: seconds, > 0 */
-#define EF_MB_SLOT_LENGTH    6  /**< float: arc length (units) */
-#define EF_MB_SLOT_V_EXIT    8  /**< float: speed at the end (units/s) */
-#define EF_MB_SLOT_LAW_DT    10 /**< 3 floats: time-law phase durations */
-#define EF_MB_SLOT_LAW_C     16 /**< 15 floats: time-law coefficients, phase by phase */
-#define EF_MB_SLOT_POINTS    46 /**< 18 floats: b[0..5] as x, y, z each (unused points 0) */
-#define EF_MB_SLOT_CRC       82 /**< CRC-16/MODBUS of words 0..81 sent high byte first */
-#define EF_MB_SLOT_WORDS     83
+    2                            /**< low byte: degree (1, 3, 5); high byte: flags, bit 0 =        \
+                                      ends at rest (exact stop) */
+#define EF_MB_SLOT_RESERVED  3   /**< 0 */
+#define EF_MB_SLOT_DURATION  4   /**< float: seconds, > 0 */
+#define EF_MB_SLOT_LENGTH    6   /**< float: arc length (units) */
+#define EF_MB_SLOT_V_EXIT    8   /**< float: speed at the end (units/s) */
+#define EF_MB_SLOT_LAW_DT    10  /**< 7 floats: time-law phase durations */
+#define EF_MB_SLOT_LAW_C     24  /**< 28 floats: time-law coefficients, phase by phase */
+#define EF_MB_SLOT_POINTS    80  /**< 18 floats: b[0..5] as x, y, z each (unused points 0) */
+#define EF_MB_SLOT_CRC       116 /**< CRC-16/MODBUS of words 0..115 sent high byte first */
+#define EF_MB_SLOT_WORDS     117 /**< one Write Multiple Registers request (at most 123) */
 #define EF_MB_SLOT_FLAG_STOP 0x01u
 /**@}*/
 

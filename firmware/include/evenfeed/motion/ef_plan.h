@@ -5,21 +5,43 @@
  * and forward passes, and each released move's time law.
  *
  * ## Limits of a move (set by ef_plan_push())
- * - v_max = min(feed, min_i v_axis_i / tabs_i, sqrt(a_n / kappa_max)), where tabs_i is the
- *   largest |tangent component| on axis i over the move (and of |f'_i| / L: ef_path.h)
- *   and a_n = a_normal_frac x a_path
- *   the centripetal share of the acceleration budget;
- * - a_max = (1 - a_normal_frac) x a_path, the tangential share, with
- *   a_path = min_i a_axis_i / tabs_i (so every axis stays within its own limit when the
- *   two shares add up, component by component).
+ * Every axis i has its own speed, acceleration and jerk limit (v_axis_i, a_axis_i, j_max),
+ * all used whole. From the move's curve (ef_move_measure()): tangent bound t_i = tabs_i,
+ * curvature-vector bound k_i = kabs_i and third-derivative bound g_i = kjerk_i. At path speed
+ * v, tangential acceleration a and tangential jerk j, axis i moves at most t_i v, accelerates
+ * at most t_i a + k_i v^2 and jerks at most t_i j + 3 k_i v a + g_i v^3. So:
+ * - v_max = min(feed, v_axis_i / t_i, sqrt(a_normal_frac a_axis_i / k_i),
+ *   cbrt(EF_PLAN_JG_SHARE j_max / g_i)): at v_max the centripetal part takes at most
+ *   a_normal_frac of each axis's acceleration, the geometry at most EF_PLAN_JG_SHARE of the
+ *   jerk;
+ * - a_max = min_i (a_axis_i - k_i v_max^2) / t_i: what every axis has left at v_max (a
+ *   line, k = 0, gets the whole budget of its most loaded axis);
+ * - j_max (the move's) = min_i (j_max - g_i v_max^3 - 3 k_i v_max a_max) / t_i, at least
+ *   EF_PLAN_JT_MIN j_max / t_i (a_max is lowered where the centripetal growth term would
+ *   leave less).
+ * The bounds take each maximum over the whole curve, so they hold at every instant of the
+ * move whatever its speed profile (within v_max, a_max, j_max).
  *
  * ## Speed profile inside a move
  * Each move is self-contained: it ramps from v_entry to a cruise speed v_c <= v_max, cruises,
- * and ramps to v_exit (ef_timelaw_t, up to three phases). Without a jerk limit the ramps
- * have constant acceleration a_max. With a jerk limit J > 0 the ramps follow a smoothstep
- * in speed (zero acceleration at both ends of a ramp, so acceleration is continuous across
- * phases and moves), lasting T = max(1.5 |dv| / a_max, sqrt(6 |dv| / J)): peak
- * acceleration 1.5 |dv| / T <= a_max, peak jerk 6 |dv| / T^2 <= J.
+ * and ramps to v_exit (ef_timelaw_t: phases 0-2, 3, 4-6). Without a jerk limit a ramp is one
+ * constant-acceleration phase at a_max. With one it is the time-optimal S-curve between two
+ * speeds at zero acceleration: constant jerk j_max up to a_max, constant acceleration,
+ * constant jerk down, lasting T = dv / a + a / j when dv >= a^2 / j, else 2 sqrt(dv / j)
+ * (the acceleration peaks at sqrt(dv j) < a). The acceleration is continuous across phases
+ * and moves (zero at every junction), the jerk within the move's j_max.
+ *
+ * ## Ramp groups
+ * A move that cannot hold a whole ramp would cap the speed by its length (each move's law
+ * starts and ends at zero acceleration). So consecutive moves are planned as one **group**
+ * while the group is shorter than a full ramp from rest to its speed limit, its members'
+ * limits agree (speed within EF_PLAN_GROUP_VRATIO, acceleration and jerk within
+ * EF_PLAN_GROUP_ARATIO), it has fewer than EF_PLAN_GROUP_MAX members and no exact stop
+ * inside. The group gets one law (above) over its whole length at its members' smallest
+ * limits; at release that law is cut at the members' boundaries (each crossing found by a
+ * fixed-count bisection), so each member's law is a slice of at most EF_TIMELAW_PHASES
+ * phases, with the acceleration continuous across the members' junctions. A group of one
+ * member is exactly the single-move law. The passes below run over groups.
  *
  * ## Passes and release
  * Junction speeds are limited by both moves' v_max (the smoother's paths are G2 at every
@@ -50,19 +72,32 @@
 extern "C" {
 #endif
 
-/** Moves in the planner's look-ahead window (each ef_move_t is 204 bytes). */
+/** Moves in the planner's look-ahead window (each ef_move_t is about 290 bytes), and as
+ *  many groups. */
 #ifndef EF_LOOKAHEAD
 #define EF_LOOKAHEAD 64
+#endif
+
+/** Share of the jerk budget the geometry may take at a move's speed limit (curvature
+ *  changing along the curve: g_i v^3, "Limits of a move"). */
+#ifndef EF_PLAN_JG_SHARE
+#define EF_PLAN_JG_SHARE 0.5f
+#endif
+/** Smallest share of the jerk budget the tangential ramps of a curved move keep (the rest is
+ *  the geometry's and the centripetal part's growth while the speed changes). */
+#ifndef EF_PLAN_JT_MIN
+#define EF_PLAN_JT_MIN 0.25f
 #endif
 
 /** Motion limits. Speeds in units/s, accelerations units/s^2, jerk units/s^3. */
 typedef struct {
     float v_axis[3];     /**< largest speed per axis, > 0 */
     float a_axis[3];     /**< largest acceleration per axis, > 0 */
-    float j_max;         /**< largest path jerk; 0 = no jerk limit (constant-acceleration
-                              ramps) */
-    float a_normal_frac; /**< share of the acceleration budget allowed for centripetal
-                              acceleration, in (0, 1); 0.5 is a good default */
+    float j_max;         /**< largest jerk of every axis; 0 = no jerk limit
+                              (constant-acceleration ramps) */
+    float a_normal_frac; /**< largest share of each axis's acceleration the centripetal part
+                              may take at a move's speed limit, in (0, 1); what is left goes
+                              to the ramps (0.85 is a good default) */
 } ef_limits_t;
 
 /**
@@ -74,18 +109,53 @@ typedef struct {
  */
 int ef_limits_check(const ef_limits_t *lim);
 
+/** Most moves one ramp group holds ("Ramp groups" above). */
+#ifndef EF_PLAN_GROUP_MAX
+#define EF_PLAN_GROUP_MAX 32
+#endif
+/** A move joins the newest group only while its speed limit is at least this share of the
+ *  group's (and the group's of its own): a group runs at its members' smallest limit. */
+#ifndef EF_PLAN_GROUP_VRATIO
+#define EF_PLAN_GROUP_VRATIO 0.92f
+#endif
+/** Likewise for the acceleration and jerk limits. */
+#ifndef EF_PLAN_GROUP_ARATIO
+#define EF_PLAN_GROUP_ARATIO 0.6f
+#endif
+
+/** A ramp group: consecutive moves planned as one (their lengths added, their smallest
+ *  limits), whose time law is cut into one law per member at release. */
+typedef struct {
+    float length;   /**< sum of the members' lengths */
+    float v_max;    /**< smallest member speed limit */
+    float a_max;    /**< smallest member tangential acceleration */
+    float j_max;    /**< smallest member tangential jerk */
+    uint16_t flags; /**< EF_MOVE_STOP_END when the last member has it */
+    uint16_t n;     /**< members (in the move ring, after the previous groups' members) */
+} ef_plan_group_t;
+
 /** Planner state; fields are public so it can be static, treat them as private. */
 typedef struct {
     ef_limits_t lim;
-    ef_move_t q[EF_LOOKAHEAD]; /**< window, oldest at head */
-    float v_lim[EF_LOOKAHEAD]; /**< backward-pass bound on each move's entry speed, kept
-                                    current by each push (the oldest move's is unused) */
-    uint32_t head;             /**< index of the oldest move */
-    uint32_t count;            /**< moves in the window */
-    uint32_t nstops;           /**< moves in the window with EF_MOVE_STOP_END */
-    uint32_t seq;              /**< next sequence number */
-    float v_last;              /**< exit speed of the last released move */
-    int finished;              /**< ef_plan_finish() called since the last push */
+    ef_move_t mv[EF_LOOKAHEAD];      /**< the moves in the window, oldest at mhead */
+    uint32_t mhead, mcount;          /**< move ring */
+    ef_plan_group_t q[EF_LOOKAHEAD]; /**< groups, oldest at head */
+    float v_lim[EF_LOOKAHEAD];       /**< backward-pass bound on each group's entry speed, kept
+                                          current by each push (the oldest group's is unused) */
+    uint32_t head;                   /**< index of the oldest group */
+    uint32_t count;                  /**< groups in the window */
+    uint32_t nstops;                 /**< groups in the window with EF_MOVE_STOP_END */
+    uint32_t seq;                    /**< next sequence number */
+    float v_last;                    /**< exit speed of the last released move */
+    int finished;                    /**< ef_plan_finish() called since the last push */
+    int open;                        /**< the newest group may still take moves */
+    /* Release of the oldest group under way (rel_n > 0): its law and where it stands. */
+    ef_move_t rel;  /**< the group's law (as a move of the group's length) */
+    uint32_t rel_n; /**< members still to release */
+    float rel_s;    /**< group distance where the next member starts */
+    uint32_t rel_k; /**< law phase the next member starts in */
+    float rel_u;    /**< time into that phase */
+    float rel_v;    /**< speed there */
 } ef_plan_t;
 
 /**

@@ -28,15 +28,18 @@
  * The move's curve f(tau), tau in [0, 1], is traversed with tau(t) = s(t) / L, where L is
  * the curve's arc length and s(t) the planned distance along it: because evenfeed's curves
  * have near-constant parametric speed |f'(tau)| ~ L, the feed |d f(tau(t)) / dt| is then
- * near s'(t). s(t) is piecewise polynomial in time with up to three phases (ramp from the
- * entry speed, cruise, ramp to the exit speed); phase k lasts `dt[k]` seconds and, with
- * u the time since the phase began,
+ * near s'(t). s(t) is piecewise polynomial in time with up to ::EF_TIMELAW_PHASES phases:
+ * phases 0-2 ramp from the entry speed, phase 3 cruises, phases 4-6 ramp to the exit speed;
+ * phase k lasts `dt[k]` seconds and, with u the time since the phase began,
  *
- *     tau(u) = c[k][0] + c[k][1] u + c[k][2] u^2 + c[k][3] u^3 + c[k][4] u^4.
+ *     tau(u) = c[k][0] + c[k][1] u + c[k][2] u^2 + c[k][3] u^3.
  *
- * Constant-acceleration ramps (no jerk limit) have c[k][3] = c[k][4] = 0; jerk-limited
- * ramps use a smoothstep speed v(u) = v0 + (v1 - v0)(3 r^2 - 2 r^3), r = u / dt, whose
- * distance is quartic in u. A drive evaluating the moves itself needs only these numbers.
+ * A phase with dt[k] == 0 is unused (all its numbers are 0) and is skipped. Without a jerk
+ * limit a ramp is one constant-acceleration phase (c[k][3] = 0). With a jerk limit a ramp is
+ * the time-optimal S-curve between two speeds at rest acceleration: constant jerk up
+ * (c[k][2] = 0), constant acceleration (c[k][3] = 0; absent when the speed change is too
+ * small to reach the move's acceleration limit), constant jerk down. A drive evaluating the
+ * moves itself needs only these numbers.
  */
 #ifndef EF_PATH_H
 #define EF_PATH_H
@@ -169,13 +172,16 @@ typedef enum {
 /** Move flag: a neighbour limited the blend (deviation below the tolerance). */
 #define EF_MOVE_BLEND_CLAMPED 4u
 
-/** Phases of a time law. */
-#define EF_TIMELAW_PHASES 3
+/** Phases of a time law: three per ramp and the cruise between them. */
+#define EF_TIMELAW_PHASES 7
+/** Polynomial coefficients per phase (cubic in time). */
+#define EF_TIMELAW_COEFFS 4
 
 /** A move's time law: tau as a piecewise polynomial in time (see the file comment). */
 typedef struct {
-    float dt[EF_TIMELAW_PHASES];   /**< phase durations (s), >= 0; sum = move duration */
-    float c[EF_TIMELAW_PHASES][5]; /**< tau(u) coefficients per phase, u = time in phase */
+    float dt[EF_TIMELAW_PHASES]; /**< phase durations (s), >= 0; sum = move duration */
+    float c[EF_TIMELAW_PHASES][EF_TIMELAW_COEFFS]; /**< tau(u) coefficients per phase, u = time
+                                                        in phase */
 } ef_timelaw_t;
 
 /** One emitted move. */
@@ -194,11 +200,17 @@ typedef struct {
                            path speed whether tau is stepped by arc length or uniformly by
                            the time law, so v <= v_axis_i / tabs_i keeps every axis within
                            its limit (for evenfeed's curves the two agree to ~0.2 %) */
+    ef_vec3_t kabs;   /**< per axis, the largest over the curve (sampled) of |kappa n_i|
+                           and |f''_i(tau)| / L^2: the axis's centripetal acceleration is at
+                           most kabs_i v^2 in either interpolator mode */
+    ef_vec3_t kjerk;  /**< per axis, the largest (sampled) |f'''_i(tau)| / L^3: at constant
+                           speed v the axis's jerk from the geometry is about kjerk_i v^3 */
     float dev;        /**< deviation from the programmed path it replaces (blends: from the
                            corner; arcs: from the true arc; lines: 0) */
     float feed;       /**< commanded feed (units/s) */
     float v_max;      /**< speed limit: feed, axis speeds, centripetal (set by the planner) */
     float a_max;      /**< tangential acceleration limit (set by the planner) */
+    float j_max;      /**< tangential jerk limit of the ramps, 0 = none (set by the planner) */
     float v_entry;    /**< planned speed at tau = 0 */
     float v_exit;     /**< planned speed at tau = 1 */
     float duration;   /**< seconds, sum of law.dt */
@@ -206,17 +218,19 @@ typedef struct {
 } ef_move_t;
 
 /**
- * @brief Arc length, curvature bound and largest |tangent component| per axis of a move's
- * curve, by Gauss–Legendre quadrature and sampling with fixed counts
+ * @brief Arc length, curvature bound, largest |tangent component|, |curvature vector
+ * component| and |third derivative component| per axis of a move's curve, by Gauss–Legendre
+ * quadrature and sampling with fixed counts
  * (::EF_MOVE_SAMPLES samples; for degree 1 exact).
  *
  * Length: 16-node Gauss–Legendre on |f'| (relative error ~2e-7 on evenfeed's curves).
- * kappa_max and tabs: at t = i / EF_MOVE_SAMPLES, i = 0..EF_MOVE_SAMPLES (ends included).
- * The derivatives come from the hodographs' control points (computed once; a cubic's
+ * kappa_max, tabs, kabs and kjerk: at t = i / EF_MOVE_SAMPLES, i = 0..EF_MOVE_SAMPLES (ends
+ * included). The derivatives come from the hodographs' control points (computed once; a cubic's
  * elevated to the quintic's degrees) in Bernstein form.
  * A zero speed at a sample (a cusp) gives an infinite curvature: EF_ERR_NONFINITE. On error
- * length, kappa_max and tabs are zero.
- * @param m  move with b and degree set; m->length, m->kappa_max and m->tabs are filled
+ * length, kappa_max, tabs, kabs and kjerk are zero.
+ * @param m  move with b and degree set; m->length, m->kappa_max, m->tabs, m->kabs and
+ *           m->kjerk are filled
  * @retval EF_OK
  * @retval EF_ERR_ARG       NULL move or degree not 1, 3 or 5
  * @retval EF_ERR_NONFINITE non-finite control points or result
