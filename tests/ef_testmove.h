@@ -88,7 +88,7 @@ static inline double tm_law_tau(const ef_move_t *m, double u)
     if (u >= m->duration)
         return 1.0;
     const float *c = m->law.c[0];
-    double t = c[0] + u * (c[1] + u * (c[2] + u * (c[3] + u * (double)c[4])));
+    double t = c[0] + u * (c[1] + u * (c[2] + u * (double)c[3]));
     return t < 0 ? 0 : t > 1 ? 1 : t;
 }
 

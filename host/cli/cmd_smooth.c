@@ -16,7 +16,7 @@ static const char usage[] =
     "  --tol P          path tolerance (mm) at start and for G64 without P (default 0.02)\n"
     "  --vmax V         axis speed limit and rapid speed, mm/s (default 100)\n"
     "  --amax A         axis acceleration limit, mm/s^2 (default 1000)\n"
-    "  --jerk J         path jerk limit, mm/s^3, 0 = none (default 20000)\n"
+    "  --jerk J         jerk limit of every axis, mm/s^3, 0 = none (default 20000)\n"
     "  --period-us N    servo period in microseconds (default 1000)\n"
     "  --step MODE      stepping for CSV/SVG samples: uniform or corrected (default)\n"
     "  --micro-len L    longest CAM micro-segment, mm, 0 = no smooth sections (default 1)\n"

@@ -180,7 +180,7 @@ static void test_roundtrip(void)
            max_chunks);
 }
 
-/* Lost, repeated, foreign-nibble and malformed chunks: the record is dropped, never
+/* Lost, repeated, foreign-sequence and malformed chunks: the record is dropped, never
  * assembled wrong, and the next whole record passes. */
 static void test_loss(void)
 {
@@ -218,7 +218,7 @@ static void test_loss(void)
         int rc = ef_co_asm_feed(&a, d);
         EF_CHECK_EQ(rc, k + 1 == n ? EF_OK : EF_ERR_AGAIN);
     }
-    /* a chunk of another record (sequence nibble) in the middle */
+    /* a chunk of another record (sequence bits) in the middle */
     ef_move_t m2 = m;
     m2.seq = 0x1236;
     uint8_t rec2[EF_CO_REC_MAX];
@@ -234,7 +234,7 @@ static void test_loss(void)
     ef_co_chunk(rec, len, 1, d);
     ef_co_asm_feed(&a, d);
     EF_CHECK_EQ(ef_co_asm_feed(&a, d), EF_ERR_SEQ);
-    /* impossible degree / phase mask / nibble not matching the record's seq */
+    /* impossible degree / phase mask / sequence bits not matching the record's seq */
     ef_co_chunk(rec, len, 0, d);
     d[3] = 4;
     EF_CHECK_EQ(ef_co_asm_feed(&a, d), EF_ERR_PROTO);

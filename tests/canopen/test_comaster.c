@@ -1195,7 +1195,7 @@ static void t_seg(void)
            (unsigned long long)B.bus.bits, (double)B.bus.now_us * 1e-6);
 }
 
-/* Drop hook: lose the second (last) chunk on RPDO2 of node 2 of the record with sequence nibble 5
+/* Drop hook: lose the second (last) chunk on RPDO2 of node 2 of the record with sequence bits 5
  * (once), and the first law chunk of sequence 9 (once). */
 /* A chunk's header byte: the sequence number's low bits and the chunk index. */
 #define CHUNK_HDR(seq, k)                                                                          \

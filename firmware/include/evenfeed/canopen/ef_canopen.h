@@ -279,7 +279,7 @@ void ef_co_asm_init(ef_co_asm_t *a, int law);
 /**
  * @brief Feed one chunk.
  * A chunk with index 0 always starts a new record (a partial one is dropped). A chunk that
- * is not the expected next one of the record under way (index or sequence nibble) drops the
+ * is not the expected next one of the record under way (index or sequence bits) drops the
  * record, and chunks are then ignored until the next index 0.
  * @retval EF_OK     the record is complete in a->rec[0..a->rec_len-1] (the stream is idle again)
  * @retval EF_ERR_AGAIN more chunks needed (or an ignored chunk while idle)

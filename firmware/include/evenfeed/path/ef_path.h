@@ -28,9 +28,11 @@
  * The move's curve f(tau), tau in [0, 1], is traversed with tau(t) = s(t) / L, where L is
  * the curve's arc length and s(t) the planned distance along it: because evenfeed's curves
  * have near-constant parametric speed |f'(tau)| ~ L, the feed |d f(tau(t)) / dt| is then
- * near s'(t). s(t) is piecewise polynomial in time with up to ::EF_TIMELAW_PHASES phases:
- * phases 0-2 ramp from the entry speed, phase 3 cruises, phases 4-6 ramp to the exit speed;
- * phase k lasts `dt[k]` seconds and, with u the time since the phase began,
+ * near s'(t). s(t) is piecewise polynomial in time with up to ::EF_TIMELAW_PHASES phases
+ * (a move planned alone: phases 0-2 ramp from the entry speed, phase 3 cruises, phases 4-6
+ * ramp to the exit speed; a member of a ramp group, ef_plan.h: its slice of the group's law,
+ * packed from phase 0, possibly starting and ending at a nonzero acceleration); phase k
+ * lasts `dt[k]` seconds and, with u the time since the phase began,
  *
  *     tau(u) = c[k][0] + c[k][1] u + c[k][2] u^2 + c[k][3] u^3.
  *
