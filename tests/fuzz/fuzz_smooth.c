@@ -6,8 +6,11 @@
  * exact stops), pushed through ef_smooth (EF_ERR_FULL handled by draining), the moves into
  * the interpolator, stepped at 1 ms. Whatever the input, every emitted move must be finite,
  * start where the previous one ended, keep its speeds within its limit and continuous,
- * and every setpoint must be finite and move no axis faster than its limit. A
- * refused primitive must leave the stream usable. Broken invariants abort.
+ * and every setpoint must be finite and move no axis faster than its limit; over every
+ * run of consecutive 1 ms setpoints each axis's acceleration (second differences) must
+ * stay within its limit and, with a jerk limit, its jerk (third differences) within J,
+ * up to the float32 and sampling margins of tests/motion/ef_sp_check.h. A refused
+ * primitive must leave the stream usable. Broken invariants abort.
  *
  * Built with -DEF_FUZZ_REPLAY_MAIN it is a plain-C replay driver (smooth_fuzz_replay
  * DIR|FILE...): every seed ("ok-*") must run without breaking an invariant.
@@ -21,6 +24,7 @@
 #include "evenfeed/core/ef_err.h"
 #include "evenfeed/motion/ef_interp.h"
 #include "evenfeed/motion/ef_smooth.h"
+#include "motion/ef_sp_check.h"
 
 extern const ef_table_t ef_tbl_g1_default;
 extern const ef_table_t ef_tbl_g2_default;
@@ -84,6 +88,8 @@ typedef struct {
     float scale;     /* largest coordinate magnitude of any move so far */
     ef_vec3_t last;  /* last setpoint */
     int have_sp;
+    spc_t chk; /* setpoint continuity over consecutive 1 ms periods */
+    double t;  /* time of the last setpoint (s) */
 } ef_fz_state_t;
 
 static ef_smooth_t S;
@@ -108,6 +114,11 @@ static void ef_fz_move(ef_fz_state_t *st, const ef_move_t *m)
         ef_fz_fail("speed above limit", m->v_max);
     if ((m->flags & EF_MOVE_STOP_END) && m->v_exit != 0.0f)
         ef_fz_fail("stop with speed", m->v_exit);
+    /* the move's extent bounds the float32 error of its setpoints (ef_sp_check.h) */
+    double ext = m->length;
+    for (int k = 1; k <= m->degree; k++)
+        ext = fmax(ext, (double)ef_v3_norm(ef_v3_sub(m->b[k], m->b[0])));
+    spc_scale(&st->chk, ext);
     st->end = m->b[m->degree];
     st->v_exit = m->v_exit;
     for (int k = 0; k <= m->degree; k++)
@@ -138,6 +149,16 @@ static void ef_fz_tick(ef_fz_state_t *st, uint32_t dt_us)
     }
     st->last = sp.p;
     st->have_sp = 1;
+    /* continuity: differences only over consecutive periods (a late call starts anew) */
+    if (dt_us != 1000u)
+        spc_break(&st->chk);
+    st->t += (double)dt_us * 1e-6;
+    if (spc_push(&st->chk, st->t, &sp) > 0) {
+        spc_report(&st->chk, "smooth fuzz", stderr);
+        ef_fz_fail(st->chk.a_over ? "axis acceleration above its limit"
+                                  : "axis jerk above the limit",
+                   st->chk.a_over ? st->chk.wa.value : st->chk.wj.value);
+    }
 }
 
 /* Pull what the smoother has into the interpolator, stepping it at 1 ms when its queue is
@@ -186,10 +207,11 @@ static void ef_fz_run(const uint8_t *data, size_t size)
     if (ef_interp_init(&IP, ef_v3(0, 0, 0), 1000u,
                        (cf & 16u) ? EF_STEP_UNIFORM : EF_STEP_CORRECTED) != EF_OK)
         ef_fz_fail("interp init", 0);
-    ef_fz_state_t st;
+    static ef_fz_state_t st; /* the continuity checker's history: not on the stack */
     memset(&st, 0, sizeof st);
     for (int i = 0; i < 3; i++)
         st.v_axis[i] = c.lim.v_axis[i];
+    spc_init(&st.chk, 1e-3, &c.lim);
     ef_vec3_t pos = ef_v3(0, 0, 0);
     for (int n = 0; n < 400 && in.i < in.n; n++) {
         uint8_t op = ef_fz_u8(&in);

@@ -20,6 +20,8 @@
  *  up to about L / |f'| law steps; a smaller cap makes the setpoint lag there and then
  *  catch up, a speed jump (issue 18). */
 #define EF_INTERP_STEP_CAP 16.0f
+/** Largest relative arc-over-chord correction of one step (kappa c ~ 1.1 rad). */
+#define EF_INTERP_ARC_CORR_MAX 0.05f
 
 /* A point finite and within EF_MAX_COORD on every axis. */
 static int ip_vok(ef_vec3_t v)
@@ -144,7 +146,8 @@ static void ip_eval(ef_interp_t *ip, const ef_move_t *m, float *v)
         ip->pos = ef_v3_add(m->b[0], d[0]);
         return;
     }
-    /* One step on arc length: S (chords so far) towards s(t) = L tau_law. */
+    /* One step on arc length: S (the arc reached so far, from the chords of the steps)
+     * towards s(t) = L tau_law. */
     d[2] = ef_v3(0.0f, 0.0f, 0.0f); /* f'' (a line has none) */
     ef_bezier_eval(lb, m->degree, ip->tau, m->degree >= 2 ? 2 : 1, d);
     float s = tau_law * m->length;
@@ -179,9 +182,14 @@ static void ip_eval(ef_interp_t *ip, const ef_move_t *m, float *v)
      * (the root continuous in k; a plain Newton step h = gap / sp where the quadratic has
      * no root). At a move's start where |f'| is a small share of L and rising fast (a blend
      * with x1 at the table's bound) the Newton step alone overshot by up to half a period's
-     * distance and, never stepping back, left a speed jump at the junction (issue 18). */
+     * distance and, never stepping back, left a speed jump at the junction (issue 18).
+     * A chord c of a curve with curvature kappa is shorter than its arc by about
+     * c (kappa c)^2 / 24: summed over a tight blend's steps that is tens of nanometres
+     * (kappa 45 / mm, 3.4 um steps), which the setpoint gave back as a jump at the move's
+     * end. So S adds arc(c) = c (1 + kk c^2), kk = kappa^2 / 24 at tau (the correction
+     * capped at EF_INTERP_ARC_CORR_MAX, where the series holds: kappa c up to about 1). */
     float sp = ef_v3_norm(d[1]);
-    float tn = tau_law;
+    float tn = tau_law, kk = 0.0f;
     if (sp > EF_INTERP_MIN_DERIV) {
         float k = ef_v3_dot(d[1], d[2]) / sp;
         float disc = sp * sp + 2.0f * k * gap;
@@ -189,6 +197,11 @@ static void ip_eval(ef_interp_t *ip, const ef_move_t *m, float *v)
         if (gap > 0.0f && disc > 0.0f)
             h = 2.0f * gap / (sp + ef_sqrtf(disc));
         tn = ip->tau + h;
+        ef_vec3_t cr = ef_v3_cross(d[1], d[2]);
+        float isp2 = 1.0f / (sp * sp);
+        kk = ef_v3_dot(cr, cr) * isp2 * isp2 * isp2 * (1.0f / 24.0f);
+        if (!ef_finitef(kk))
+            kk = 0.0f;
     }
     if (!ef_finitef(tn))
         tn = tau_law;
@@ -203,18 +216,20 @@ static void ip_eval(ef_interp_t *ip, const ef_move_t *m, float *v)
     ef_vec3_t p[1];
     ef_bezier_eval(lb, m->degree, tn, 0, p);
     float chord = ef_v3_norm(ef_v3_sub(p[0], d[0]));
-    /* One secant correction on the chord itself: the step scaled by gap / chord takes out
-     * what the quadratic model missed (f''' on a quintic), for one more evaluation. */
-    if (gap > 0.0f && chord > 0.0f && tn > ip->tau) {
-        float t2 = ip->tau + (tn - ip->tau) * (gap / chord);
+    float arc = chord * (1.0f + ef_minf(EF_INTERP_ARC_CORR_MAX, kk * chord * chord));
+    /* One secant correction on the arc actually covered: the step scaled by gap / arc takes
+     * out what the quadratic model missed (f''' on a quintic), for one more evaluation. */
+    if (gap > 0.0f && arc > 0.0f && tn > ip->tau) {
+        float t2 = ip->tau + (tn - ip->tau) * (gap / arc);
         t2 = ef_maxf(ip->tau, ef_minf(hi, t2));
         if (ef_finitef(t2) && t2 != tn) {
             tn = t2;
             ef_bezier_eval(lb, m->degree, tn, 0, p);
             chord = ef_v3_norm(ef_v3_sub(p[0], d[0]));
+            arc = chord * (1.0f + ef_minf(EF_INTERP_ARC_CORR_MAX, kk * chord * chord));
         }
     }
-    ip_kahan(&ip->s_done, &ip->s_c, chord);
+    ip_kahan(&ip->s_done, &ip->s_c, arc);
     ip->tau = tn;
     ip->pos = ef_v3_add(m->b[0], p[0]);
 }

@@ -329,6 +329,8 @@ static void sm_decide(ef_smooth_t *s, ef_smooth_prim_t *a, ef_smooth_prim_t *b)
     a->blend_len = probe.length;
     a->blend_kmax = probe.kappa_max;
     a->blend_tabs = probe.tabs;
+    a->blend_kabs = probe.kabs;
+    a->blend_kjerk = probe.kjerk;
     a->end_kind = EF_V_BLEND;
     a->trim_end = a->blend.trim_in;
     b->trim_start = a->blend.trim_out;
@@ -484,6 +486,8 @@ static int sm_next_move(ef_smooth_t *s, ef_move_t *m)
         m->length = h->blend_len; /* measured when the vertex was decided */
         m->kappa_max = h->blend_kmax;
         m->tabs = h->blend_tabs;
+        m->kabs = h->blend_kabs;
+        m->kjerk = h->blend_kjerk;
         nx->blend_in_end = m->b[5];
         s->emitting = EF_E_DONE;
         return 1;

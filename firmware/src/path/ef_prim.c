@@ -342,9 +342,17 @@ int ef_move_measure(ef_move_t *m)
         kabs.x = ef_maxf(kabs.x, ef_maxf(ef_fabsf(kv.x), ef_fabsf(d2.x) * ilen2));
         kabs.y = ef_maxf(kabs.y, ef_maxf(ef_fabsf(kv.y), ef_fabsf(d2.y) * ilen2));
         kabs.z = ef_maxf(kabs.z, ef_maxf(ef_fabsf(kv.z), ef_fabsf(d2.z) * ilen2));
-        kjerk.x = ef_maxf(kjerk.x, ef_fabsf(d3.x) * ilen3);
-        kjerk.y = ef_maxf(kjerk.y, ef_fabsf(d3.y) * ilen3);
-        kjerk.z = ef_maxf(kjerk.z, ef_fabsf(d3.z) * ilen3);
+        /* Third derivative by arc length (what arc-length stepping jerks each axis by per
+         * unit v^3), d3p/ds3 = f'''/s^3 - 3 s' f''/s^4 + (3 s'^2/s^5 - s''/s^4) f' with
+         * s = |f'|, and f''' / L^3 (uniform stepping): the larger per axis. */
+        float s1 = ef_v3_dot(d1, d2) * isp;
+        float s2 = (ef_v3_dot(d2, d2) + ef_v3_dot(d1, d3)) * isp - s1 * s1 * isp;
+        float i3 = isp * isp * isp, i4 = i3 * isp;
+        ef_vec3_t js = ef_v3_axpy(ef_v3_scale(d3, i3), -3.0f * s1 * i4, d2);
+        js = ef_v3_axpy(js, 3.0f * s1 * s1 * i4 * isp - s2 * i4, d1);
+        kjerk.x = ef_maxf(kjerk.x, ef_maxf(ef_fabsf(js.x), ef_fabsf(d3.x) * ilen3));
+        kjerk.y = ef_maxf(kjerk.y, ef_maxf(ef_fabsf(js.y), ef_fabsf(d3.y) * ilen3));
+        kjerk.z = ef_maxf(kjerk.z, ef_maxf(ef_fabsf(js.z), ef_fabsf(d3.z) * ilen3));
         /* Per axis, the larger of |t_i| (what arc-length stepping moves the axis by per unit
          * path speed) and |f'_i| / L (what stepping tau uniformly by the time law does, where
          * the curve's parametric speed exceeds its mean): the planner's axis limits then

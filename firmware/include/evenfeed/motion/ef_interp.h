@@ -12,9 +12,15 @@
  *   near-constant parametric speed, so this alone gives near-constant feed; the residual
  *   fluctuation is the curve's own speed variation.
  * - ::EF_STEP_CORRECTED: one correction step per sample: with S the arc length reached so
- *   far (chords accumulated), tau_next = tau + (s(t) - S) / |f'(tau)|. It removes most of
- *   the residual at the cost of one derivative evaluation. A step is at most the larger of
- *   1/64 of the curve and four times the law's step; a deficit larger than that (a late
+ *   far (each step's chord c plus its curvature deficit, c (kappa c)^2 / 24) and
+ *   g = s(t) - S, tau_next = tau + h where h solves |f'| h + k h^2 / 2 = g,
+ *   k = <f', f''> / |f'| (the rate |f'| changes at tau), then h is scaled once by g / arc
+ *   (a secant step on the arc actually covered). It removes most of the residual at the
+ *   cost of a second-derivative evaluation and two position evaluations, also where |f'| is
+ *   a small share of L and changes fast (a blend whose end speed x1 sits at the table's
+ *   lower bound), so the feed stays continuous across junctions and S ends each move at
+ *   its length. A step is at most the larger of 1/64 of the curve and 16 times the law's
+ *   step; a deficit larger than the larger of 1/64 of the curve and four law steps (a late
  *   call, a move entered part-way through) resynchronises: three Newton steps on the arc
  *   length, measured by quadrature, find where the arc length is s(t).
  *

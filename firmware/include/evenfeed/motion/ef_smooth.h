@@ -124,6 +124,8 @@ typedef struct {
     float blend_len;      /**< end blend's length (measured once, when the vertex is decided) */
     float blend_kmax;     /**< end blend's curvature bound (likewise) */
     ef_vec3_t blend_tabs; /**< end blend's axis tangent bounds (likewise) */
+    ef_vec3_t blend_kabs;  /**< end blend's axis curvature-vector bounds (likewise) */
+    ef_vec3_t blend_kjerk; /**< end blend's axis third-derivative bounds (likewise) */
     uint32_t nmerged;     /**< inner vertices merged into it */
     float merge_dev;      /**< largest distance of those vertices from it: the blends and
                                smooth sections at its ends get only tol - merge_dev */
