@@ -464,6 +464,11 @@ static void crep_summary(const crep_ctx_t *c, const char *title, const ef_pipe_s
         printf("  %-10s     max %.3e  rms %.3e  (%llu samples, max at line %u, %u underruns)\n",
                names[k], fl->max_rel, fl->rms_rel, (unsigned long long)fl->samples,
                (unsigned)fl->max_line, (unsigned)fl->underruns);
+        printf("  %-10s     at >= %.0f %% of the feed: max %.3e (%llu samples, line %u); "
+               "largest speed error %.4f %s/s\n",
+               "", 100.0 * EF_PIPE_FLUCT_FEED_SHARE, fl->max_rel_feed,
+               (unsigned long long)fl->samples_feed, (unsigned)fl->max_line_feed, fl->max_abs * f,
+               u);
     }
 }
 
@@ -508,7 +513,13 @@ static int crep_write_json(const crep_ctx_t *c, const char *path, const char *ti
         cli_json_num(fp, st->fl[k].max_rel);
         fputs(", \"rms\": ", fp);
         cli_json_num(fp, st->fl[k].rms_rel);
-        fprintf(fp, ", \"samples\": %llu}", (unsigned long long)st->fl[k].samples);
+        fprintf(fp,
+                ", \"samples\": %llu, \"max_at_feed\": ", (unsigned long long)st->fl[k].samples);
+        cli_json_num(fp, st->fl[k].max_rel_feed);
+        fprintf(fp, ", \"samples_at_feed\": %llu, \"max_speed_error\": ",
+                (unsigned long long)st->fl[k].samples_feed);
+        cli_json_num(fp, st->fl[k].max_abs * f);
+        fputc('}', fp);
     }
     fprintf(fp, ", \"status\": \"%s\"}\n}\n", rc ? ef_err_str(rc) : "ok");
     int bad = ferror(fp);

@@ -94,7 +94,10 @@ static double dist_arc(const double *x, const prog_t *g)
 static double dist_prog(const double *x, int k)
 {
     double best = 1e300;
-    int lo = k - 3 < 0 ? 0 : k - 3, hi = k + 36 > NP ? NP : k + 36; /* merged lines */
+    /* Merged lines: up to EF_SMOOTH_MERGE_MAX + 1 after the tag; a blend (tagged with the
+     * outgoing line) trims up to half the incoming merged line, before the tag. */
+    int w = EF_SMOOTH_MERGE_MAX + 4;
+    int lo = k - w < 0 ? 0 : k - w, hi = k + w > NP ? NP : k + w;
     for (int i = lo; i < hi; i++) {
         double b[3] = {P[i].pr.end.x, P[i].pr.end.y, P[i].pr.end.z};
         double d = P[i].pr.kind == EF_PRIM_LINE ? dist_line(x, P[i].a, b) : dist_arc(x, &P[i]);
@@ -385,6 +388,116 @@ static void test_micro_circle(int degree)
            degree == 5 ? "G2 quintic" : "G1 cubic", NM, ri.dev_over, jump);
 }
 
+/* Largest distance of an input point (every accepted primitive's end, and the start) from
+ * the moves of the last run, sampled 64 times each; points and moves both run along the
+ * path, so the search is a window of moves around the last nearest one. */
+static double pts_to_moves(ef_vec3_t start)
+{
+    double worst = 0;
+    int at = 0;
+    for (int i = -1; i < NP; i++) {
+        ef_vec3_t p = i < 0 ? start : P[i].pr.end;
+        double x[3] = {p.x, p.y, p.z}, best = 1e300;
+        int lo = at - 4 < 0 ? 0 : at - 4, hi = at + 8 > NM ? NM : at + 8;
+        for (int k = lo; k < hi; k++) {
+            ef_vec3_t q0 = M[k].b[0];
+            for (int j = 1; j <= 64; j++) {
+                ef_vec3_t q1;
+                ef_bezier_eval(M[k].b, M[k].degree, (float)j / 64.0f, 0, &q1);
+                double a[3] = {q0.x, q0.y, q0.z}, b[3] = {q1.x, q1.y, q1.z};
+                double d = dist_line(x, a, b);
+                if (d < best) {
+                    best = d;
+                    at = k;
+                }
+                q0 = q1;
+            }
+        }
+        if (best > worst)
+            worst = best;
+    }
+    return worst;
+}
+
+/* Band decimation of dense, quantized CAM output (issue 18): an arc of radius 20 from
+ * 0.02 mm chords with coordinates rounded to 0.0025 mm, 2-D and tilted in 3-D, qtol = P.
+ * The noise must not become curvature or stops: a few decimated chords as G2 sections, one
+ * stop (the end), the feed held, every input point within P of the path and the path
+ * within P of the points (independent measures), curvature within the noise estimate
+ * q / (sqrt(2) L^2) of 1/r, G2 at every junction. With qtol below the rounding nothing
+ * merges (Q keeps its meaning); a piece running backwards is never merged over. */
+static void test_band(void)
+{
+    ef_smooth_cfg_t c = cfg_default();
+    enum { N = 3000 };
+    static ef_prim_t pr[N];
+    const double r = 20, q = 0.0025, tol = 0.02;
+    for (int tilt = 0; tilt < 2; tilt++) {
+        for (int i = 0; i < N; i++) {
+            double a = 0.02 * (i + 1) / r;
+            double x = r * cos(a), y = r * sin(a), z = tilt ? 0.3 * y : 0;
+            x = q * floor(x / q + 0.5);
+            y = q * floor(y / q + 0.5);
+            z = q * floor(z / q + 0.5);
+            pr[i] = line_to((float)x, (float)y, (float)z, 40, (float)tol);
+            pr[i].qtol = (float)tol;
+        }
+        run_prims(&c, ef_v3((float)r, 0, 0), pr, N);
+        runinfo_t ri = check_run(ef_v3((float)r, 0, 0), pr[N - 1].end, tol, &c.lim);
+        ef_smooth_stats_t st = ef_smooth_stats(&S);
+        double p2m = pts_to_moves(ef_v3((float)r, 0, 0));
+        EF_CHECK_EQ(ri.stops, 1);
+        EF_CHECK_EQ(st.stops, 1);
+        EF_CHECK(st.merged > N / 2);
+        EF_CHECK(NM < N / 20);
+        EF_CHECK(ri.dev_over <= 1.0);
+        EF_CHECK(p2m <= tol);
+        /* ... and in fact about the rounding (0.0018 mm = 0.09 P at most) plus the fit. */
+        EF_CHECK(ri.dev_over <= 0.3 && p2m <= 0.3 * tol);
+        EF_CHECK_NEAR(M[NM / 2].v_entry, 40, 1e-2);
+        double jump = 0, kerr = 0, lmin = 1e9;
+        int smooth_joins = 0;
+        for (int i = 0; i + 1 < NM; i++) {
+            if (M[i].kind != EF_MOVE_SMOOTH || M[i + 1].kind != EF_MOVE_SMOOTH)
+                continue;
+            ef_vec3_t k0 = curv(&M[i], 1), k1 = curv(&M[i + 1], 0);
+            jump = fmax(jump, ef_v3_norm(ef_v3_sub(k0, k1)) * r);
+            kerr = fmax(kerr, fabs(ef_v3_norm(k1) * r - 1));
+            lmin = fmin(lmin, fmin(M[i].length, M[i + 1].length));
+            smooth_joins++;
+        }
+        EF_CHECK(smooth_joins >= NM - 4);
+        EF_CHECK(jump < 1e-2);
+        /* q / (sqrt 2 L^2) is the RMS; 4 sigma, and the tilted circle is an ellipse whose
+         * curvature varies by 8 % itself. */
+        double kn = 4 * q / (sqrt(2.0) * lmin * lmin) * r + (tilt ? 0.1 : 0);
+        EF_CHECK(kerr <= kn);
+        printf("band (%s): %d points -> %d moves (%u merged, %u smooth, %u blends, %u stops), "
+               "dev / P path->points %.3f points->path %.3f, |kappa r - 1| max %.3f (bound %.3f), "
+               "curvature jump x r %.1e\n",
+               tilt ? "3-D" : "2-D", N, NM, st.merged, st.smooth, st.blends, st.stops, ri.dev_over,
+               p2m / tol, kerr, kn, jump);
+    }
+    /* Q below the rounding: Q keeps its meaning, nothing off the line merges. */
+    for (int i = 0; i < N; i++)
+        pr[i].qtol = 1e-6f;
+    run_prims(&c, ef_v3((float)r, 0, 0), pr, N);
+    check_run(ef_v3((float)r, 0, 0), pr[N - 1].end, tol, &c.lim);
+    /* (where the rounding leaves runs of points exactly on a line, near 0 and 90 degrees,
+     * those still merge) */
+    printf("band, Q 1e-6: %u merged\n", ef_smooth_stats(&S).merged);
+    EF_CHECK(ef_smooth_stats(&S).merged < N / 4);
+    /* A piece running backwards inside the band is never merged over. */
+    ef_prim_t b[4] = {line_to(1, 0, 0, 40, 0.02f), line_to(2, 0, 0, 40, 0.02f),
+                      line_to(1.995f, 0, 0, 40, 0.02f), line_to(3, 0, 0, 40, 0.02f)};
+    for (int i = 0; i < 4; i++)
+        b[i].qtol = 0.02f;
+    run_prims(&c, ef_v3(0, 0, 0), b, 4);
+    check_run(ef_v3(0, 0, 0), b[3].end, 0.02, &c.lim);
+    EF_CHECK_EQ(ef_smooth_stats(&S).merged, 1); /* 1 into 2 only */
+    EF_CHECK_EQ(ef_smooth_stats(&S).reversals, 2);
+}
+
 /* Lines and arcs meeting at corners: blends at arc ends, within P. */
 static void test_arcs(void)
 {
@@ -653,11 +766,17 @@ static void test_random_runs(void)
 int main(int argc, char **argv)
 {
     static const ef_test_part_t parts[] = {
-        {"square", test_square},         {"reversal", test_reversal},
-        {"collinear", test_collinear},   {"circle", test_micro_circle_5},
-        {"circle", test_micro_circle_3}, {"arcs", test_arcs},
-        {"bad", test_bad_input},         {"full", test_full},
-        {"interp", test_with_interp},    {"random [RUNS]", test_random_runs},
+        {"square", test_square},
+        {"reversal", test_reversal},
+        {"collinear", test_collinear},
+        {"circle", test_micro_circle_5},
+        {"circle", test_micro_circle_3},
+        {"arcs", test_arcs},
+        {"bad", test_bad_input},
+        {"full", test_full},
+        {"interp", test_with_interp},
+        {"band", test_band},
+        {"random [RUNS]", test_random_runs},
     };
     setvbuf(stdout, NULL, _IOLBF, 0);
     M = calloc(MAXM, sizeof *M);

@@ -89,6 +89,7 @@ int ef_smooth_init(ef_smooth_t *s, const ef_smooth_cfg_t *cfg, ef_vec3_t start)
     s->ph = s->pn = 0;
     s->sh = s->sn = 0;
     s->arc_next = s->arc_n = 0;
+    s->next_id = 0;
     s->emitting = EF_E_BODY;
     ef_smooth_stats_t zero = {0};
     s->st = zero;
@@ -164,10 +165,94 @@ static int sm_line_move(ef_move_t *m, ef_vec3_t a, ef_vec3_t b, float feed, uint
     return sm_finish_move(m, EF_MOVE_LINE, feed, tag);
 }
 
-/* A smooth-section move between two frames on a line primitive a-b; its deviation from
- * the chord is measured. Returns an ef_err code (the caller falls back to a line). */
+/* The vertices merged into held line h (valid until its end vertex is decided). */
+static ef_vec3_t *sm_run(ef_smooth_t *s, const ef_smooth_prim_t *h)
+{
+    return s->runs[h->id % EF_SMOOTH_RUNS];
+}
+
+/* Vertex k of the input polyline held line h stands for: its start, the vertices merged
+ * into it (pts, in order), its end (k = nmerged + 1). */
+static ef_vec3_t sm_vertex(const ef_smooth_prim_t *h, const ef_vec3_t *pts, uint32_t k)
+{
+    if (k == 0)
+        return h->start;
+    return k <= h->nmerged ? pts[k - 1] : h->pr.end;
+}
+
+/* Where vertex k of h lies along its chord (distance from its start). */
+static float sm_vertex_u(const ef_smooth_prim_t *h, const ef_vec3_t *pts, uint32_t k, ef_vec3_t dir)
+{
+    return ef_v3_dot(ef_v3_sub(sm_vertex(h, pts, k), h->start), dir);
+}
+
+/* Offset from the chord line of the piecewise-linear curve through (u[i], o[i]) at u, for
+ * piece i; outside the piece's span the end point is used and the distance along the chord
+ * is returned in *gap (0 inside). */
+static ef_vec3_t sm_lerp_off(float u0, ef_vec3_t o0, float u1, ef_vec3_t o1, float u, float *gap)
+{
+    float du = u1 - u0, t = du > 0.0f ? (u - u0) / du : 0.0f;
+    *gap = 0.0f;
+    if (t < 0.0f) {
+        *gap = u0 - u;
+        t = 0.0f;
+    } else if (t > 1.0f) {
+        *gap = u - u1;
+        t = 1.0f;
+    }
+    return ef_v3_add(o0, ef_v3_scale(ef_v3_sub(o1, o0), t));
+}
+
+/* Deviation of the sampled curve (us[j], os[j]: distance along h's chord and offset from it,
+ * j = 0..EF_BLEND_DEV_SAMPLES, increasing in u) from the input polyline of h, at equal
+ * distance along the chord: the largest |offset of the curve - offset of the polyline| over
+ * the curve's span. The input points run forward along the chord (the decimation checks
+ * it), so the polyline has exactly one point at each u; between consecutive breakpoints
+ * (samples and input vertices) both offsets are affine in u, so the largest difference is
+ * at a breakpoint. It bounds both the distance of every curve sample's chord point from the
+ * polyline and of every input vertex in the span from the sampled curve. */
+static float sm_poly_dev(const ef_smooth_prim_t *h, const ef_vec3_t *pts, ef_vec3_t dir,
+                         const float *us, const ef_vec3_t *os)
+{
+    const int ns = EF_BLEND_DEV_SAMPLES;
+    uint32_t nv = h->nmerged + 2, v = 1, k = 0;
+    int j = 0, js = 0;
+    float worst = 0.0f;
+    /* Every sample and every inner vertex once, in order of u: bounded by ns + nv. */
+    for (uint32_t guard = 0; guard < (uint32_t)ns + nv + 2u && (j <= ns || v + 1 < nv); guard++) {
+        float u;
+        if (v + 1 < nv && (j > ns || sm_vertex_u(h, pts, v, dir) < us[j])) {
+            u = sm_vertex_u(h, pts, v++, dir);
+            if (u < us[0] || u > us[ns])
+                continue; /* under a blend at the chord's end, not this curve's */
+        } else {
+            u = us[j++];
+        }
+        while (js + 1 < ns && us[js + 1] < u)
+            js++;
+        while (k + 2 < nv && sm_vertex_u(h, pts, k + 1, dir) < u)
+            k++;
+        float g0, g1;
+        ef_vec3_t oc = sm_lerp_off(us[js], os[js], us[js + 1], os[js + 1], u, &g0);
+        ef_vec3_t p0 = ef_v3_sub(sm_vertex(h, pts, k), h->start);
+        ef_vec3_t p1 = ef_v3_sub(sm_vertex(h, pts, k + 1), h->start);
+        float u0 = ef_v3_dot(p0, dir), u1 = ef_v3_dot(p1, dir);
+        ef_vec3_t op =
+            sm_lerp_off(u0, ef_v3_axpy(p0, -u0, dir), u1, ef_v3_axpy(p1, -u1, dir), u, &g1);
+        ef_vec3_t dd = ef_v3_sub(oc, op);
+        float e = ef_sqrtf(ef_v3_dot(dd, dd) + g1 * g1);
+        worst = ef_maxf(worst, e);
+    }
+    return worst;
+}
+
+/* A smooth-section move between two frames on held line h; its deviation is measured from
+ * the chord (samples plus a bound between them) and, where vertices were merged into the
+ * chord and pts holds them, from the input points themselves (sm_poly_dev()); m->dev is the
+ * smaller of the two bounds (chord bound + merge_dev, or the polyline measure) plus the
+ * between-samples bound. Returns an ef_err code (the caller falls back to a line). */
 static int sm_smooth_move(ef_smooth_t *s, ef_move_t *m, const ef_frame_t *f0, const ef_frame_t *f1,
-                          ef_vec3_t a, ef_vec3_t b, float feed, uint32_t tag)
+                          const ef_smooth_prim_t *h, const ef_vec3_t *pts, int measure)
 {
     ef_endpoint_t e0 = ef_frame_endpoint(f0), e1 = ef_frame_endpoint(f1);
     ef_seg_t seg;
@@ -181,25 +266,42 @@ static int sm_smooth_move(ef_smooth_t *s, ef_move_t *m, const ef_frame_t *f0, co
         m->b[i] = seg.b[i];
     m->degree = seg.degree;
     m->flags = (uint16_t)((seg.flags & EF_SEG_CLAMPED) ? EF_MOVE_CLAMPED : 0u);
-    /* Deviation from the programmed chord: samples plus the bound of the distance a chord
-     * between two samples can keep from the curve (|f''| h^2 / 8, with |f''| bounded by the
-     * second-difference hull of the control points). */
+    if (!measure) /* rebuilt for emission: the caller has the measurement */
+        return sm_finish_move(m, EF_MOVE_SMOOTH, h->pr.feed, h->pr.tag);
+    /* Samples: distance from the chord, and position along it / offset from it. */
+    enum { NS = EF_BLEND_DEV_SAMPLES };
+    float us[NS + 1];
+    ef_vec3_t os[NS + 1];
+    ef_vec3_t dir = sm_dir(h);
     float dmax = 0.0f;
-    for (int i = 0; i <= EF_BLEND_DEV_SAMPLES; i++) {
+    int mono = 1;
+    for (int i = 0; i <= NS; i++) {
         ef_vec3_t p;
-        float t = (float)i / (float)EF_BLEND_DEV_SAMPLES;
+        float t = (float)i / (float)NS;
         ef_bezier_eval(m->b, m->degree, t, 0, &p);
-        dmax = ef_maxf(dmax, sm_dist_seg(p, a, b));
+        dmax = ef_maxf(dmax, sm_dist_seg(p, h->start, h->pr.end));
+        ef_vec3_t q = ef_v3_sub(p, h->start);
+        us[i] = ef_v3_dot(q, dir);
+        os[i] = ef_v3_axpy(q, -us[i], dir);
+        if (i > 0 && !(us[i] > us[i - 1]))
+            mono = 0;
     }
+    /* Bound of the distance a chord between two samples can keep from the curve
+     * (|f''| h^2 / 8, with |f''| bounded by the second-difference hull of the control
+     * points). */
     float d2 = 0.0f;
     int n = m->degree;
     for (int i = 0; i + 2 <= n; i++) {
         ef_vec3_t dd = ef_v3_add(ef_v3_sub(m->b[i + 2], ef_v3_scale(m->b[i + 1], 2.0f)), m->b[i]);
         d2 = ef_maxf(d2, ef_v3_norm(dd));
     }
-    float h = 1.0f / (float)EF_BLEND_DEV_SAMPLES;
-    m->dev = dmax + (float)(n * (n - 1)) * d2 * h * h * 0.125f;
-    return sm_finish_move(m, EF_MOVE_SMOOTH, feed, tag);
+    float hs = 1.0f / (float)NS;
+    float between = (float)(n * (n - 1)) * d2 * hs * hs * 0.125f;
+    float dev = dmax + h->merge_dev;
+    if (h->nmerged > 0 && mono && pts)
+        dev = ef_minf(dev, sm_poly_dev(h, pts, dir, us, os));
+    m->dev = dev + between;
+    return sm_finish_move(m, EF_MOVE_SMOOTH, h->pr.feed, h->pr.tag);
 }
 
 /* The fall-back for a piece no curve can represent: its chord a-b, with exact stops at
@@ -228,17 +330,47 @@ static ef_frame_t sm_line_frame(ef_vec3_t p, ef_vec3_t dir)
     return f;
 }
 
-/* Smooth-vertex test between lines a->b and b->c (the tolerance-gated rule, ef_smooth.h);
- * on success *f is the frame of the circle through a, b, c at b. */
-static int sm_smooth_gate(const ef_smooth_t *s, ef_vec3_t a, ef_vec3_t b, ef_vec3_t c, float tol,
-                          ef_frame_t *f)
+/* The smooth-section move of held line h as its vertices stand: its start as decided (a
+ * smooth frame, or where the blend before it ended), its end at the smooth frame fe, or on
+ * the line trim_end before its end when fe is NULL; measured against the input points pts
+ * (NULL: from the chord only; measure 0: not at all, m->dev 0). Deterministic: the same
+ * state builds the same move. Returns an ef_err code. */
+static int sm_section_build(ef_smooth_t *s, const ef_smooth_prim_t *h, const ef_frame_t *fe,
+                            float trim_end, const ef_vec3_t *pts, int measure, ef_move_t *m)
+{
+    ef_vec3_t dir = sm_dir(h);
+    ef_frame_t f0 =
+        h->start_smooth ? h->fs : sm_line_frame(ef_v3_axpy(h->start, h->trim_start, dir), dir);
+    ef_frame_t f1 = fe ? *fe : sm_line_frame(ef_v3_axpy(h->pr.end, -trim_end, dir), dir);
+    if (h->trim_start > 0.0f)
+        f0.p = h->blend_in_end; /* exactly where the blend ended */
+    int rc = sm_smooth_move(s, m, &f0, &f1, h, pts, measure);
+    return rc == EF_OK && !sm_move_ok(m) ? EF_ERR_NONFINITE : rc;
+}
+
+/* sm_section_build() measured against h's input points: 1 when the section was built and is
+ * within h's tolerance, else 0. */
+static int sm_body_section(ef_smooth_t *s, const ef_smooth_prim_t *h, const ef_frame_t *fe,
+                           float trim_end, const ef_vec3_t *pts, ef_move_t *m)
+{
+    return sm_section_build(s, h, fe, trim_end, pts, 1, m) == EF_OK && m->dev <= h->pr.tol;
+}
+
+/* Smooth-vertex test between held lines pa (a->b) and pb (b->c), decimated chords (the
+ * tolerance-gated rule, ef_smooth.h); on success *f is the frame of the circle through
+ * a, b, c at b. */
+static int sm_smooth_gate(const ef_smooth_t *s, const ef_smooth_prim_t *pa,
+                          const ef_smooth_prim_t *pb, float tol, ef_frame_t *f)
 {
     float ml = s->cfg.micro_len;
     if (!(ml > 0.0f))
         return 0;
+    if (pa->piece_max > ml || pb->piece_max > ml)
+        return 0; /* input lines longer than micro-segments: corners, not samples */
+    ef_vec3_t a = pa->start, b = pa->pr.end, c = pb->pr.end;
     ef_vec3_t d1 = ef_v3_sub(b, a), d2 = ef_v3_sub(c, b);
     float l1 = ef_v3_norm(d1), l2 = ef_v3_norm(d2);
-    if (l1 > ml || l2 > ml || l1 > EF_SMOOTH_LEN_RATIO * l2 || l2 > EF_SMOOTH_LEN_RATIO * l1)
+    if (l1 > EF_SMOOTH_LEN_RATIO * l2 || l2 > EF_SMOOTH_LEN_RATIO * l1)
         return 0;
     ef_vec3_t u1 = ef_v3_scale(d1, 1.0f / l1), u2 = ef_v3_scale(d2, 1.0f / l2);
     float sn = ef_v3_norm(ef_v3_cross(u1, u2)), cs = ef_v3_dot(u1, u2);
@@ -249,9 +381,10 @@ static int sm_smooth_gate(const ef_smooth_t *s, ef_vec3_t a, ef_vec3_t b, ef_vec
     float lac = ef_v3_norm(ef_v3_sub(c, a));
     float kappa = 2.0f * sn / lac;
     /* Gate: the curve through the points bulges from each chord by about kappa L^2 / 8;
-     * half the tolerance is kept for the curvature varying along the section. */
+     * the rest of the tolerance is kept for the curvature varying along the section (which
+     * is measured against the input points before the vertex is taken as smooth). */
     float lm = ef_maxf(l1, l2);
-    if (kappa * lm * lm * 0.125f > 0.5f * tol)
+    if (kappa * lm * lm * 0.125f > EF_SMOOTH_GATE_SHARE * tol)
         return 0;
     /* Tangent of the circle at b: u1 turned towards u2 by the half-angle of chord ab,
      * sin(d1) = l1 kappa / 2. In the plane of u1, u2 with e = u1 and f perpendicular. */
@@ -269,19 +402,80 @@ static int sm_smooth_gate(const ef_smooth_t *s, ef_vec3_t a, ef_vec3_t b, ef_vec
     return 1;
 }
 
+/* Frame at q of the circular arc from the other end p of a chord, tangent to t there: the
+ * tangents at the two ends of an arc make equal angles with its chord. Used where a smooth
+ * section ends at an exact stop: the speed is zero there, so the tangent is free, and the
+ * arc continues the curve the smooth vertex at the other end estimated (instead of turning
+ * into the chord's direction, which costs deviation on a curved run). */
+static ef_frame_t sm_arc_frame(ef_vec3_t p, ef_vec3_t t, ef_vec3_t q)
+{
+    ef_vec3_t d = ef_v3_sub(q, p);
+    float l = ef_v3_norm(d);
+    ef_vec3_t u = ef_v3_scale(d, 1.0f / ef_maxf(l, 1e-30f));
+    ef_frame_t f;
+    f.p = q;
+    f.t = ef_v3_axpy(ef_v3_scale(t, -1.0f), 2.0f * ef_v3_dot(t, u), u);
+    f.t = ef_v3_scale(f.t, 1.0f / ef_maxf(ef_v3_norm(f.t), 1e-30f));
+    /* Towards the centre: the part of (p - q) across the tangent at q. */
+    ef_vec3_t w = ef_v3_scale(d, -1.0f);
+    ef_vec3_t nn = ef_v3_axpy(w, -ef_v3_dot(w, f.t), f.t);
+    float ln = ef_v3_norm(nn);
+    float sn = ef_v3_norm(ef_v3_cross(t, u));
+    if (ln > 1e-6f * l && sn > EF_BLEND_MIN_TURN) {
+        f.n = ef_v3_scale(nn, 1.0f / ln);
+        f.kappa = 2.0f * sn / l;
+    } else {
+        f.n = ef_v3(0.0f, 0.0f, 0.0f);
+        f.kappa = 0.0f;
+    }
+    return f;
+}
+
+/* Fit held line h's section with the end frame fe of a smooth vertex being decided: built
+ * and measured against the input points now (the section is final once the vertex is).
+ * Where h starts at rest without a smooth frame, the arc of fe is tried first as its
+ * start frame (sm_arc_frame()). 1 when a section fits (h->sec, h->sec_dev set, the free
+ * start frame kept), else 0 (h unchanged). */
+static int sm_fit_section(ef_smooth_t *s, ef_smooth_prim_t *h, const ef_frame_t *fe)
+{
+    const ef_vec3_t *pts = sm_run(s, h);
+    ef_move_t trial;
+    if (!h->start_smooth && h->start_stop) {
+        ef_frame_t keep = h->fs;
+        /* (the reflection of the forward tangent at the end is the forward one here) */
+        h->fs = sm_arc_frame(fe->p, fe->t, h->start);
+        h->start_smooth = 1;
+        if (sm_body_section(s, h, fe, 0.0f, pts, &trial)) {
+            h->sec = 1;
+            h->sec_dev = trial.dev;
+            return 1;
+        }
+        h->start_smooth = 0;
+        h->fs = keep;
+    }
+    if (!sm_body_section(s, h, fe, 0.0f, pts, &trial))
+        return 0;
+    h->sec = 1;
+    h->sec_dev = trial.dev;
+    return 1;
+}
+
 /* Decide the vertex between held primitives a (ends there) and b (starts there). */
-static void sm_decide(ef_smooth_t *s, ef_smooth_prim_t *a, ef_smooth_prim_t *b)
+static void sm_decide_vertex(ef_smooth_t *s, ef_smooth_prim_t *a, ef_smooth_prim_t *b)
 {
     a->end_kind = EF_V_STOP;
     if ((b->pr.flags & EF_PRIM_STOP_BEFORE) || !(b->pr.tol > 0.0f)) {
         s->st.stops++;
         return;
     }
-    /* What collinear merging used of the tolerance is not available to the vertex. */
+    /* What the decimation used of the tolerance is not available to a blend here; smooth
+     * sections are measured against the input points themselves. */
     float tol = b->pr.tol - ef_maxf(a->merge_dev, b->merge_dev);
     if (a->pr.kind == EF_PRIM_LINE && b->pr.kind == EF_PRIM_LINE) {
         ef_frame_t f;
-        if (sm_smooth_gate(s, a->start, a->pr.end, b->pr.end, tol, &f)) {
+        /* The section ending here is final once this vertex is: built and measured now, so
+         * a section that does not fit makes this vertex a corner, not an exact stop. */
+        if (sm_smooth_gate(s, a, b, b->pr.tol, &f) && sm_fit_section(s, a, &f)) {
             a->end_kind = EF_V_SMOOTH;
             a->end_smooth = 1;
             a->fe = f;
@@ -334,7 +528,44 @@ static void sm_decide(ef_smooth_t *s, ef_smooth_prim_t *a, ef_smooth_prim_t *b)
     a->end_kind = EF_V_BLEND;
     a->trim_end = a->blend.trim_in;
     b->trim_start = a->blend.trim_out;
+    b->blend_in_end = a->blend.seg.b[5]; /* as emitted; a section on b starts there */
     s->st.blends++;
+}
+
+/* Held line h's end vertex is decided: build and measure its smooth section once, while
+ * its merged vertices are still in their run slot (emission rebuilds the same move and
+ * takes this measurement); the slot is free after. A section from a smooth vertex to an
+ * exact stop ends on the arc of its smooth start (sm_arc_frame()) when that fits, else on
+ * the chord's direction; one that fits neither is driven as its chord between stops. */
+static void sm_close(ef_smooth_t *s, ef_smooth_prim_t *h)
+{
+    if (h->pr.kind != EF_PRIM_LINE || h->sec != 0 || !(h->start_smooth || h->end_smooth))
+        return;
+    ef_move_t trial;
+    const ef_vec3_t *pts = sm_run(s, h);
+    if (h->end_kind == EF_V_STOP && h->start_smooth && !h->end_smooth) {
+        ef_frame_t fe = sm_arc_frame(h->fs.p, h->fs.t, h->pr.end);
+        if (sm_body_section(s, h, &fe, 0.0f, pts, &trial)) {
+            h->fe = fe;
+            h->end_smooth = 1;
+            h->sec = 1;
+            h->sec_dev = trial.dev;
+            return;
+        }
+    }
+    int ok = sm_body_section(s, h, h->end_smooth ? &h->fe : (const ef_frame_t *)0, h->trim_end, pts,
+                             &trial);
+    h->sec = ok ? 1u : 2u;
+    h->sec_dev = trial.dev;
+}
+
+/* Decide the vertex between a and b, then close a. */
+static void sm_decide(ef_smooth_t *s, ef_smooth_prim_t *a, ef_smooth_prim_t *b)
+{
+    sm_decide_vertex(s, a, b);
+    if (a->end_kind == EF_V_STOP)
+        b->start_stop = 1;
+    sm_close(s, a);
 }
 
 /* Arc length bounds of piece i (0-based) of n of an arc body; the last piece ends exactly
@@ -438,15 +669,19 @@ static int sm_next_move(ef_smooth_t *s, ef_move_t *m)
             ef_vec3_t a = ef_v3_axpy(h->start, h->trim_start, dir);
             ef_vec3_t b = ef_v3_axpy(h->pr.end, -h->trim_end, dir);
             if (h->start_smooth || h->end_smooth) {
-                ef_frame_t f0 = h->start_smooth ? h->fs : sm_line_frame(a, dir);
-                ef_frame_t f1 = h->end_smooth ? h->fe : sm_line_frame(b, dir);
-                if (h->trim_start > 0.0f)
-                    f0.p = h->blend_in_end; /* exactly where the blend ended */
-                rc = sm_smooth_move(s, m, &f0, &f1, h->start, h->pr.end, h->pr.feed, h->pr.tag);
-                if (rc != EF_OK || !sm_move_ok(m) || m->dev > h->pr.tol - h->merge_dev) {
+                rc = EF_OK;
+                if (h->sec == 1 &&
+                    sm_section_build(s, h, h->end_smooth ? &h->fe : (const ef_frame_t *)0,
+                                     h->trim_end, (const ef_vec3_t *)0, 0, m) == EF_OK) {
+                    m->dev = h->sec_dev; /* measured against the input points at sm_close() */
+                } else {
                     /* Not representable within the tolerance: the chord itself, with exact
                      * stops at both ends (tangents differ there). */
-                    rc = sm_chord_stop(s, m, f0.p, f1.p, &h->pr);
+                    if (h->trim_start > 0.0f)
+                        a = h->blend_in_end;
+                    rc = sm_chord_stop(s, m, h->start_smooth ? h->fs.p : a,
+                                       h->end_smooth ? h->fe.p : b, &h->pr);
+                    m->dev = h->merge_dev;
                 }
             } else {
                 if (h->trim_start > 0.0f)
@@ -456,6 +691,7 @@ static int sm_next_move(ef_smooth_t *s, ef_move_t *m)
                     return sm_skip_body(s, h, m);
                 }
                 rc = sm_line_move(m, a, b, h->pr.feed, h->pr.tag);
+                m->dev = h->merge_dev; /* the chord, off the input points by that much */
             }
         }
         if (rc != EF_OK)
@@ -473,13 +709,13 @@ static int sm_next_move(ef_smooth_t *s, ef_move_t *m)
         *m = zero;
         for (int i = 0; i < 6; i++)
             m->b[i] = h->blend.seg.b[i];
+        ef_smooth_prim_t *nx = sm_held(s, 1);
         m->degree = 5;
-        m->dev = h->blend.dev;
+        m->dev = h->blend.dev + ef_maxf(h->merge_dev, nx->merge_dev);
         if (h->blend.flags & EF_BLEND_CLAMPED)
             m->flags |= EF_MOVE_BLEND_CLAMPED;
         if (h->blend.flags & EF_BLEND_TBL_CLAMPED)
             m->flags |= EF_MOVE_CLAMPED;
-        ef_smooth_prim_t *nx = sm_held(s, 1);
         m->kind = EF_MOVE_BLEND;
         m->feed = ef_minf(h->pr.feed, nx->pr.feed);
         m->tag = nx->pr.tag;
@@ -539,9 +775,10 @@ static int sm_pump(ef_smooth_t *s)
     return EF_OK;
 }
 
-/* Merge line pr (from s->pos) into the newest held line when the collinearity tolerance
- * allows (G64 Q): every inner vertex within qtol of the merged line, same direction, same
- * feed. Returns 1 when merged. */
+/* Band decimation (ef_smooth.h, rule 2): merge line pr (from s->pos) into the newest held
+ * line when every inner vertex, old and new, lies within the band of the merged chord and
+ * every input piece runs forward along it (no reversal, whatever the band), at the same
+ * feed. Straight runs and gently curving ones alike. Returns 1 when merged. */
 static int sm_try_merge(ef_smooth_t *s, const ef_prim_t *pr)
 {
     if (s->pn == 0 || pr->kind != EF_PRIM_LINE || !(pr->qtol > 0.0f) || !(pr->tol > 0.0f) ||
@@ -549,25 +786,38 @@ static int sm_try_merge(ef_smooth_t *s, const ef_prim_t *pr)
         return 0;
     ef_smooth_prim_t *h = sm_held(s, s->pn - 1);
     if (h->pr.kind != EF_PRIM_LINE || h->end_kind != EF_V_OPEN || h->pr.feed != pr->feed ||
-        h->nmerged >= EF_SMOOTH_MERGE_MAX)
+        h->nmerged >= EF_SMOOTH_MERGE_MAX || !(h->pr.tol > 0.0f))
         return 0;
     ef_vec3_t a = h->start, c = pr->end;
     ef_vec3_t ac = ef_v3_sub(c, a);
     float lac = ef_v3_norm(ac);
-    if (!(lac > EF_MIN_CHORD) ||
-        ef_v3_dot(ef_v3_sub(c, h->pr.end), ef_v3_sub(h->pr.end, a)) <= 0.0f)
+    if (!(lac > EF_MIN_CHORD))
         return 0;
-    /* Every inner vertex, old and new, within qtol of the merged chord, and within half
-     * the path tolerance so the blends at the ends keep at least the other half. */
-    float lim = ef_minf(pr->qtol, 0.5f * ef_minf(pr->tol, h->pr.tol));
-    float dev = sm_dist_seg(h->pr.end, a, c);
-    for (uint32_t i = 0; i < h->nmerged; i++)
-        dev = ef_maxf(dev, sm_dist_seg(h->merged[i], a, c));
-    if (!(dev <= lim))
+    /* The band: Q, and at most a share of the path tolerance so the blends and smooth
+     * sections on the chord keep the rest. */
+    float lim =
+        ef_minf(ef_minf(pr->qtol, h->pr.qtol), EF_SMOOTH_BAND_SHARE * ef_minf(pr->tol, h->pr.tol));
+    /* Every piece forward along the new chord, every inner vertex within the band. */
+    ef_vec3_t prev = a;
+    float dev = 0.0f;
+    ef_vec3_t *pts = sm_run(s, h);
+    for (uint32_t i = 0; i <= h->nmerged; i++) {
+        ef_vec3_t v = i < h->nmerged ? pts[i] : h->pr.end;
+        if (!(ef_v3_dot(ef_v3_sub(v, prev), ac) > 0.0f))
+            return 0;
+        dev = ef_maxf(dev, sm_dist_seg(v, a, c));
+        if (!(dev <= lim))
+            return 0;
+        prev = v;
+    }
+    if (!(ef_v3_dot(ef_v3_sub(c, prev), ac) > 0.0f))
         return 0;
     h->merge_dev = dev;
-    h->merged[h->nmerged++] = h->pr.end;
+    pts[h->nmerged++] = h->pr.end;
+    h->piece_max = ef_maxf(h->piece_max, ef_v3_norm(ef_v3_sub(c, h->pr.end)));
     h->pr.end = c;
+    h->pr.tol = ef_minf(h->pr.tol, pr->tol);
+    h->pr.qtol = ef_minf(h->pr.qtol, pr->qtol);
     h->len = lac;
     s->st.merged++;
     return 1;
@@ -599,8 +849,17 @@ int ef_smooth_push(ef_smooth_t *s, const ef_prim_t *pr)
     h->trim_start = h->trim_end = 0.0f;
     h->end_kind = EF_V_OPEN;
     h->start_smooth = h->end_smooth = 0;
+    /* At rest where it starts: the first primitive, or after ef_smooth_finish() (every
+     * held primitive then ends at a stop); a stop decided later sets it in sm_decide(). */
+    h->start_stop = s->pn == 0 || sm_held(s, s->pn - 1)->end_kind == EF_V_STOP;
     h->nmerged = 0;
     h->merge_dev = 0.0f;
+    h->piece_max = len;
+    h->sec = 0;
+    h->sec_dev = 0.0f;
+    /* Its run slot is the one of the primitive two before it, whose end vertex is decided
+     * below, before anything is merged into this one. */
+    h->id = s->next_id++;
     h->blend_in_end = h->start;
     s->pn++;
     /* The previous primitive is now closed: the vertex before it can be decided. */
@@ -629,6 +888,7 @@ int ef_smooth_finish(ef_smooth_t *s)
         if (b->end_kind == EF_V_OPEN) {
             b->end_kind = EF_V_STOP;
             s->st.stops++;
+            sm_close(s, b);
         }
     }
     return sm_pump(s);

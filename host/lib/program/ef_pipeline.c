@@ -22,6 +22,7 @@ typedef struct {
     uint32_t seq;
     int valid;
     float v_max;
+    float feed; /* programmed feed (units/s) */
     ef_pipe_move_info_t mi;
 } ef_pipe_seq_t;
 
@@ -42,6 +43,7 @@ typedef struct {
     ef_pipe_stats_t st;
     double tol, qtol;
     int stop_next;
+    int last_rapid; /* the last primitive pushed was a G0 */
     int units_set;
 } ef_pipe_t;
 
@@ -120,6 +122,16 @@ int ef_pipe_item_prim(const ef_gcode_item_t *it, double rapid_speed, ef_prim_t *
     }
 }
 
+/* Q in force for G64 with tolerance tol and Q word q (0: not given): the word, else the
+ * configured default, else P itself (LinuxCNC's default); the firmware caps the band at
+ * EF_SMOOTH_BAND_SHARE x P. */
+static double pipe_qtol(const ef_pipe_cfg_t *c, double tol, double q)
+{
+    if (q > 0)
+        return q;
+    return c->qtol_default > 0 ? c->qtol_default : tol;
+}
+
 /* What is known about the primitive with this tag (newest first). */
 static ef_pipe_move_info_t pipe_tag_info(const ef_pipe_t *P, uint32_t tag)
 {
@@ -167,6 +179,16 @@ static int pipe_step(ef_pipe_t *P, int k, ef_msg_t *m)
         double dz = (double)sp.p.z - P->prev[k].p.z;
         double vm = sqrt(dx * dx + dy * dy + dz * dz) / dt;
         double vref = 0.5 * ((double)P->prev[k].v_plan + sp.v_plan);
+        if (fabs(vm - vref) > fl->max_abs)
+            fl->max_abs = fabs(vm - vref);
+        if (vref > 0 && vref >= EF_PIPE_FLUCT_FEED_SHARE * si->feed) {
+            double rel = fabs(vm - vref) / vref;
+            fl->samples_feed++;
+            if (rel > fl->max_rel_feed) {
+                fl->max_rel_feed = rel;
+                fl->max_line_feed = sp.tag;
+            }
+        }
         if (vref > 0 && vref >= EF_PIPE_FLUCT_VMIN_FRAC * si->v_max) {
             double rel = fabs(vm - vref) / vref;
             fl->samples++;
@@ -216,6 +238,7 @@ static int pipe_move(ef_pipe_t *P, const ef_move_t *mv, ef_msg_t *m)
     s->seq = mv->seq;
     s->valid = 1;
     s->v_max = mv->v_max;
+    s->feed = mv->feed;
     s->mi = mi;
     if (P->cb.on_move) {
         int rc = P->cb.on_move(P->cb.user, mv, &mi);
@@ -309,7 +332,11 @@ static int pipe_prim(ef_pipe_t *P, const ef_gcode_item_t *it, ef_msg_t *m)
     pr.tag = it->line;
     pr.tol = (float)P->tol;
     pr.qtol = (float)P->qtol;
-    if (P->stop_next || rapid)
+    /* Exact stops: at program start and after events (stop_next), and around every G0
+     * only when rapids are configured to stop; otherwise a G0 corner, and a G0/G1
+     * transition, is blended within the active P like any other vertex (tol 0, i.e. G61,
+     * still stops everywhere). */
+    if (P->stop_next || (P->cfg->rapid_exact && (rapid || P->last_rapid)))
         pr.flags |= EF_PRIM_STOP_BEFORE;
     if (!P->units_set) {
         P->st.units = it->units;
@@ -317,7 +344,7 @@ static int pipe_prim(ef_pipe_t *P, const ef_gcode_item_t *it, ef_msg_t *m)
     }
     ef_pipe_tag_t *t = &P->tags[P->ntags++ % EF_PIPE_TAGS];
     t->tag = pr.tag;
-    t->mi.tol = pr.flags & EF_PRIM_STOP_BEFORE ? 0.0 : P->tol;
+    t->mi.tol = P->tol;
     t->mi.units = it->units;
     t->mi.rapid = rapid;
     for (int tries = 0;; tries++) {
@@ -356,9 +383,10 @@ static int pipe_prim(ef_pipe_t *P, const ef_gcode_item_t *it, ef_msg_t *m)
         P->st.rapids++;
     if (pr.kind == EF_PRIM_ARC)
         P->st.arcs++;
-    if (!(pr.flags & EF_PRIM_STOP_BEFORE) && P->tol > P->st.tol_max)
+    if (P->tol > P->st.tol_max)
         P->st.tol_max = P->tol;
-    P->stop_next = rapid;
+    P->stop_next = 0;
+    P->last_rapid = rapid;
     return pipe_pull(P, NULL, m);
 }
 
@@ -431,7 +459,7 @@ static int pipe_loop(ef_pipe_t *P, ef_msg_t *m)
                 P->qtol = 0;
             } else {
                 P->tol = it.p_tol > 0 ? it.p_tol : P->cfg->tol_default;
-                P->qtol = it.q_tol > 0 ? it.q_tol : P->cfg->qtol_default;
+                P->qtol = pipe_qtol(P->cfg, P->tol, it.q_tol);
             }
             break;
         case EF_GC_EVENT:
@@ -475,7 +503,7 @@ int ef_pipe_run(ef_gcode_t *r, const ef_pipe_cfg_t *cfg, const ef_pipe_cb_t *cb,
         P->cb = *cb;
     P->r = r;
     P->tol = cfg->tol_default;
-    P->qtol = cfg->qtol_default;
+    P->qtol = pipe_qtol(cfg, P->tol, 0.0);
     P->stop_next = 1;
     P->st.units = r->units ? r->units : 21;
     ef_vec3_t start = ef_v3((float)r->cur[0], (float)r->cur[1], (float)r->cur[2]);

@@ -12,6 +12,9 @@ if(TARGET evenfeed)
                    --evenfeed $<TARGET_FILE:evenfeed>
                    --work ${CMAKE_CURRENT_BINARY_DIR}/lcnc-smoke
                    ${CMAKE_CURRENT_LIST_DIR}/smoke.ngc)
+  # lcnc_run.sh's own limit (EF_LCNC_TIMEOUT) well inside ctest's, so that a stuck run is
+  # stopped by the script, which stops every LinuxCNC process it started, not killed by
+  # ctest with LinuxCNC left running.
   set_tests_properties(lcnc_smoke PROPERTIES SKIP_RETURN_CODE 77 RESOURCE_LOCK linuxcnc
-                       TIMEOUT 300)
+                       ENVIRONMENT "EF_LCNC_TIMEOUT=240" TIMEOUT 420)
 endif()

@@ -20,17 +20,29 @@
  * 1. **Exact stop** when the next primitive has ::EF_PRIM_STOP_BEFORE or tol == 0, when the
  *    turn exceeds EF_BLEND_MAX_TURN (a reversal), or when the blend that fits is below float32
  *    resolution: the move ending there gets ::EF_MOVE_STOP_END.
- * 2. **Collinear collapse** (G64 Q): consecutive lines whose inner vertices all lie within
- *    min(qtol, tol / 2) of the merged line become one line (at most ::EF_SMOOTH_MERGE_MAX
- *    vertices). What the merge used of the tolerance is taken from the blends at the merged
- *    line's ends, so the total deviation from the program stays within tol.
+ * 2. **Band decimation** (G64 Q; the host passes Q = P when the program gives none, as
+ *    LinuxCNC does): consecutive lines, straight or gently curving, whose inner vertices all
+ *    lie within the band min(qtol, ::EF_SMOOTH_BAND_SHARE x tol) of the chord from the
+ *    run's first point to its last, running forward along that chord piece by piece (never
+ *    a reversal), at the same feed, become one chord (at most ::EF_SMOOTH_MERGE_MAX inner
+ *    vertices; qtol = 0 disables it). The dropped points are kept (ef_smooth_t::runs, until
+ *    the chord's end vertex is decided) and every move built on the chord is measured
+ *    against them, so the total deviation from every input
+ *    point stays within tol: a line on the chord deviates by merge_dev, a blend at its ends
+ *    gets tol - merge_dev, and a smooth section on it is measured against the input points
+ *    themselves (the polyline through them, at equal distance along the chord).
  * 3. **Smooth vertex** (CAM micro-segments; the tolerance-gated rule): between two lines
- *    both no longer than micro_len, turning by at most micro_turn, whose lengths differ by at
- *    most a factor ::EF_SMOOTH_LEN_RATIO, and where the curve through the neighbouring points
- *    stays within tol of both chords (estimated sagitta kappa L^2 / 8 <= tol). The vertex is
- *    interpolated with the tangent and curvature of the circle through it and its two
- *    neighbours; the chord between two smooth vertices becomes a G2 quintic (or G1 cubic)
- *    segment through the table (::EF_MOVE_SMOOTH).
+ *    (decimated chords) whose input pieces are no longer than micro_len, turning by at most
+ *    micro_turn, whose chord lengths differ by at most a factor ::EF_SMOOTH_LEN_RATIO, and
+ *    where the circle through the vertex and its two neighbouring chord ends bulges from
+ *    the longer chord by at most ::EF_SMOOTH_GATE_SHARE x tol (kappa L^2 / 8). The vertex is
+ *    interpolated with that circle's tangent and curvature; the chord between two smooth
+ *    vertices becomes a G2 quintic (or G1 cubic) segment through the table
+ *    (::EF_MOVE_SMOOTH). The section ending at the vertex is built and measured when the
+ *    vertex is decided: if it is not within tol of the input points the vertex is a corner
+ *    instead (never an exact stop: noise in the points costs at most a blend). A section
+ *    from or to an exact stop (speed 0, tangent free) continues the arc of its smooth end
+ *    rather than turning into the chord's direction.
  * 4. Otherwise a **corner**: a G2 blend within tol (ef_blend_prims()). Each primitive gives
  *    at most half its length to the blend at either end, so blends never overlap.
  * Arcs between vertices become equal G2 quintic pieces of at most ::EF_ARC_PIECE_SWEEP,
@@ -61,9 +73,21 @@ extern "C" {
 #ifndef EF_SMOOTH_PRIMS
 #define EF_SMOOTH_PRIMS 8
 #endif
-/** Most inner vertices one collinear merge absorbs. */
+/** Most inner vertices one decimated chord absorbs (rule 2); EF_SMOOTH_RUNS (3) runs are
+ *  kept at 12 bytes a vertex (2.3 KB with the default). */
 #ifndef EF_SMOOTH_MERGE_MAX
-#define EF_SMOOTH_MERGE_MAX 32
+#define EF_SMOOTH_MERGE_MAX 64
+#endif
+/** Band of the decimation (rule 2) as a share of the path tolerance: the band is
+ *  min(qtol, EF_SMOOTH_BAND_SHARE x tol), the rest of tol is left to the blends and smooth
+ *  sections built on the decimated chords. */
+#ifndef EF_SMOOTH_BAND_SHARE
+#define EF_SMOOTH_BAND_SHARE 0.5f
+#endif
+/** Smooth-vertex gate (rule 3): the circle through the vertex and its neighbours may bulge
+ *  from the longer chord by at most this share of tol (the section is measured after). */
+#ifndef EF_SMOOTH_GATE_SHARE
+#define EF_SMOOTH_GATE_SHARE 1.0f
 #endif
 /** Smooth vertices need neighbouring chords whose lengths differ by at most this factor. */
 #ifndef EF_SMOOTH_LEN_RATIO
@@ -89,8 +113,8 @@ typedef struct {
     const ef_table_t *g2;  /**< G2 quintic table (required) */
     const ef_table_t *g1;  /**< G1 cubic table (required only when smooth_degree == 3) */
     ef_limits_t lim;       /**< motion limits for the planner */
-    float micro_len;       /**< longest chord treated as a CAM micro-segment; 0 disables
-                                smooth sections */
+    float micro_len;       /**< longest input line (before decimation) treated as a CAM
+                                micro-segment; 0 disables smooth sections */
     float micro_turn;      /**< largest turn (rad) at a smooth vertex, e.g. 0.35 (20 deg) */
     uint8_t smooth_degree; /**< 5: G2 quintic smooth sections; 3: G1 cubic */
 } ef_smooth_cfg_t;
@@ -103,7 +127,7 @@ typedef struct {
     uint32_t straight;   /**< vertices passed straight (turn below EF_BLEND_MIN_TURN) */
     uint32_t stops;      /**< exact stops (requested, reversal, too small, finish) */
     uint32_t reversals;  /**< of those, reversals */
-    uint32_t merged;     /**< vertices removed by collinear collapse */
+    uint32_t merged;     /**< vertices removed by band decimation (collinear collapse) */
     uint32_t smooth;     /**< smooth vertices */
     uint32_t arc_pieces; /**< arc pieces emitted */
     float dev_max;       /**< largest deviation of any emitted move from the programmed path */
@@ -117,20 +141,32 @@ typedef struct {
     float trim_start;                 /**< length taken by the blend at its start */
     float trim_end;                   /**< length taken by the blend at its end */
     uint8_t end_kind;                 /**< how its end vertex was resolved (internal) */
-    uint8_t start_smooth, end_smooth; /**< smooth vertex at start / end */
+    uint8_t start_smooth, end_smooth; /**< smooth frame at start / end (a smooth vertex, or
+                                           at an exact stop the arc of the other end's) */
+    uint8_t start_stop;               /**< it starts at rest (an exact stop) */
     ef_frame_t fs, fe;                /**< smooth vertex frames at start / end */
     ef_blend_t blend;                 /**< blend at its end (when end_kind says so) */
     ef_vec3_t blend_in_end;           /**< where the blend at its start ended (its first point) */
-    float blend_len;      /**< end blend's length (measured once, when the vertex is decided) */
-    float blend_kmax;     /**< end blend's curvature bound (likewise) */
-    ef_vec3_t blend_tabs; /**< end blend's axis tangent bounds (likewise) */
+    float blend_len;       /**< end blend's length (measured once, when the vertex is decided) */
+    float blend_kmax;      /**< end blend's curvature bound (likewise) */
+    ef_vec3_t blend_tabs;  /**< end blend's axis tangent bounds (likewise) */
     ef_vec3_t blend_kabs;  /**< end blend's axis curvature-vector bounds (likewise) */
     ef_vec3_t blend_kjerk; /**< end blend's axis third-derivative bounds (likewise) */
-    uint32_t nmerged;     /**< inner vertices merged into it */
-    float merge_dev;      /**< largest distance of those vertices from it: the blends and
-                               smooth sections at its ends get only tol - merge_dev */
-    ef_vec3_t merged[EF_SMOOTH_MERGE_MAX]; /**< those vertices (for the Q check) */
+    uint32_t nmerged;      /**< inner vertices merged into it (band decimation) */
+    float merge_dev;       /**< largest distance of those vertices from it: the blends at
+                                its ends get only tol - merge_dev */
+    float piece_max;       /**< longest input line merged into it (the micro_len test) */
+    uint32_t id;           /**< sequence number: its run slot is id % EF_SMOOTH_RUNS */
+    uint8_t sec;           /**< its smooth section: 0 none / not built yet, 1 fits, 2 does
+                                not (driven as its chord between exact stops) */
+    float sec_dev;         /**< that section's measured deviation (when sec == 1) */
 } ef_smooth_prim_t;
+
+/** Run slots: the vertices merged into a held line are needed until its end vertex is
+ *  decided (the band test while it grows, then the measurement of its smooth section),
+ *  which happens when the primitive after the next one arrives; so at most three held
+ *  lines need theirs at once. Structural, not a tunable. */
+#define EF_SMOOTH_RUNS 3
 
 /** Smoother state (public for static allocation; treat as private). */
 typedef struct {
@@ -138,6 +174,9 @@ typedef struct {
     ef_plan_t plan;
     ef_smooth_prim_t pq[EF_SMOOTH_PRIMS]; /**< held primitives, oldest at ph */
     uint32_t ph, pn;
+    uint32_t next_id; /**< id of the next held primitive */
+    /** Vertices merged into the held lines whose end vertex is still open, in order. */
+    ef_vec3_t runs[EF_SMOOTH_RUNS][EF_SMOOTH_MERGE_MAX];
     ef_vec3_t pos;     /**< end of the last accepted primitive */
     ef_vec3_t out_end; /**< where the last emitted move ends (moves chain exactly) */
     ef_move_t stage[EF_SMOOTH_STAGE];

@@ -7,14 +7,21 @@
  *
  * ## Item conversion
  * - Positions stay in millimetres (the reader's); feeds mm/min -> mm/s.
- * - G0: a LINE primitive at the rapid speed, with ::EF_PRIM_STOP_BEFORE, and the primitive
- *   after it also gets ::EF_PRIM_STOP_BEFORE (exact stops at both ends of a rapid).
+ * - G0: a LINE primitive at the rapid speed. Its corners, and the transitions between G0
+ *   and G1/G2/G3, are blended within the active G64 tolerance P like any other vertex (as
+ *   LinuxCNC blends rapids); in G61 (tol 0) every vertex stops, and so does the program
+ *   start and every event (below). With ::ef_pipe_cfg_t::rapid_exact set, a G0 and the
+ *   primitive after it get ::EF_PRIM_STOP_BEFORE (exact stops at both ends of a rapid).
  * - G1: a LINE primitive. G2/G3: an ARC primitive about +Z (G17), +Y (G18) or +X (G19)
  *   with the item's centre and signed sweep (full turns included); a helix ends at the
  *   item's end.
  * - G61/G61.1: tol 0 (exact stops) from then on. G64 P Q: tol = P (P absent or 0: the
- *   configured default), qtol = Q (absent: the configured default). The program starts in
- *   G64 with the defaults (LinuxCNC's default mode).
+ *   configured default), qtol = Q (absent or 0: the configured default, and where that is 0,
+ *   P itself, LinuxCNC's default). The smoother merges lines, straight runs and gently
+ *   curving ones, whose inner points lie within min(Q, EF_SMOOTH_BAND_SHARE x P) of the
+ *   merged chord (ef_smooth.h, band decimation), so a run of short collinear G1 becomes one
+ *   move without a Q word. The program starts in G64 with the defaults (LinuxCNC's
+ *   default mode).
  * - Events (tool change, spindle, coolant, dwell, G53 moves, work offsets, M0...):
  *   ef_smooth_finish(), every move drained (and interpolated to rest), then on_event, so
  *   moves and events keep their order. The first primitive after an event has
@@ -46,6 +53,9 @@ extern "C" {
 /** Feed fluctuation counts samples whose planned speed is at least this fraction of the
  *  move's speed limit (ramps to rest are excluded: relative errors there mean nothing). */
 #define EF_PIPE_FLUCT_VMIN_FRAC 0.1
+/** Feed fluctuation is also reported over the samples whose planned speed is at least this
+ *  share of the programmed feed (what the part sees at feed, not the ramps near rest). */
+#define EF_PIPE_FLUCT_FEED_SHARE 0.5
 
 /** What the pipeline knows about a move beyond ef_move_t (looked up by its tag). */
 typedef struct {
@@ -76,11 +86,12 @@ typedef struct {
     const ef_table_t *g1;  /**< G1 cubic table (required when smooth_degree == 3) */
     ef_limits_t lim;       /**< motion limits (mm/s, mm/s^2, mm/s^3) */
     double tol_default;    /**< P (mm) at program start and for G64 without P */
-    double qtol_default;   /**< Q (mm) at program start and for G64 without Q (0: no merge) */
+    double qtol_default;   /**< Q (mm) at program start and for G64 without Q (0: Q = P) */
     double micro_len;      /**< longest CAM micro-segment (mm); 0 disables smooth sections */
     double micro_turn;     /**< largest turn at a smooth vertex (rad) */
     int smooth_degree;     /**< 5 (G2 quintic) or 3 (G1 cubic) smooth sections */
     double rapid_speed;    /**< G0 path speed (mm/s), > 0 */
+    int rapid_exact;       /**< nonzero: exact stops at both ends of every G0 (0: blended) */
     uint32_t period_us;    /**< servo period (us), > 0 */
     int step_mode;         /**< ::ef_step_mode_t whose setpoints go to on_setpoint */
     unsigned interp_modes; /**< EF_PIPE_INTERP_* bits: interpolators to run (0: none) */
@@ -89,14 +100,20 @@ typedef struct {
 /** Feed fluctuation of one step mode, measured on consecutive setpoints:
  *  |(|p_k - p_k-1| / period) - v_ref| / v_ref with v_ref the mean planned speed of the two. */
 typedef struct {
-    uint64_t setpoints; /**< setpoints produced */
-    uint64_t samples;   /**< pairs counted (both moving, v_ref >= EF_PIPE_FLUCT_VMIN_FRAC
-                             x the move's v_max) */
-    double max_rel;     /**< largest relative fluctuation */
-    double rms_rel;     /**< RMS relative fluctuation */
-    uint32_t max_line;  /**< source line where the largest one occurred */
-    uint32_t underruns; /**< EF_ERR_UNDERRUN results (should be 0) */
-    double end_time;    /**< time of the last setpoint (s) */
+    uint64_t setpoints;     /**< setpoints produced */
+    uint64_t samples;       /**< pairs counted (both moving, v_ref >= EF_PIPE_FLUCT_VMIN_FRAC
+                                 x the move's v_max) */
+    double max_rel;         /**< largest relative fluctuation */
+    double rms_rel;         /**< RMS relative fluctuation */
+    uint32_t max_line;      /**< source line where the largest one occurred */
+    uint64_t samples_feed;  /**< pairs with v_ref >= EF_PIPE_FLUCT_FEED_SHARE x the
+                                 programmed feed */
+    double max_rel_feed;    /**< largest relative fluctuation over those */
+    uint32_t max_line_feed; /**< where */
+    double max_abs;         /**< largest |measured - planned| speed over every moving pair
+                                 (program units/s) */
+    uint32_t underruns;     /**< EF_ERR_UNDERRUN results (should be 0) */
+    double end_time;        /**< time of the last setpoint (s) */
 } ef_pipe_fluct_t;
 
 /** Counters and figures of a run. */
@@ -125,9 +142,10 @@ typedef struct {
     ef_pipe_fluct_t fl[2];  /**< per ::ef_step_mode_t, when interpolated */
 } ef_pipe_stats_t;
 
-/** Defaults: P 0.02 mm, Q 0, 100 mm/s and 1000 mm/s^2 per axis, jerk 20000 mm/s^3,
+/** Defaults: P 0.02 mm, Q 0 (Q = P), 100 mm/s and 1000 mm/s^2 per axis, jerk 20000 mm/s^3,
  *  a_normal_frac 0.5, micro_len 1 mm, micro_turn 0.35 rad, quintic smooth sections, rapid
- *  100 mm/s, period 1000 us, corrected stepping, no interpolation; tables NULL. */
+ *  100 mm/s blended (rapid_exact 0), period 1000 us, corrected stepping, no interpolation; tables
+ * NULL. */
 void ef_pipe_cfg_default(ef_pipe_cfg_t *cfg);
 
 /**
