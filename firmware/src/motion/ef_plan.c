@@ -442,12 +442,15 @@ static void pl_limits(const ef_limits_t *l, const ef_move_t *m, float *v_out, fl
     float g[3] = {m->kjerk.x, m->kjerk.y, m->kjerk.z};
     if (m->kappa_max > 0.0f && !(k[0] > 0.0f || k[1] > 0.0f || k[2] > 0.0f))
         k[0] = k[1] = k[2] = m->kappa_max; /* a move measured without its axis parts */
-    float J = l->j_max, v = m->feed;
+    float J = EF_PLAN_LIMIT_SHARE * l->j_max, v = m->feed;
+    float A[3];
+    for (int i = 0; i < 3; i++)
+        A[i] = EF_PLAN_LIMIT_SHARE * l->a_axis[i];
     for (int i = 0; i < 3; i++) {
         if (t[i] > 0.0f)
             v = ef_minf(v, l->v_axis[i] / t[i]);
         if (k[i] > 0.0f)
-            v = ef_minf(v, ef_sqrtf(l->a_normal_frac * l->a_axis[i] / k[i]));
+            v = ef_minf(v, ef_sqrtf(l->a_normal_frac * A[i] / k[i]));
         if (J > 0.0f && g[i] > 0.0f)
             v = ef_minf(v, ef_cbrtf(EF_PLAN_JG_SHARE * J / g[i]));
     }
@@ -456,7 +459,7 @@ static void pl_limits(const ef_limits_t *l, const ef_move_t *m, float *v_out, fl
     for (int i = 0; i < 3; i++) {
         if (!(t[i] > 0.0f))
             continue;
-        float ai = (l->a_axis[i] - k[i] * v * v) / t[i];
+        float ai = (A[i] - k[i] * v * v) / t[i];
         a = have ? ef_minf(a, ai) : ai;
         have = 1;
     }

@@ -47,6 +47,10 @@ typedef struct {
     int units_set;
 } ef_pipe_t;
 
+#ifndef EF_PIPE_A_NORMAL_FRAC
+#define EF_PIPE_A_NORMAL_FRAC 0.5f
+#endif
+
 /* Fill a pipeline configuration with the documented defaults (see ef_pipeline.h). */
 void ef_pipe_cfg_default(ef_pipe_cfg_t *cfg)
 {
@@ -58,7 +62,7 @@ void ef_pipe_cfg_default(ef_pipe_cfg_t *cfg)
         cfg->lim.a_axis[k] = 1000.0f;
     }
     cfg->lim.j_max = 20000.0f;
-    cfg->lim.a_normal_frac = 0.5f;
+    cfg->lim.a_normal_frac = EF_PIPE_A_NORMAL_FRAC;
     cfg->tol_default = 0.02;
     cfg->qtol_default = 0.0;
     cfg->micro_len = 1.0;

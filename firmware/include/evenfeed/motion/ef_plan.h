@@ -5,9 +5,11 @@
  * and forward passes, and each released move's time law.
  *
  * ## Limits of a move (set by ef_plan_push())
- * Every axis i has its own speed, acceleration and jerk limit (v_axis_i, a_axis_i, j_max),
- * all used whole. From the move's curve (ef_move_measure()): tangent bound t_i = tabs_i,
- * curvature-vector bound k_i = kabs_i and third-derivative bound g_i = kjerk_i. At path speed
+ * Every axis i has its own speed, acceleration and jerk limit (v_axis_i, a_axis_i, j_max);
+ * the planner uses each whole but for ::EF_PLAN_LIMIT_SHARE (a_axis_i and j_max below stand
+ * for those shares of the limits). From the move's curve (ef_move_measure()): tangent
+ * bound t_i = tabs_i, curvature-vector bound k_i = kabs_i and third-derivative bound
+ * g_i = kjerk_i. At path speed
  * v, tangential acceleration a and tangential jerk j, axis i moves at most t_i v, accelerates
  * at most t_i a + k_i v^2 and jerks at most t_i j + 3 k_i v a + g_i v^3. So:
  * - v_max = min(feed, v_axis_i / t_i, sqrt(a_normal_frac a_axis_i / k_i),
@@ -87,6 +89,16 @@ extern "C" {
  *  the geometry's and the centripetal part's growth while the speed changes). */
 #ifndef EF_PLAN_JT_MIN
 #define EF_PLAN_JT_MIN 0.25f
+#endif
+
+/** Share of each axis's acceleration limit and of the jerk limit the planner plans to. The
+ *  rest covers what the plan takes from samples of the curve (tabs, kabs, kjerk at 17
+ *  points, ~0.2 %, ef_path.h) and the float32 evaluation of the setpoints (about one ulp of
+ *  the coordinate per setpoint: at 1 ms and 30 mm, 8 mm/s^2 in a second difference), so
+ *  the drive's setpoints stay within a_axis and j_max themselves, not only within a margin
+ *  (measured on the LinuxCNC corpus: docs/benchmarks-linuxcnc.md). */
+#ifndef EF_PLAN_LIMIT_SHARE
+#define EF_PLAN_LIMIT_SHARE 0.98f
 #endif
 
 /** Motion limits. Speeds in units/s, accelerations units/s^2, jerk units/s^3. */
