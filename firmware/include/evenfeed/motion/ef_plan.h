@@ -9,9 +9,9 @@
  * the planner uses each whole but for ::EF_PLAN_LIMIT_SHARE (a_axis_i and j_max below stand
  * for those shares of the limits). From the move's curve (ef_move_measure()): tangent
  * bound t_i = tabs_i, curvature-vector bound k_i = kabs_i and third-derivative bound
- * g_i = kjerk_i. At path speed
- * v, tangential acceleration a and tangential jerk j, axis i moves at most t_i v, accelerates
- * at most t_i a + k_i v^2 and jerks at most t_i j + 3 k_i v a + g_i v^3. So:
+ * g_i = kjerk_i. At path speed v, tangential acceleration a and tangential jerk j, axis i
+ * moves at most t_i v, accelerates at most t_i a + k_i v^2 and jerks at most
+ * t_i j + 3 k_i v a + g_i v^3. So:
  * - v_max = min(feed, v_axis_i / t_i, sqrt(a_normal_frac a_axis_i / k_i),
  *   cbrt(EF_PLAN_JG_SHARE j_max / g_i)): at v_max the centripetal part takes at most
  *   a_normal_frac of each axis's acceleration, the geometry at most EF_PLAN_JG_SHARE of the
