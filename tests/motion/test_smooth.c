@@ -499,6 +499,49 @@ static void test_band(void)
 }
 
 /* Lines and arcs meeting at corners: blends at arc ends, within P. */
+/* Zigzag noise about a straight line (issue 18): 0.05 mm steps up and down by 0.7 tol,
+ * qtol = tol. Every vertex turns by 90 degrees and the points lie on both sides of the
+ * chord, so the run takes the whole Q (as LinuxCNC's G64 Q) and collapses into chords of
+ * EF_SMOOTH_MERGE_MAX inner vertices, not 900 blends. The same points lifted to one side
+ * of a curve (a sawtooth on an arc that turns slowly) are not noise: its vertices turn by
+ * less than 60 degrees, so the band stays EF_SMOOTH_BAND_SHARE tol there. */
+static void test_zigzag(void)
+{
+    ef_smooth_cfg_t c = cfg_default();
+    c.micro_len = 0;
+    enum { N = 900 };
+    static ef_prim_t pr[N];
+    const float tol = 0.05f, amp = 0.7f * tol, step = 0.05f;
+    for (int i = 0; i < N; i++) {
+        pr[i] = line_to(step * (float)(i + 1), (i % 2) ? 0.0f : amp, 0, 50, tol);
+        pr[i].qtol = tol;
+    }
+    run_prims(&c, ef_v3(0, 0, 0), pr, N);
+    runinfo_t ri = check_run(ef_v3(0, 0, 0), pr[N - 1].end, tol, &c.lim);
+    ef_smooth_stats_t st = ef_smooth_stats(&S);
+    double p2m = pts_to_moves(ef_v3(0, 0, 0));
+    printf("zigzag: %d points -> %d moves (%u merged, %u blends, %u stops), dev / P path->points "
+           "%.3f points->path %.3f\n",
+           N, NM, st.merged, st.blends, st.stops, ri.dev_over, p2m / tol);
+    EF_CHECK(st.merged >= N - N / EF_SMOOTH_MERGE_MAX - 2);
+    EF_CHECK(NM < 2 * (N / EF_SMOOTH_MERGE_MAX + 2));
+    EF_CHECK_EQ(ri.stops, 1);
+    EF_CHECK(ri.dev_over <= 1.0);
+    EF_CHECK(p2m <= tol);
+    /* The same band share kept for a curve: a polyline whose vertices alternate between
+     * radius R and R - amp on an arc (turns of a few degrees) merges only within 0.5 tol. */
+    const double R = 50.0;
+    for (int i = 0; i < N; i++) {
+        double a = 0.5 * (i + 1) / R, rr = (i % 2) ? R : R - 0.7 * tol;
+        pr[i] = line_to((float)(rr * cos(a)), (float)(rr * sin(a)), 0, 50, tol);
+        pr[i].qtol = tol;
+    }
+    run_prims(&c, ef_v3((float)R, 0, 0), pr, N);
+    check_run(ef_v3((float)R, 0, 0), pr[N - 1].end, tol, &c.lim);
+    printf("sawtooth on an arc: %u merged of %d\n", ef_smooth_stats(&S).merged, N);
+    EF_CHECK_EQ(ef_smooth_stats(&S).merged, 0);
+}
+
 static void test_arcs(void)
 {
     ef_smooth_cfg_t c = cfg_default();
@@ -766,17 +809,12 @@ static void test_random_runs(void)
 int main(int argc, char **argv)
 {
     static const ef_test_part_t parts[] = {
-        {"square", test_square},
-        {"reversal", test_reversal},
-        {"collinear", test_collinear},
-        {"circle", test_micro_circle_5},
-        {"circle", test_micro_circle_3},
-        {"arcs", test_arcs},
-        {"bad", test_bad_input},
-        {"full", test_full},
-        {"interp", test_with_interp},
-        {"band", test_band},
-        {"random [RUNS]", test_random_runs},
+        {"square", test_square},         {"reversal", test_reversal},
+        {"collinear", test_collinear},   {"circle", test_micro_circle_5},
+        {"circle", test_micro_circle_3}, {"arcs", test_arcs},
+        {"bad", test_bad_input},         {"full", test_full},
+        {"interp", test_with_interp},    {"band", test_band},
+        {"zigzag", test_zigzag},         {"random [RUNS]", test_random_runs},
     };
     setvbuf(stdout, NULL, _IOLBF, 0);
     M = calloc(MAXM, sizeof *M);

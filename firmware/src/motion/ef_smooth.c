@@ -794,23 +794,31 @@ static int sm_try_merge(ef_smooth_t *s, const ef_prim_t *pr)
     if (!(lac > EF_MIN_CHORD))
         return 0;
     /* The band: Q, and at most a share of the path tolerance so the blends and smooth
-     * sections on the chord keep the rest. */
-    float lim =
-        ef_minf(ef_minf(pr->qtol, h->pr.qtol), EF_SMOOTH_BAND_SHARE * ef_minf(pr->tol, h->pr.tol));
+     * sections on the chord keep the rest. A run whose every inner vertex turns by 60
+     * degrees or more (a curving or S-shaped run never does; its pieces turn by a few
+     * degrees) is noise about a straight line, a zigzag of rounding or of a CAM post: it
+     * may use Q up to the whole tol, as LinuxCNC's G64 Q does. The blends at its ends then
+     * get what is left of tol (rule 2 in ef_smooth.h). */
+    float qt = ef_minf(pr->qtol, h->pr.qtol), tl = ef_minf(pr->tol, h->pr.tol);
+    float lim = ef_minf(qt, EF_SMOOTH_BAND_SHARE * tl), wide = ef_minf(qt, tl);
     /* Every piece forward along the new chord, every inner vertex within the band. */
     ef_vec3_t prev = a;
     float dev = 0.0f;
+    int sharp = 1;
     ef_vec3_t *pts = sm_run(s, h);
     for (uint32_t i = 0; i <= h->nmerged; i++) {
         ef_vec3_t v = i < h->nmerged ? pts[i] : h->pr.end;
-        if (!(ef_v3_dot(ef_v3_sub(v, prev), ac) > 0.0f))
+        ef_vec3_t next = i + 1 < h->nmerged ? pts[i + 1] : (i < h->nmerged ? h->pr.end : c);
+        ef_vec3_t din = ef_v3_sub(v, prev), dout = ef_v3_sub(next, v);
+        if (!(ef_v3_dot(din, ac) > 0.0f))
             return 0;
+        sharp &= ef_v3_dot(din, dout) <= 0.5f * ef_v3_norm(din) * ef_v3_norm(dout);
         dev = ef_maxf(dev, sm_dist_seg(v, a, c));
-        if (!(dev <= lim))
+        if (!(dev <= wide))
             return 0;
         prev = v;
     }
-    if (!(ef_v3_dot(ef_v3_sub(c, prev), ac) > 0.0f))
+    if (!(ef_v3_dot(ef_v3_sub(c, prev), ac) > 0.0f) || !(dev <= (sharp ? wide : lim)))
         return 0;
     h->merge_dev = dev;
     pts[h->nmerged++] = h->pr.end;

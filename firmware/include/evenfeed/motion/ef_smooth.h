@@ -25,12 +25,15 @@
  *    lie within the band min(qtol, ::EF_SMOOTH_BAND_SHARE x tol) of the chord from the
  *    run's first point to its last, running forward along that chord piece by piece (never
  *    a reversal), at the same feed, become one chord (at most ::EF_SMOOTH_MERGE_MAX inner
- *    vertices; qtol = 0 disables it). The dropped points are kept (ef_smooth_t::runs, until
- *    the chord's end vertex is decided) and every move built on the chord is measured
- *    against them, so the total deviation from every input
- *    point stays within tol: a line on the chord deviates by merge_dev, a blend at its ends
- *    gets tol - merge_dev, and a smooth section on it is measured against the input points
- *    themselves (the polyline through them, at equal distance along the chord).
+ *    vertices; qtol = 0 disables it). A run whose every inner vertex turns by 60 degrees or
+ *    more is noise about a straight line (a zigzag of rounding or of a CAM post; a curving
+ *    run never turns that much at a vertex): its band is min(qtol, tol), as LinuxCNC's Q.
+ *    The dropped points are kept (ef_smooth_t::runs, until the chord's end vertex is
+ *    decided) and every move built on the chord is measured against them, so the total
+ *    deviation from every input point stays within tol: a line on the chord deviates by
+ *    merge_dev, a blend at its ends gets tol - merge_dev, and a smooth section on it is
+ *    measured against the input points themselves (the polyline through them, at equal
+ *    distance along the chord).
  * 3. **Smooth vertex** (CAM micro-segments; the tolerance-gated rule): between two lines
  *    (decimated chords) whose input pieces are no longer than micro_len, turning by at most
  *    micro_turn, whose chord lengths differ by at most a factor ::EF_SMOOTH_LEN_RATIO, and
