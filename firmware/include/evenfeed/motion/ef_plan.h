@@ -81,9 +81,11 @@ extern "C" {
 #endif
 
 /** Share of the jerk budget the geometry may take at a move's speed limit (curvature
- *  changing along the curve: g_i v^3, "Limits of a move"). */
+ *  changing along the curve: g_i v^3, "Limits of a move"). Blends and curvature reversals
+ *  are jerk-bound and traversed at constant speed, so most of it (comparison of 0.5, 0.8
+ *  and 0.9 in docs/smoothing.md). */
 #ifndef EF_PLAN_JG_SHARE
-#define EF_PLAN_JG_SHARE 0.5f
+#define EF_PLAN_JG_SHARE 0.8f
 #endif
 /** Smallest share of the jerk budget the tangential ramps of a curved move keep (the rest is
  *  the geometry's and the centripetal part's growth while the speed changes). */
