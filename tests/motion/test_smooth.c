@@ -121,6 +121,7 @@ static ef_smooth_cfg_t cfg_default(void)
     c.lim.a_normal_frac = 0.5f;
     c.micro_len = 1.0f;
     c.micro_turn = 0.35f;
+    c.keep_slow_blends = 1; /* the parts test blends (test_slow_corners: the rule) */
     c.smooth_degree = 5;
     return c;
 }

@@ -21,7 +21,7 @@ if(TARGET ef_tables_default)
   # Both programs: the profile's micro-segments become smooth sections, within P; the CAN
   # part: every drive executed every segment of the profile.
   set_tests_properties(pipeline_demo PROPERTIES TIMEOUT 600
-                       PASS_REGULAR_EXPRESSION "SVG plot written to .*pipeline-demo.svg.*vertices [^\n]* [1-9][0-9]* smooth\ndeviation [^\n]*, 0 moves over tolerance.*SVG plot written to .*pipeline-demo-profile.svg.*executed by each drive: 148 148 148.*segment mode needs 1/")
+                       PASS_REGULAR_EXPRESSION "SVG plot written to .*pipeline-demo.svg.*vertices [^\n]* [1-9][0-9]* smooth\ndeviation [^\n]*, 0 moves over tolerance.*SVG plot written to .*pipeline-demo-profile.svg.*executed by each drive: 142 142 142.*segment mode needs 1/")
 endif()
 
 # Regression: a very short arc between two corners (both blends use it up) must not stop

@@ -96,6 +96,8 @@ static ef_pipe_cb_t CB = {NULL, cb_move, NULL, cb_event, cb_note, &RUN};
 static void cfg_init(ef_pipe_cfg_t *c)
 {
     ef_pipe_cfg_default(c);
+    /* the parts below test blends: every corner blended (test_slow_corners: the default) */
+    c->keep_slow_blends = 1;
     c->g2 = &ef_tbl_g2_default;
     c->g1 = &ef_tbl_g1_default;
 }
@@ -271,6 +273,38 @@ static void test_tolerance_modes(void)
     /* Back from G61 to G64 P within one program. */
     EF_CHECK_EQ(run("G61 G1 X10 F600\nY10\nG64 P0.05 X0\nY0\nM2\n"), EF_OK);
     EF_CHECK_EQ(count_kind(EF_MOVE_BLEND), 2);
+}
+
+/* Corners where an exact stop is faster than the blend that fits (ef_smooth.h, rule 1),
+ * the pipeline's default: a square at 10 mm/s in G64 P0.05 under the default jerk limit
+ * has blends good for about 4 mm/s, so its three corners become exact stops, counted as
+ * slow corners, and the program takes less time than with every corner blended; at P2 the
+ * blends are fast and stay. */
+static void test_slow_corners(void)
+{
+    const char *tight = "G64 P0.05\nG1 X10 F600\nY10\nX0\nY0\nM2\n";
+    const char *wide = "G64 P2\nG1 X10 F600\nY10\nX0\nY0\nM2\n";
+    ef_pipe_cfg_t c;
+    cfg_init(&c);
+    c.keep_slow_blends = 0;
+    EF_CHECK_EQ(run_cfg(tight, &c, &CB), EF_OK);
+    double t_stop = ST.cycle_time;
+    EF_CHECK_EQ(ST.sm.slow_corners, 3);
+    EF_CHECK_EQ(ST.sm.blends, 0);
+    EF_CHECK_EQ(count_kind(EF_MOVE_BLEND), 0);
+    EF_CHECK_EQ(ST.dev_over, 0);
+    EF_CHECK(joined(ef_v3(0, 0, 0), 1e-4));
+    c.keep_slow_blends = 1;
+    EF_CHECK_EQ(run_cfg(tight, &c, &CB), EF_OK);
+    double t_blend = ST.cycle_time;
+    EF_CHECK_EQ(ST.sm.blends, 3);
+    printf("slow corners: square at 10 mm/s, P0.05: %.4f s stopping, %.4f s blended\n", t_stop,
+           t_blend);
+    EF_CHECK(t_stop < t_blend);
+    c.keep_slow_blends = 0;
+    EF_CHECK_EQ(run_cfg(wide, &c, &CB), EF_OK);
+    EF_CHECK_EQ(ST.sm.slow_corners, 0);
+    EF_CHECK_EQ(ST.sm.blends, 3);
 }
 
 /* Rapids are blended within P like any vertex (exact stops at both ends with
@@ -833,6 +867,7 @@ int main(int argc, char **argv)
         {"item_prim", test_item_prim},
         {"units", test_units},
         {"tolerance_modes", test_tolerance_modes},
+        {"slow_corners", test_slow_corners},
         {"rapids_events", test_rapids_events},
         {"notes", test_notes},
         {"refused", test_refused},

@@ -495,6 +495,16 @@ static void pl_limits(const ef_limits_t *l, const ef_move_t *m, float *v_out, fl
     *j_out = j;
 }
 
+/* A move's limits without queueing it (see ef_plan.h). */
+int ef_plan_move_limits(const ef_limits_t *lim, const ef_move_t *m, float *v_max, float *a_max,
+                        float *j_max)
+{
+    if (!lim || !m || !v_max || !a_max || !j_max || !(m->feed > 0.0f))
+        return EF_ERR_ARG;
+    pl_limits(lim, m, v_max, a_max, j_max);
+    return EF_OK;
+}
+
 /* Queue a move with its speed/acceleration limits, update bounds (see ef_plan.h). */
 int ef_plan_push(ef_plan_t *p, const ef_move_t *m)
 {

@@ -460,6 +460,45 @@ static int sm_fit_section(ef_smooth_t *s, ef_smooth_prim_t *h, const ef_frame_t 
     return 1;
 }
 
+/* Time a ramp between speed v and v_hi (> v) loses against covering its distance at v_hi:
+ * T (v_hi - v) / (2 v_hi), T the S-curve's duration (ef_plan.h, "Speed profile"). */
+static float sm_ramp_loss(float v, float v_hi, float a, float j)
+{
+    float dv = v_hi - v, T;
+    if (!(j > 0.0f))
+        T = dv / a;
+    else if (dv >= a * a / j)
+        T = dv / a + a / j;
+    else
+        T = 2.0f * ef_sqrtf(dv / j);
+    return T * dv / (2.0f * v_hi);
+}
+
+/* A corner blend whose speed limit (ef_plan_move_limits()) is so low that the time spent in
+ * it, blend_len / v_b against blend_len / v_hi, exceeds what the two ramps lose by going on
+ * to rest instead of to v_b is slower than an exact stop at the vertex (ef_smooth.h, rule
+ * 1): under a jerk limit a sharp corner at a tight tolerance can only be blended at a few
+ * mm/s. Between two lines only (an arc's own speed limit may be as low as the blend's):
+ * v_hi is their feed within the axis speeds, the acceleration the smallest axis's. */
+static int sm_stop_is_faster(const ef_limits_t *lim, ef_move_t *blend, float feed)
+{
+    float v_b, a_b, j_b;
+    blend->feed = feed;
+    if (ef_limits_check(lim) != EF_OK ||
+        ef_plan_move_limits(lim, blend, &v_b, &a_b, &j_b) != EF_OK || !(v_b < feed))
+        return 0;
+    float a = ef_minf(lim->a_axis[0], ef_minf(lim->a_axis[1], lim->a_axis[2]));
+    float j = lim->j_max, vh = feed;
+    for (int i = 0; i < 3; i++)
+        vh = ef_minf(vh, lim->v_axis[i]);
+    if (!(v_b < vh))
+        return 0;
+    if (!(v_b > 0.0f))
+        return 1;
+    float extra = 2.0f * (sm_ramp_loss(0.0f, vh, a, j) - sm_ramp_loss(v_b, vh, a, j));
+    return blend->length * (1.0f / v_b - 1.0f / vh) > extra;
+}
+
 /* Decide the vertex between held primitives a (ends there) and b (starts there). */
 static void sm_decide_vertex(ef_smooth_t *s, ef_smooth_prim_t *a, ef_smooth_prim_t *b)
 {
@@ -518,6 +557,12 @@ static void sm_decide_vertex(ef_smooth_t *s, ef_smooth_prim_t *a, ef_smooth_prim
     if (ef_move_measure(&probe) != EF_OK || !sm_move_ok(&probe) ||
         !(probe.length <= 2.0f * (a->blend.trim_in + a->blend.trim_out) + EF_MIN_CHORD)) {
         s->st.stops++;
+        return;
+    }
+    if (!s->cfg.keep_slow_blends && a->pr.kind == EF_PRIM_LINE && b->pr.kind == EF_PRIM_LINE &&
+        sm_stop_is_faster(&s->cfg.lim, &probe, ef_minf(a->pr.feed, b->pr.feed))) {
+        s->st.stops++;
+        s->st.slow_corners++;
         return;
     }
     a->blend_len = probe.length;

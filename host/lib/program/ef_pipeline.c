@@ -521,6 +521,7 @@ int ef_pipe_run(ef_gcode_t *r, const ef_pipe_cfg_t *cfg, const ef_pipe_cb_t *cb,
     sc.micro_len = (float)cfg->micro_len;
     sc.micro_turn = (float)cfg->micro_turn;
     sc.smooth_degree = (uint8_t)cfg->smooth_degree;
+    sc.keep_slow_blends = cfg->keep_slow_blends != 0;
     rc = ef_smooth_init(&P->sm, &sc, start);
     if (rc) {
         rc = ef_fail(m, rc, "smoother configuration: %s", ef_err_str(rc));

@@ -235,6 +235,19 @@ uint32_t ef_plan_space(const ef_plan_t *p);
  */
 int ef_plan_timelaw(ef_move_t *m, float j_max);
 
+/**
+ * @brief The limits the planner gives a move ("Limits of a move": speed limit, tangential
+ * acceleration and jerk), without queueing it; the smoother uses it to tell whether a
+ * corner is faster blended or stopped at.
+ * @param lim checked limits (ef_limits_check())
+ * @param m   measured move (ef_move_measure()) with its feed
+ * @param v_max, a_max, j_max filled (j_max 0 without a jerk limit)
+ * @retval EF_OK
+ * @retval EF_ERR_ARG a NULL argument, or feed not > 0
+ */
+int ef_plan_move_limits(const ef_limits_t *lim, const ef_move_t *m, float *v_max, float *a_max,
+                        float *j_max);
+
 #ifdef __cplusplus
 }
 #endif

@@ -113,27 +113,30 @@ extern "C" {
 
 /** Configuration. */
 typedef struct {
-    const ef_table_t *g2;  /**< G2 quintic table (required) */
-    const ef_table_t *g1;  /**< G1 cubic table (required only when smooth_degree == 3) */
-    ef_limits_t lim;       /**< motion limits for the planner */
-    float micro_len;       /**< longest input line (before decimation) treated as a CAM
-                                micro-segment; 0 disables smooth sections */
-    float micro_turn;      /**< largest turn (rad) at a smooth vertex, e.g. 0.35 (20 deg) */
-    uint8_t smooth_degree; /**< 5: G2 quintic smooth sections; 3: G1 cubic */
+    const ef_table_t *g2;     /**< G2 quintic table (required) */
+    const ef_table_t *g1;     /**< G1 cubic table (required only when smooth_degree == 3) */
+    ef_limits_t lim;          /**< motion limits for the planner */
+    float micro_len;          /**< longest input line (before decimation) treated as a CAM
+                                   micro-segment; 0 disables smooth sections */
+    float micro_turn;         /**< largest turn (rad) at a smooth vertex, e.g. 0.35 (20 deg) */
+    uint8_t smooth_degree;    /**< 5: G2 quintic smooth sections; 3: G1 cubic */
+    uint8_t keep_slow_blends; /**< nonzero: blend every corner that fits, also where an exact
+                                   stop is faster (rule 1; for tests of the blend geometry) */
 } ef_smooth_cfg_t;
 
 /** Counters, for summaries and tests. */
 typedef struct {
-    uint32_t prims;      /**< primitives accepted */
-    uint32_t moves;      /**< moves emitted (pulled) */
-    uint32_t blends;     /**< corners blended */
-    uint32_t straight;   /**< vertices passed straight (turn below EF_BLEND_MIN_TURN) */
-    uint32_t stops;      /**< exact stops (requested, reversal, too small, finish) */
-    uint32_t reversals;  /**< of those, reversals */
-    uint32_t merged;     /**< vertices removed by band decimation (collinear collapse) */
-    uint32_t smooth;     /**< smooth vertices */
-    uint32_t arc_pieces; /**< arc pieces emitted */
-    float dev_max;       /**< largest deviation of any emitted move from the programmed path */
+    uint32_t prims;        /**< primitives accepted */
+    uint32_t moves;        /**< moves emitted (pulled) */
+    uint32_t blends;       /**< corners blended */
+    uint32_t straight;     /**< vertices passed straight (turn below EF_BLEND_MIN_TURN) */
+    uint32_t stops;        /**< exact stops (requested, reversal, too small, finish) */
+    uint32_t reversals;    /**< of those, reversals */
+    uint32_t slow_corners; /**< of those, corners where stopping is faster than the blend */
+    uint32_t merged;       /**< vertices removed by band decimation (collinear collapse) */
+    uint32_t smooth;       /**< smooth vertices */
+    uint32_t arc_pieces;   /**< arc pieces emitted */
+    float dev_max;         /**< largest deviation of any emitted move from the programmed path */
 } ef_smooth_stats_t;
 
 /** One held primitive with what the geometry stage has decided about it. */

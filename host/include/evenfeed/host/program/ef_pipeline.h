@@ -92,6 +92,8 @@ typedef struct {
     int smooth_degree;     /**< 5 (G2 quintic) or 3 (G1 cubic) smooth sections */
     double rapid_speed;    /**< G0 path speed (mm/s), > 0 */
     int rapid_exact;       /**< nonzero: exact stops at both ends of every G0 (0: blended) */
+    int keep_slow_blends;  /**< nonzero: blend every corner that fits, also where an exact
+                                stop is faster (ef_smooth_cfg_t::keep_slow_blends; 0: stop) */
     uint32_t period_us;    /**< servo period (us), > 0 */
     int step_mode;         /**< ::ef_step_mode_t whose setpoints go to on_setpoint */
     unsigned interp_modes; /**< EF_PIPE_INTERP_* bits: interpolators to run (0: none) */
