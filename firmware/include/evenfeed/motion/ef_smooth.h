@@ -18,8 +18,11 @@
  * ## What happens at each vertex (docs/smoothing.md)
  * Vertex = where one primitive ends and the next begins. In this order:
  * 1. **Exact stop** when the next primitive has ::EF_PRIM_STOP_BEFORE or tol == 0, when the
- *    turn exceeds EF_BLEND_MAX_TURN (a reversal), or when the blend that fits is below float32
- *    resolution: the move ending there gets ::EF_MOVE_STOP_END.
+ *    turn exceeds EF_BLEND_MAX_TURN (a reversal), when the blend that fits is below float32
+ *    resolution, or (a slow corner, between two lines, unless keep_slow_blends) when the
+ *    blend's speed limit (ef_plan_move_limits()) is so low that its length at that speed
+ *    takes longer than the two ramps lose by going on to rest: the move ending there gets
+ *    ::EF_MOVE_STOP_END.
  * 2. **Band decimation** (G64 Q; the host passes Q = P when the program gives none, as
  *    LinuxCNC does): consecutive lines, straight or gently curving, whose inner vertices all
  *    lie within the band min(qtol, ::EF_SMOOTH_BAND_SHARE x tol) of the chord from the
