@@ -159,6 +159,10 @@ static int crep_move(void *user, const ef_move_t *m, const ef_pipe_move_info_t *
         cli_json_num(fp, m->v_exit * f);
         fputs(", \"v_max\": ", fp);
         cli_json_num(fp, m->v_max * f);
+        fputs(", \"a_max\": ", fp);
+        cli_json_num(fp, m->a_max * f);
+        fputs(", \"j_max\": ", fp);
+        cli_json_num(fp, m->j_max * f);
         fputs(", \"feed\": ", fp);
         cli_json_num(fp, m->feed * f);
         fputs(", \"dev\": ", fp);
