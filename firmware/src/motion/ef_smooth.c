@@ -356,6 +356,124 @@ static int sm_body_section(ef_smooth_t *s, const ef_smooth_prim_t *h, const ef_f
     return sm_section_build(s, h, fe, trim_end, pts, 1, m) == EF_OK && m->dev <= h->pr.tol;
 }
 
+/* Legendre polynomials P0..P4 and their first two derivatives at x. */
+static void sm_legendre(float x, float *p, float *d1, float *d2)
+{
+    float x2 = x * x;
+    p[0] = 1.0f;
+    p[1] = x;
+    p[2] = 1.5f * x2 - 0.5f;
+    p[3] = (2.5f * x2 - 1.5f) * x;
+    p[4] = (4.375f * x2 - 3.75f) * x2 + 0.375f;
+    d1[0] = 0.0f;
+    d1[1] = 1.0f;
+    d1[2] = 3.0f * x;
+    d1[3] = 7.5f * x2 - 1.5f;
+    d1[4] = (17.5f * x2 - 7.5f) * x;
+    d2[0] = d2[1] = 0.0f;
+    d2[2] = 3.0f;
+    d2[3] = 15.0f * x;
+    d2[4] = 52.5f * x2 - 7.5f;
+}
+
+/* Smooth-vertex frame from the input points, not only three of them (ef_smooth.h, rule 3):
+ * the circle through a, b, c takes their rounding straight into the tangent and curvature
+ * at b (q / L each), and the G2 section between two such frames then carries that noise
+ * as curvature changing along it (at 0.001 mm rounding on 0.9 mm chords of a 10 mm circle,
+ * a third derivative 8 x the circle's, which starves the ramps of jerk). So every input
+ * point of both chords (the runs are still held) is fitted in the circle's plane by a
+ * least-squares quartic y(x) across the circle's tangent at b, in Legendre polynomials on
+ * the points' x range (well conditioned in float32), and the tangent and curvature at b
+ * are taken from the fit: t along (1, y'(0)), kappa = y''(0) / (1 + y'(0)^2)^(3/2), and
+ * the vertex moves onto the fitted curve, b + y(0) n, when that is within
+ * EF_SMOOTH_FIT_SHIFT tol (the sections on both sides start and end at the frame; a chord
+ * driven instead of a section too). Fewer than EF_SMOOTH_FIT_MIN points, or a fit that
+ * turns the frame by more than the circle's own turn, keep the circle's frame. */
+static void sm_frame_fit(const ef_smooth_t *s, const ef_smooth_prim_t *pa,
+                         const ef_smooth_prim_t *pb, float tol, ef_frame_t *f)
+{
+    uint32_t na = pa->nmerged + 1u, nb = pb->nmerged + 1u; /* vertices before b, after b */
+    if (na + nb + 1u < EF_SMOOTH_FIT_MIN)
+        return;
+    const ef_vec3_t *ra = s->runs[pa->id % EF_SMOOTH_RUNS];
+    const ef_vec3_t *rb = s->runs[pb->id % EF_SMOOTH_RUNS];
+    /* x range of the points along t (for the Legendre variable) */
+    float xlo = ef_v3_dot(ef_v3_sub(pa->start, f->p), f->t);
+    float xhi = ef_v3_dot(ef_v3_sub(pb->pr.end, f->p), f->t);
+    float mid = 0.5f * (xlo + xhi), half = 0.5f * (xhi - xlo);
+    if (!(half > EF_MIN_CHORD))
+        return;
+    float G[5][6];
+    for (int i = 0; i < 5; i++)
+        for (int j = 0; j < 6; j++)
+            G[i][j] = 0.0f;
+    for (uint32_t k = 0; k < na + nb + 1u; k++) {
+        ef_vec3_t q = k < na ? (k == 0 ? pa->start : ra[k - 1])
+                             : (k == na ? f->p : (k - na < nb ? rb[k - na - 1u] : pb->pr.end));
+        ef_vec3_t d = ef_v3_sub(q, f->p);
+        float xi = (ef_v3_dot(d, f->t) - mid) / half, y = ef_v3_dot(d, f->n);
+        float P[5], D1[5], D2[5];
+        sm_legendre(xi, P, D1, D2);
+        for (int i = 0; i < 5; i++) {
+            for (int j = 0; j < 5; j++)
+                G[i][j] += P[i] * P[j];
+            G[i][5] += P[i] * y;
+        }
+    }
+    /* Gaussian elimination with partial pivoting, 5 x 5 */
+    for (int c = 0; c < 5; c++) {
+        int piv = c;
+        for (int r = c + 1; r < 5; r++)
+            if (ef_fabsf(G[r][c]) > ef_fabsf(G[piv][c]))
+                piv = r;
+        if (!(ef_fabsf(G[piv][c]) > 1e-20f))
+            return;
+        for (int j = 0; j < 6; j++) {
+            float t = G[c][j];
+            G[c][j] = G[piv][j];
+            G[piv][j] = t;
+        }
+        for (int r = c + 1; r < 5; r++) {
+            float m = G[r][c] / G[c][c];
+            for (int j = c; j < 6; j++)
+                G[r][j] -= m * G[c][j];
+        }
+    }
+    float a[5];
+    for (int c = 4; c >= 0; c--) {
+        float v = G[c][5];
+        for (int j = c + 1; j < 5; j++)
+            v -= G[c][j] * a[j];
+        a[c] = v / G[c][c];
+    }
+    float P[5], D1[5], D2[5];
+    sm_legendre(-mid / half, P, D1, D2);
+    float y0 = 0.0f, y1 = 0.0f, y2 = 0.0f;
+    for (int i = 0; i < 5; i++) {
+        y0 += a[i] * P[i];
+        y1 += a[i] * D1[i];
+        y2 += a[i] * D2[i];
+    }
+    y1 /= half;
+    y2 /= half * half;
+    float w = 1.0f + y1 * y1;
+    float kappa = y2 / (w * ef_sqrtf(w));
+    /* The circle's frame is a sound estimate: a fit far from it is a bad fit (too few
+     * points across the range, or a run that is not one curve). */
+    if (!ef_finitef(kappa) || !ef_finitef(y0) ||
+        !(ef_fabsf(y1) <= 0.5f * ef_fabsf(f->kappa) * half + 1e-3f) || !(kappa > 0.0f) ||
+        !(kappa < 2.0f * f->kappa + 1e-6f) || !(ef_fabsf(y0) <= EF_SMOOTH_FIT_SHIFT * tol))
+        return;
+    f->p = ef_v3_axpy(f->p, y0, f->n);
+    ef_vec3_t t = ef_v3_add(f->t, ef_v3_scale(f->n, y1));
+    t = ef_v3_scale(t, 1.0f / ef_v3_norm(t));
+    ef_vec3_t n = ef_v3_axpy(f->n, -ef_v3_dot(f->n, t), t);
+    n = ef_v3_scale(n, 1.0f / ef_maxf(ef_v3_norm(n), 1e-30f));
+    f->t = t;
+    f->n = n;
+    f->kappa = kappa;
+}
+
 /* Smooth-vertex test between held lines pa (a->b) and pb (b->c), decimated chords (the
  * tolerance-gated rule, ef_smooth.h); on success *f is the frame of the circle through
  * a, b, c at b. */
@@ -399,6 +517,7 @@ static int sm_smooth_gate(const ef_smooth_t *s, const ef_smooth_prim_t *pa,
     f->t = t;
     f->n = n;
     f->kappa = kappa;
+    sm_frame_fit(s, pa, pb, tol, f);
     return 1;
 }
 
@@ -726,7 +845,11 @@ static int sm_next_move(ef_smooth_t *s, ef_move_t *m)
                         a = h->blend_in_end;
                     rc = sm_chord_stop(s, m, h->start_smooth ? h->fs.p : a,
                                        h->end_smooth ? h->fe.p : b, &h->pr);
-                    m->dev = h->merge_dev;
+                    /* the frames may sit off the chord's ends (sm_frame_fit()) */
+                    float sh =
+                        ef_maxf(h->start_smooth ? ef_v3_norm(ef_v3_sub(h->fs.p, h->start)) : 0.0f,
+                                h->end_smooth ? ef_v3_norm(ef_v3_sub(h->fe.p, h->pr.end)) : 0.0f);
+                    m->dev = h->merge_dev + sh;
                 }
             } else {
                 if (h->trim_start > 0.0f)

@@ -90,6 +90,15 @@ extern "C" {
 #ifndef EF_SMOOTH_BAND_SHARE
 #define EF_SMOOTH_BAND_SHARE 0.5f
 #endif
+/** Fewest input points (both chords' vertices) a smooth vertex's frame is fitted to
+ *  (rule 3); with fewer it is the circle through the vertex and its neighbours. */
+#ifndef EF_SMOOTH_FIT_MIN
+#define EF_SMOOTH_FIT_MIN 9
+#endif
+/** Farthest a smooth vertex moves onto its fitted curve, as a share of tol (rule 3). */
+#ifndef EF_SMOOTH_FIT_SHIFT
+#define EF_SMOOTH_FIT_SHIFT 0.25f
+#endif
 /** Smooth-vertex gate (rule 3): the circle through the vertex and its neighbours may bulge
  *  from the longer chord by at most this share of tol (the section is measured after). */
 #ifndef EF_SMOOTH_GATE_SHARE
