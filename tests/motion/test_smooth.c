@@ -469,15 +469,22 @@ static void test_band(void)
         }
         EF_CHECK(smooth_joins >= NM - 4);
         EF_CHECK(jump < 1e-2);
+        /* The frames are fitted to all the points (sm_frame_fit()), so the sections' third
+         * derivative, which caps the speed and the ramps' jerk, stays near the circle's
+         * kappa^2 (per axis at most 1 / r^2): kjerk r^2. */
+        double gmax = 0;
+        for (int i = 1; i + 1 < NM; i++)
+            if (M[i].kind == EF_MOVE_SMOOTH)
+                gmax = fmax(gmax, fmax(M[i].kjerk.x, fmax(M[i].kjerk.y, M[i].kjerk.z)) * r * r);
         /* q / (sqrt 2 L^2) is the RMS; 4 sigma, and the tilted circle is an ellipse whose
          * curvature varies by 8 % itself. */
         double kn = 4 * q / (sqrt(2.0) * lmin * lmin) * r + (tilt ? 0.1 : 0);
         EF_CHECK(kerr <= kn);
         printf("band (%s): %d points -> %d moves (%u merged, %u smooth, %u blends, %u stops), "
                "dev / P path->points %.3f points->path %.3f, |kappa r - 1| max %.3f (bound %.3f), "
-               "curvature jump x r %.1e\n",
+               "curvature jump x r %.1e, third derivative x r^2 %.2f\n",
                tilt ? "3-D" : "2-D", N, NM, st.merged, st.smooth, st.blends, st.stops, ri.dev_over,
-               p2m / tol, kerr, kn, jump);
+               p2m / tol, kerr, kn, jump, gmax);
     }
     /* Q below the rounding: Q keeps its meaning, nothing off the line merges. */
     for (int i = 0; i < N; i++)

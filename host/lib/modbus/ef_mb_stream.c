@@ -118,8 +118,8 @@ int ef_mb_stream(ef_gcode_t *r, const ef_mb_stream_cfg_t *c, ef_mb_stream_result
     cb.on_event = mbs_stream_event;
     cb.user = &S;
     if (c->mode == EF_MB_MODE_DIRECT) {
-        pc.interp_modes = EF_PIPE_INTERP_UNIFORM;
-        pc.step_mode = EF_STEP_UNIFORM;
+        pc.interp_modes = EF_PIPE_INTERP_CORRECTED;
+        pc.step_mode = EF_STEP_CORRECTED;
         pc.period_us = (uint32_t)lrint(1e6 / c->direct_hz);
         cb.on_setpoint = mbs_stream_setpoint;
     }
