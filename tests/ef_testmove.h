@@ -92,63 +92,14 @@ static inline double tm_law_tau(const ef_move_t *m, double u)
     return t < 0 ? 0 : t > 1 ? 1 : t;
 }
 
-/* Arc-length tables of the moves tm_arc_point() has seen: parameter t_k = k / TM_ARC_N,
- * cumulative length by dense chords (double), keyed by the move's address. */
-enum { TM_ARC_N = 2000, TM_ARC_MOVES = 64 };
-static const ef_move_t *tm_arc_key[TM_ARC_MOVES];
-static ef_vec3_t tm_arc_pts[TM_ARC_MOVES][6]; /* the curve the table is of */
-static double tm_arc_cum[TM_ARC_MOVES][TM_ARC_N + 1];
-
-/* The point at arc-length fraction f of move m (the drive steps by arc length,
- * EF_STEP_CORRECTED: its law's tau is the share of the length, not the curve parameter). */
-static inline void tm_arc_point(const ef_move_t *m, double f, double out[3])
-{
-    int slot = -1;
-    for (int i = 0; i < TM_ARC_MOVES && slot < 0; i++)
-        if (tm_arc_key[i] == m &&
-            !memcmp(tm_arc_pts[i], m->b, sizeof(ef_vec3_t) * (size_t)(m->degree + 1)))
-            slot = i;
-    if (slot < 0) {
-        for (int i = 0; i < TM_ARC_MOVES && slot < 0; i++)
-            if (!tm_arc_key[i] || tm_arc_key[i] == m)
-                slot = i;
-        if (slot < 0)
-            slot = 0; /* more moves than slots: the oldest table is rebuilt */
-        tm_arc_key[slot] = m;
-        memcpy(tm_arc_pts[slot], m->b, sizeof(ef_vec3_t) * (size_t)(m->degree + 1));
-        double prev[3], cur[3];
-        tm_bz(m->b, m->degree, 0, prev);
-        tm_arc_cum[slot][0] = 0;
-        for (int k = 1; k <= TM_ARC_N; k++) {
-            tm_bz(m->b, m->degree, (double)k / TM_ARC_N, cur);
-            double dx = cur[0] - prev[0], dy = cur[1] - prev[1], dz = cur[2] - prev[2];
-            tm_arc_cum[slot][k] = tm_arc_cum[slot][k - 1] + sqrt(dx * dx + dy * dy + dz * dz);
-            memcpy(prev, cur, sizeof prev);
-        }
-    }
-    const double *cum = tm_arc_cum[slot];
-    double s = f * cum[TM_ARC_N];
-    int lo = 0, hi = TM_ARC_N;
-    while (hi - lo > 1) {
-        int mid = (lo + hi) / 2;
-        if (cum[mid] <= s)
-            lo = mid;
-        else
-            hi = mid;
-    }
-    double w = cum[hi] > cum[lo] ? (s - cum[lo]) / (cum[hi] - cum[lo]) : 0;
-    tm_bz(m->b, m->degree, (lo + w) / TM_ARC_N, out);
-}
-
-/* Where a chain of moves (started at time 0) is at time T, in double, stepped by arc
- * length as the drive does. */
+/* Where a chain of moves (started at time 0) is at time T, in double. */
 static inline void tm_chain_pos(const ef_move_t *mv, int n, double T, double out[3])
 {
     double t0 = 0;
     out[0] = out[1] = out[2] = 0;
     for (int i = 0; i < n; i++) {
         if (T < t0 + mv[i].duration || i == n - 1) {
-            tm_arc_point(&mv[i], tm_law_tau(&mv[i], T - t0), out);
+            tm_bz(mv[i].b, mv[i].degree, tm_law_tau(&mv[i], T - t0), out);
             return;
         }
         t0 += mv[i].duration;

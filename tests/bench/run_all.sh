@@ -76,9 +76,9 @@ echo "   baud, and the feed each sustains on the sample profile (docs/benchmarks
 "$b/tests/bench_modbus" "$ef" .
 
 echo
-echo "== Setpoint continuity with uniform parameter stepping (a comparison: the plan, the drive"
-echo "   and the host step by arc length): worst per-axis acceleration and jerk against the"
-echo "   limits (tests/motion/test_continuity.c; corrected stepping is a ctest)"
+echo "== Setpoint continuity with uniform parameter stepping (what a segment-mode drive runs):"
+echo "   worst per-axis acceleration and jerk against the limits (tests/motion/test_continuity.c;"
+echo "   corrected stepping is a ctest, this one is an open item of issue 18)"
 "$b/tests/test_continuity" uniform 2>&1 | grep -v '^ok' | tail -6 || true
 
 echo

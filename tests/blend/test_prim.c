@@ -572,8 +572,8 @@ static void test_measure(void)
             bez_d(m.b, deg, (double)i / EF_MOVE_SAMPLES, &q, &d1, &d2);
             double sp = dnorm(d1);
             km = fmax(km, dnorm(dcross(d1, d2)) / (sp * sp * sp));
-            /* |t_x|: the tangent's component (arc-length stepping, ef_path.h) */
-            tx = fmax(tx, fabs(d1.x) / sp);
+            /* the larger of |t_x| and |f'_x| / L (ef_path.h) */
+            tx = fmax(tx, fabs(d1.x) / fmin(sp, L));
         }
         EF_CHECK_NEAR(m.kappa_max, km, 1e-4 * km + 1e-6);
         EF_CHECK_NEAR(m.tabs.x, tx, 1e-5 * (1 + tx));

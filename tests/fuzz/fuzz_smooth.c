@@ -88,11 +88,8 @@ typedef struct {
     float scale;     /* largest coordinate magnitude of any move so far */
     ef_vec3_t last;  /* last setpoint */
     int have_sp;
-    spc_t chk;  /* setpoint continuity over consecutive 1 ms periods */
-    double t;   /* time of the last setpoint (s) */
-    int limits; /* check axis speed, acceleration and jerk: arc-length (corrected) stepping,
-                   the one the plan bounds; uniform stepping (a comparison) adds the curves'
-                   parametric-speed terms, so it is checked for all the rest only */
+    spc_t chk; /* setpoint continuity over consecutive 1 ms periods */
+    double t;  /* time of the last setpoint (s) */
 } ef_fz_state_t;
 
 static ef_smooth_t S;
@@ -139,7 +136,7 @@ static void ef_fz_tick(ef_fz_state_t *st, uint32_t dt_us)
         ef_fz_fail("interp", rc);
     if (!ef_fz_finite3(sp.p))
         ef_fz_fail("setpoint not finite", 0);
-    if (st->have_sp && st->limits) {
+    if (st->have_sp) {
         /* no axis faster than its limit, plus float32 resolution: a few ulps of the
          * coordinates and of the moves' extent (a setpoint of a 800 m line is rounded at
          * that scale, wherever on it) */
@@ -156,7 +153,7 @@ static void ef_fz_tick(ef_fz_state_t *st, uint32_t dt_us)
     if (dt_us != 1000u)
         spc_break(&st->chk);
     st->t += (double)dt_us * 1e-6;
-    if (spc_push(&st->chk, st->t, &sp) > 0 && st->limits) {
+    if (spc_push(&st->chk, st->t, &sp) > 0) {
         spc_report(&st->chk, "smooth fuzz", stderr);
         ef_fz_fail(st->chk.a_over ? "axis acceleration above its limit"
                                   : "axis jerk above the limit",
@@ -214,7 +211,6 @@ static void ef_fz_run(const uint8_t *data, size_t size)
     memset(&st, 0, sizeof st);
     for (int i = 0; i < 3; i++)
         st.v_axis[i] = c.lim.v_axis[i];
-    st.limits = !(cf & 16u);
     spc_init(&st.chk, 1e-3, &c.lim);
     ef_vec3_t pos = ef_v3(0, 0, 0);
     for (int n = 0; n < 400 && in.i < in.n; n++) {

@@ -10,9 +10,8 @@ if(TARGET ef_tables_default)
     add_test(NAME continuity_${part} COMMAND test_continuity ${part})
     set_tests_properties(continuity_${part} PROPERTIES TIMEOUT 600)
   endforeach()
-  # Not a ctest: the part `uniform` (the same programs with uniform parameter stepping) is
-  # a comparison. The planner bounds arc-length stepping, which every consumer of the plan
-  # uses (the pipeline, ef_drive.c in segment mode, Modbus direct mode); uniform stepping
-  # adds the curves' parametric-speed terms and jumps at junctions where a curve's |f'| / L
-  # differs from 1 (tests/bench/run_all.sh prints its figure).
+  # Not a ctest yet: the part `uniform` (the same programs with uniform parameter stepping,
+  # what ef_drive.c executes in segment mode) still fails on jerk at blend junctions, where
+  # the blend's parametric speed |f'| / L differs from 1 (open item of issue 18; the
+  # benchmarks print its figure: tests/bench/run_all.sh).
 endif()

@@ -127,8 +127,9 @@ static int ct_run(const char *name, const char *src, int mode, float j)
     return ok;
 }
 
-/* Step mode of the runs: corrected (the pipeline's, the CLI's and ef_drive.c's) in every part
- * but "uniform", which runs the whole corpus again with uniform stepping for comparison. */
+/* Step mode of the runs: corrected (the pipeline's and the CLI's default) in every part but
+ * "uniform", which runs the whole corpus again with uniform stepping (what ef_drive.c
+ * executes segments with). */
 static int MODE = EF_STEP_CORRECTED;
 
 /* A program at the default jerk limit, and also without one when nojerk is set. */
@@ -735,8 +736,7 @@ static void test_file(void)
     }
 }
 
-/* The whole corpus with uniform stepping (a comparison; the plan bounds arc-length
- * stepping): tau = s / L, so the feed is
+/* The whole corpus with uniform stepping (ef_drive.c's mode): tau = s / L, so the feed is
  * v |f'(tau)| / L and jumps at a junction wherever a curve's end speed |f'| is not its
  * length (blends: a few per cent; at the table's x1 bound, twelve times). */
 static void test_uniform(void)

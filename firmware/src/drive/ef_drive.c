@@ -64,7 +64,7 @@ static void drv_flush(ef_drive_t *d)
     d->moving = 0u;
     /* cmd is always finite and within range (it only moves along checked segments or
      * towards checked targets), so this cannot fail. */
-    (void)ef_interp_init(&d->ip, d->cmd, d->period_us, EF_STEP_CORRECTED);
+    (void)ef_interp_init(&d->ip, d->cmd, d->period_us, EF_STEP_UNIFORM);
 }
 
 /* Reset the queue and the counters a clear (or fault reset) starts from. */

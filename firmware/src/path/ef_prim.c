@@ -324,6 +324,8 @@ int ef_move_measure(ef_move_t *m)
         len += ef_gl16[i][1] * (a + b);
     }
     float kmax = 0.0f;
+    float ilen = 1.0f / ef_maxf(len, 1e-30f);
+    float ilen2 = ilen * ilen, ilen3 = ilen2 * ilen;
     ef_vec3_t tabs = ef_v3(0.0f, 0.0f, 0.0f), kabs = tabs, kjerk = tabs;
     for (int i = 0; i <= EF_MOVE_SAMPLES; i++) {
         float t = (float)i * (1.0f / (float)EF_MOVE_SAMPLES);
@@ -333,30 +335,32 @@ int ef_move_measure(ef_move_t *m)
         float k = ef_v3_norm(ef_v3_cross(d1, d2)) * isp * isp * isp;
         kmax = ef_maxf(kmax, k);
         /* Curvature vector (d2 less its tangential part, / sp^2): what arc-length stepping
-         * (EF_STEP_CORRECTED, which every consumer of the plan uses: the pipeline, the
-         * drive, Modbus direct mode) accelerates each axis by per unit v^2. Uniform stepping
-         * would add f'' / L^2 terms from the curve's parametric speed; it is kept only for
-         * comparison (docs/smoothing.md, "Feed fluctuation"). */
+         * accelerates each axis by per unit v^2; f'' / L^2 is what uniform stepping does.
+         * The planner takes the larger per axis (its centripetal and jerk limits). */
         ef_vec3_t tn = ef_v3_scale(d1, isp);
         ef_vec3_t kv = ef_v3_scale(ef_v3_axpy(d2, -ef_v3_dot(d2, tn), tn), isp * isp);
-        kabs.x = ef_maxf(kabs.x, ef_fabsf(kv.x));
-        kabs.y = ef_maxf(kabs.y, ef_fabsf(kv.y));
-        kabs.z = ef_maxf(kabs.z, ef_fabsf(kv.z));
+        kabs.x = ef_maxf(kabs.x, ef_maxf(ef_fabsf(kv.x), ef_fabsf(d2.x) * ilen2));
+        kabs.y = ef_maxf(kabs.y, ef_maxf(ef_fabsf(kv.y), ef_fabsf(d2.y) * ilen2));
+        kabs.z = ef_maxf(kabs.z, ef_maxf(ef_fabsf(kv.z), ef_fabsf(d2.z) * ilen2));
         /* Third derivative by arc length (what arc-length stepping jerks each axis by per
          * unit v^3), d3p/ds3 = f'''/s^3 - 3 s' f''/s^4 + (3 s'^2/s^5 - s''/s^4) f' with
-         * s = |f'|. */
+         * s = |f'|, and f''' / L^3 (uniform stepping): the larger per axis. */
         float s1 = ef_v3_dot(d1, d2) * isp;
         float s2 = (ef_v3_dot(d2, d2) + ef_v3_dot(d1, d3)) * isp - s1 * s1 * isp;
         float i3 = isp * isp * isp, i4 = i3 * isp;
         ef_vec3_t js = ef_v3_axpy(ef_v3_scale(d3, i3), -3.0f * s1 * i4, d2);
         js = ef_v3_axpy(js, 3.0f * s1 * s1 * i4 * isp - s2 * i4, d1);
-        kjerk.x = ef_maxf(kjerk.x, ef_fabsf(js.x));
-        kjerk.y = ef_maxf(kjerk.y, ef_fabsf(js.y));
-        kjerk.z = ef_maxf(kjerk.z, ef_fabsf(js.z));
-        /* Per axis |t_i|: what arc-length stepping moves the axis by per unit path speed. */
-        tabs.x = ef_maxf(tabs.x, ef_fabsf(d1.x) * isp);
-        tabs.y = ef_maxf(tabs.y, ef_fabsf(d1.y) * isp);
-        tabs.z = ef_maxf(tabs.z, ef_fabsf(d1.z) * isp);
+        kjerk.x = ef_maxf(kjerk.x, ef_maxf(ef_fabsf(js.x), ef_fabsf(d3.x) * ilen3));
+        kjerk.y = ef_maxf(kjerk.y, ef_maxf(ef_fabsf(js.y), ef_fabsf(d3.y) * ilen3));
+        kjerk.z = ef_maxf(kjerk.z, ef_maxf(ef_fabsf(js.z), ef_fabsf(d3.z) * ilen3));
+        /* Per axis, the larger of |t_i| (what arc-length stepping moves the axis by per unit
+         * path speed) and |f'_i| / L (what stepping tau uniformly by the time law does, where
+         * the curve's parametric speed exceeds its mean): the planner's axis limits then
+         * hold for both interpolator modes. */
+        float w = ef_maxf(isp, ilen);
+        tabs.x = ef_maxf(tabs.x, ef_fabsf(d1.x) * w);
+        tabs.y = ef_maxf(tabs.y, ef_fabsf(d1.y) * w);
+        tabs.z = ef_maxf(tabs.z, ef_fabsf(d1.z) * w);
     }
     /* A tiny curve's bounds are huge (curvature ~ 1 / L, its rate ~ 1 / L^2) but finite:
      * saturate rather than overflow, so the planner gets a small positive speed limit. */

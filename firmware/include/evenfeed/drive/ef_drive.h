@@ -5,9 +5,7 @@
  *
  * What a drive that takes whole segments runs (the simulated Modbus and CAN drives, and a
  * real drive's firmware): a ring of received segments (::EF_DRIVE_SLOTS), the interpolator
- * (ef_interp.h, stepping by arc length, ::EF_STEP_CORRECTED, as the host does: the planner's
- * limits are for that stepping) that evaluates them every servo period, and a servo model
- * whose actual
+ * (ef_interp.h) that evaluates them every servo period, and a servo model whose actual
  * position follows the command with lag and limits, so a following error exists and is
  * measured.
  *

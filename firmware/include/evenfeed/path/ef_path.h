@@ -197,17 +197,16 @@ typedef struct {
                            primitive's) */
     float length;     /**< arc length L of the curve */
     float kappa_max;  /**< largest curvature on the curve (sampled, see ef_move_measure()) */
-    ef_vec3_t tabs;   /**< per axis, the largest over the curve (sampled) of |t_i|: the axis
-                           moves at most tabs_i times the planned path speed when tau is
-                           stepped by arc length (EF_STEP_CORRECTED, what the pipeline, the
-                           drive and Modbus direct mode use), so v <= v_axis_i / tabs_i
-                           keeps every axis within its limit */
-    ef_vec3_t kabs;   /**< per axis, the largest over the curve (sampled) of |kappa n_i|:
-                           the axis's centripetal acceleration is at most kabs_i v^2 */
-    ef_vec3_t kjerk;  /**< per axis, the largest (sampled) |d^3 p_i / ds^3|: at constant
-                           speed v the axis's jerk from the geometry is kjerk_i v^3 (uniform
-                           stepping, kept for comparison, adds the curve's parametric-speed
-                           terms to all three, up to 8 x on noisy CAM sections) */
+    ef_vec3_t tabs;   /**< per axis, the largest over the curve (sampled) of |t_i| and
+                           |f'_i(tau)| / L: the axis moves at most tabs_i times the planned
+                           path speed whether tau is stepped by arc length or uniformly by
+                           the time law, so v <= v_axis_i / tabs_i keeps every axis within
+                           its limit (for evenfeed's curves the two agree to ~0.2 %) */
+    ef_vec3_t kabs;   /**< per axis, the largest over the curve (sampled) of |kappa n_i|
+                           and |f''_i(tau)| / L^2: the axis's centripetal acceleration is at
+                           most kabs_i v^2 in either interpolator mode */
+    ef_vec3_t kjerk;  /**< per axis, the largest (sampled) |f'''_i(tau)| / L^3: at constant
+                           speed v the axis's jerk from the geometry is about kjerk_i v^3 */
     float dev;        /**< deviation from the programmed path it replaces (blends: from the
                            corner; arcs: from the true arc; lines: 0) */
     float feed;       /**< commanded feed (units/s) */
