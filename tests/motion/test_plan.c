@@ -815,6 +815,45 @@ static void test_interp_lines(void)
     }
 }
 
+/* A curve longer than EF_INTERP_CORRECTED_MAX_LEN is stepped uniformly even in corrected
+ * mode: the fuzzed case, a 199 m quintic along z at 50 mm/s (a cruise phase of 3973 s),
+ * whose corrected steps drifted 20 mm behind the law and resynchronised with a 3 m jump.
+ * Over 3000 s of it every step stays within the law's 0.05 mm per period (plus float32
+ * rounding at 1e5 mm) and the curve is followed to its end. */
+static void test_interp_long_curve(void)
+{
+    ef_move_t m;
+    memset(&m, 0, sizeof m);
+    m.degree = 5;
+    for (int i = 0; i < 6; i++)
+        m.b[i] = ef_v3(-0.53f - 0.075f * (float)i, 1.55f + 0.003f * (float)(i * (5 - i)),
+                       39733.8867f * (float)i);
+    EF_CHECK_EQ(ef_move_measure(&m), EF_OK);
+    EF_CHECK(m.length > EF_INTERP_CORRECTED_MAX_LEN);
+    m.v_entry = m.v_exit = m.v_max = 50.0f;
+    m.feed = 50.0f;
+    m.duration = m.length / 50.0f;
+    m.law.dt[0] = m.duration;
+    m.law.c[0][1] = 1.0f / m.duration;
+    static ef_interp_t ip;
+    EF_CHECK_EQ(ef_interp_init(&ip, m.b[0], 1000, EF_STEP_CORRECTED), EF_OK);
+    EF_CHECK_EQ(ef_interp_push(&ip, &m), EF_OK);
+    ef_setpoint_t sp;
+    ef_vec3_t prev = m.b[0];
+    double worst = 0;
+    for (long k = 0; k < 3000000; k++) {
+        EF_CHECK_EQ(ef_interp_process(&ip, 1000, NULL, &sp), EF_OK);
+        worst = fmax(worst, ef_v3_norm(ef_v3_sub(sp.p, prev)));
+        prev = sp.p;
+    }
+    printf("interp: 199 m quintic, corrected mode: largest step per period %.4f mm\n", worst);
+    EF_CHECK(worst < 0.05 + 0.06);
+    /* the law ends at speed (nothing follows): an underrun, holding the end */
+    EF_CHECK_EQ(ef_interp_process(&ip, 0xFFFFFFFFu, NULL, &sp), EF_ERR_UNDERRUN);
+    EF_CHECK_EQ(sp.moving, 0);
+    EF_CHECK(sp.p.z == m.b[5].z);
+}
+
 static void test_interp_underrun_wrap(void)
 {
     ef_interp_t ip;
@@ -1147,12 +1186,19 @@ static void chain_case_2000(void)
 int main(int argc, char **argv)
 {
     static const ef_test_part_t parts[] = {
-        {"plan", test_single_line},        {"plan", chain_case_0},
-        {"plan", chain_case_2000},         {"plan", test_window},
-        {"plan", test_axis_limits},        {"plan", test_random_streams},
-        {"plan", test_incremental_bounds}, {"plan", test_groups},
-        {"interp", test_interp_lines},     {"interp", test_interp_underrun_wrap},
-        {"interp", test_fluctuation},      {"bad", test_bad_input},
+        {"plan", test_single_line},
+        {"plan", chain_case_0},
+        {"plan", chain_case_2000},
+        {"plan", test_window},
+        {"plan", test_axis_limits},
+        {"plan", test_random_streams},
+        {"plan", test_incremental_bounds},
+        {"plan", test_groups},
+        {"interp", test_interp_lines},
+        {"interp", test_interp_underrun_wrap},
+        {"interp", test_interp_long_curve},
+        {"interp", test_fluctuation},
+        {"bad", test_bad_input},
     };
     return EF_TEST_RUN(argc, argv, 1, parts);
 }

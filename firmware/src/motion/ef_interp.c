@@ -140,7 +140,7 @@ static void ip_eval(ef_interp_t *ip, const ef_move_t *m, float *v)
     ef_vec3_t d[3], lb[6];
     for (int i = 0; i <= m->degree && i < 6; i++)
         lb[i] = ef_v3_sub(m->b[i], m->b[0]);
-    if (ip->mode != EF_STEP_CORRECTED) {
+    if (ip->mode != EF_STEP_CORRECTED || !(m->length <= EF_INTERP_CORRECTED_MAX_LEN)) {
         ef_bezier_eval(lb, m->degree, tau_law, 0, d);
         ip->tau = tau_law;
         ip->pos = ef_v3_add(m->b[0], d[0]);

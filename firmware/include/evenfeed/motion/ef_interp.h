@@ -49,10 +49,21 @@ extern "C" {
 #define EF_INTERP_JOIN_TOL 1e-3f
 #endif
 
+/** Longest curve (units) the corrected mode steps by arc length; a longer one is stepped
+ *  uniformly. float32 holds the parameter to 2^-24 of the curve: at 16 m that is 1 um, the
+ *  step of 1 mm/s at 1 ms, and the chords the corrected step sums then drift from the law
+ *  (a fuzzed 199 m quintic at 50 mm/s fell 20 mm behind, and its resynchronisation jumped
+ *  3 m in one period). Uniform stepping evaluates the law's parameter directly, continuous
+ *  at any length. */
+#ifndef EF_INTERP_CORRECTED_MAX_LEN
+#define EF_INTERP_CORRECTED_MAX_LEN 16000.0f
+#endif
+
 /** Parameter stepping modes. */
 typedef enum {
     EF_STEP_UNIFORM = 0,   /**< tau straight from the time law */
-    EF_STEP_CORRECTED = 1, /**< plus one arc-length correction step per sample */
+    EF_STEP_CORRECTED = 1, /**< plus one arc-length correction step per sample (curves up
+                                to EF_INTERP_CORRECTED_MAX_LEN long) */
 } ef_step_mode_t;
 
 /** One setpoint. */
