@@ -139,7 +139,8 @@ enum {
     CLI_PIPE_PERIOD,
     CLI_PIPE_STEP,
     CLI_PIPE_MICRO,
-    CLI_PIPE_G1
+    CLI_PIPE_G1,
+    CLI_PIPE_KEEP_BLENDS
 };
 /* clang-format off */
 /** The smoothing options' longopts entries (smooth and stream list them). */
@@ -151,7 +152,8 @@ enum {
     {"period-us", required_argument, NULL, CLI_PIPE_PERIOD},                                       \
     {"step", required_argument, NULL, CLI_PIPE_STEP},                                              \
     {"micro-len", required_argument, NULL, CLI_PIPE_MICRO},                                        \
-    {"g1", no_argument, NULL, CLI_PIPE_G1}
+    {"g1", no_argument, NULL, CLI_PIPE_G1},                                                        \
+    {"keep-blends", no_argument, NULL, CLI_PIPE_KEEP_BLENDS}
 /* clang-format on */
 
 /** Apply smoothing option key (a CLI_PIPE_* key cli_getopt() returned; value in g->val).

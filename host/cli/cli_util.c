@@ -261,6 +261,9 @@ int cli_pipe_opt(const cli_getopt_t *g, int key, ef_pipe_cfg_t *cfg)
     case CLI_PIPE_G1:
         cfg->smooth_degree = 3;
         break;
+    case CLI_PIPE_KEEP_BLENDS:
+        cfg->keep_slow_blends = 1;
+        break;
     default:
         rc = cli_error(EF_ERR_ARG, "%s: unknown option '%s'", g->cmd, g->opt ? g->opt : "?");
         break;

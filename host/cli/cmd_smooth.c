@@ -7,7 +7,7 @@
 static const char usage[] =
     "usage: evenfeed smooth IN.ngc [-o OUT.json|OUT.csv] [--svg PLOT.svg] [--tol P]\n"
     "                       [--vmax V] [--amax A] [--jerk J] [--period-us N]\n"
-    "                       [--step uniform|corrected] [--micro-len L] [--g1]\n"
+    "                       [--step uniform|corrected] [--micro-len L] [--g1] [--keep-blends]\n"
     "\n"
     "Smooths a part program (docs/gcode.md) into G2 Bezier moves, plans the feed, runs the\n"
     "interpolator in both step modes and prints a summary (docs/smoothing-cli.md).\n"
@@ -20,7 +20,9 @@ static const char usage[] =
     "  --period-us N    servo period in microseconds (default 1000)\n"
     "  --step MODE      stepping for CSV/SVG samples: uniform or corrected (default)\n"
     "  --micro-len L    longest CAM micro-segment, mm, 0 = no smooth sections (default 1)\n"
-    "  --g1             G1 cubic smooth sections instead of G2 quintic\n";
+    "  --g1             G1 cubic smooth sections instead of G2 quintic\n"
+    "  --keep-blends    blend every corner that fits, also where stopping there is faster\n"
+    "                   (slow corners, docs/smoothing.md)\n";
 
 enum { O_SVG = CLI_LONG };
 

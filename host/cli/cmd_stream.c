@@ -38,6 +38,7 @@ static const char usage[] =
     "  --fault-reset     reset faulted drives first (default: refuse to enable them)\n"
     "  -v                progress on stderr\n"
     "  smoothing: --tol MM --vmax MM/S --amax MM/S2 --jerk MM/S3 --micro-len MM --g1\n"
+    "             --keep-blends\n"
     "             --period-us US --step uniform|corrected (as evenfeed smooth)\n"
     "\n"
     "Exit status 0 when every segment executed; otherwise the negated error code, with\n"

@@ -91,6 +91,11 @@ fi
 # Options change the run.
 expect 0 'feed fluctuation .* servo period 250 us' -- smooth "$bracket" --period-us 250
 expect 0 'moves' -- smooth "$bracket" --g1 --micro-len 0 --tol 0.05 --vmax 50 --amax 500 --jerk 0
+# A square at 10 mm/s, G64 P0.05: its corners are slow corners (exact stops, faster than the
+# blends under the jerk limit) unless --keep-blends keeps every blend.
+printf 'G64 P0.05\nG1 X10 F600\nY10\nX0\nY0\nM2\n' >"$tmp/square.ngc"
+expect 0 'vertices  *0 blended, .*3 slow corners' -- smooth "$tmp/square.ngc"
+expect 0 'vertices  *3 blended, .*0 slow corners' -- smooth "$tmp/square.ngc" --keep-blends
 
 # Bad input: exit status is the negated error code, the message names file and line.
 printf 'G1 X10 F600\nY10\n#1=[0/0]\nX0\n' >"$tmp/nan.ngc"
