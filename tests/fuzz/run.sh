@@ -12,7 +12,10 @@
 # some, which then share all of it), on a working copy of its seed corpus kept in that build directory, so coverage
 # accumulates across runs while the checked-in corpora stay as they are. Crash reproducers
 # go to $EF_FUZZ_BUILD/artifacts/; the script exits nonzero when a fuzzer finds one.
-# EF_FUZZ_JOBS=N runs N processes (libFuzzer fork mode). Needs clang and libclang-rt-dev
+# EF_FUZZ_JOBS=N runs N processes (libFuzzer fork mode). EF_FUZZ_RUNS=N runs N inputs per
+# target instead of the time share, and EF_FUZZ_SEED=S fixes libFuzzer's random seed: with
+# both, on a fresh build directory (only the checked-in seeds), a run is the same on every
+# machine, as `./dev test` (CI) needs; `./dev fuzz` stays random. Needs clang and libclang-rt-dev
 # (the libFuzzer runtime). Warnings are not errors here: a fuzz run should not depend on
 # the newest clang diagnostics.
 set -eu
@@ -26,6 +29,8 @@ build=${2:-${EF_FUZZ_BUILD:-$root/build-fuzz}}
 mkdir -p "$build"
 build=$(cd "$build" && pwd)
 jobs=${EF_FUZZ_JOBS:-1}
+runs=${EF_FUZZ_RUNS:-}
+seed=${EF_FUZZ_SEED:-}
 cc=${CC:-clang}
 targets=${EF_FUZZ_TARGETS:-table gcode smooth can}
 
@@ -43,11 +48,23 @@ fuzz() {
     bin=$1 seeds=$2 corpus=$3
     mkdir -p "$corpus"
     cp "$seeds"/* "$corpus"/
-    set -- -max_total_time="$each" -print_final_stats=1 -artifact_prefix="$build/artifacts/"
+    if [ -n "$runs" ]; then
+        set -- -runs="$runs"
+    else
+        set -- -max_total_time="$each"
+    fi
+    set -- "$@" -print_final_stats=1 -artifact_prefix="$build/artifacts/"
+    if [ -n "$seed" ]; then
+        set -- "$@" -seed="$seed"
+    fi
     if [ "$jobs" -gt 1 ]; then
         set -- "$@" -fork="$jobs"
     fi
-    echo "fuzzing $bin for ${each}s, corpus $corpus"
+    if [ -n "$runs" ]; then
+        echo "fuzzing $bin for $runs runs${seed:+ (seed $seed)}, corpus $corpus"
+    else
+        echo "fuzzing $bin for ${each}s${seed:+ (seed $seed)}, corpus $corpus"
+    fi
     st=0
     # libFuzzer reports every new corpus entry; keep that in a log and show its summary.
     log="$build/fuzz-$bin.log"
