@@ -408,8 +408,7 @@ static void sm_frame_fit(const ef_smooth_t *s, const ef_smooth_prim_t *pa,
         for (int j = 0; j < 6; j++)
             G[i][j] = 0.0f;
     for (uint32_t k = 0; k < na + nb + 1u; k++) {
-        ef_vec3_t q = k < na ? (k == 0 ? pa->start : ra[k - 1])
-                             : (k == na ? f->p : (k - na < nb ? rb[k - na - 1u] : pb->pr.end));
+        ef_vec3_t q = k < na ? sm_vertex(pa, ra, k) : sm_vertex(pb, rb, k - na); /* b once */
         ef_vec3_t d = ef_v3_sub(q, f->p);
         float xi = (ef_v3_dot(d, f->t) - mid) / half, y = ef_v3_dot(d, f->n);
         float P[5], D1[5], D2[5];
@@ -603,8 +602,8 @@ static int sm_stop_is_faster(const ef_limits_t *lim, ef_move_t *blend, float fee
 {
     float v_b, a_b, j_b;
     blend->feed = feed;
-    if (ef_limits_check(lim) != EF_OK ||
-        ef_plan_move_limits(lim, blend, &v_b, &a_b, &j_b) != EF_OK || !(v_b < feed))
+    /* (lim was checked once, by ef_plan_init() in ef_smooth_init()) */
+    if (ef_plan_move_limits(lim, blend, &v_b, &a_b, &j_b) != EF_OK || !(v_b < feed))
         return 0;
     float a = ef_minf(lim->a_axis[0], ef_minf(lim->a_axis[1], lim->a_axis[2]));
     float j = lim->j_max, vh = feed;
