@@ -779,7 +779,7 @@ static ef_prim_t prim_reverse(ef_vec3_t s, const ef_prim_t *p)
 typedef struct {
     const char *name;
     int n, blends, clamped, straight, stop, rev, other;
-    double dev_max, v_max, p_max, under_max, g2_t, g2_k, pos;
+    double dev_max, v_max, p_max, under_max, g2_t, g2_k, pos, rho;
     double *devs, *hd, free_min;
     int ndev, nhd, nfree, tan_stop;
 } stats_t;
@@ -927,6 +927,30 @@ static void corner_case(stats_t *st, unsigned long long *seed, int in_arc, int o
                     st->name, idx, e, at, ak, et, ek, planar, tturn, mi.h, mo.h, L, dnorm(kx),
                     dnorm(kv));
     }
+    /* end speeds against the arc length (what uniform stepping's feed is at the ends, in
+     * units of the planned speed): within EF_BA_END_SPEED_REL (2e-3) of 1, ef_blend_arc.c,
+     * plus the quadrature's error and float32 rounding of the control points at the corner's
+     * coordinates (2 ulp of |b1 - b0| = x1 / 5) */
+    {
+        double len = 0.0;
+        enum { NL = 4000 };
+        for (int i = 0; i < NL; i++) {
+            dv3 q, d1;
+            bez_d(bl.seg.b, 5, (i + 0.5) / NL, &q, &d1, NULL);
+            len += dnorm(d1) / NL;
+        }
+        for (int e = 0; e < 2; e++) {
+            dv3 q, d1;
+            bez_d(bl.seg.b, 5, e, &q, &d1, NULL);
+            double rho = fabs(dnorm(d1) / len - 1.0);
+            double slack = 10.0 * 2.4e-7 * scale / len;
+            st->rho = fmax(st->rho, rho);
+            EF_CHECK(rho <= 2.2e-3 + slack);
+            if (!(rho <= 2.2e-3 + slack))
+                fprintf(stderr, "  %s #%d end %d: rho-1 %.4g slack %.3g len %.4g deg %d\n",
+                        st->name, idx, e, rho, slack, len, bl.seg.degree);
+        }
+    }
     /* one-sided deviation in double: the blend's points (2000 samples plus refinement) to the
      * replaced pieces */
     int ns = 2000, imax = 0;
@@ -1045,9 +1069,10 @@ static void test_blend_prims(void)
                "path->blend/tol max %.4f; "
                "true dev / reported dev max %.4f; G2 ends (err / allowed): tangent %.2g, "
                "curvature*L %.2g; "
-               "end position err/tol %.2g\n",
+               "end position err/tol %.2g; end speed / L - 1 max %.2g\n",
                st.name, st.n, st.blends, st.clamped, st.straight, st.stop, st.rev, st.other,
-               st.dev_max, p99, p50, st.v_max, st.p_max, st.under_max, st.g2_t, st.g2_k, st.pos);
+               st.dev_max, p99, p50, st.v_max, st.p_max, st.under_max, st.g2_t, st.g2_k, st.pos,
+               st.rho);
         EF_CHECK(st.blends > N / 2);
         EF_CHECK(st.other < N / 100);
         qsort(st.hd, (size_t)st.nhd, sizeof(double), cmp_d);
@@ -1084,10 +1109,10 @@ static void test_tangent_joins(void)
         qsort(st.hd, (size_t)st.nhd, sizeof(double), cmp_d);
         printf("%-12s: %d joins: %d blends (%d clamped), %d straight, %d stop, %d skipped; "
                "dev/tol max %.6f, two-sided max %.6f median %.4f; G2 ends (err / allowed): "
-               "tangent %.2g, curvature*L %.2g\n",
+               "tangent %.2g, curvature*L %.2g; end speed / L - 1 max %.2g\n",
                st.name, st.n, st.blends, st.clamped, st.straight, st.stop, st.other, st.dev_max,
                st.nhd ? st.hd[st.nhd - 1] : 0, st.nhd ? st.hd[(st.nhd - 1) / 2] : 0, st.g2_t,
-               st.g2_k);
+               st.g2_k, st.rho);
         EF_CHECK_EQ(st.tan_stop, 0);
         EF_CHECK_EQ(st.rev, 0);
         EF_CHECK(st.blends >= st.n * 9 / 10);

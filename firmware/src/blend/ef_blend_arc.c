@@ -40,6 +40,21 @@
 #define EF_BA_KAPPA_REL   1e-4f
 /* First trim estimate for a tangent join: deviation ~ dk L^2 / EF_BA_TANGENT_GAIN. */
 #define EF_BA_TANGENT_GAIN 1.0f
+/* Largest relative difference between a blend's parametric speed at either end, |f'(0)| or
+ * |f'(1)|, and its mean, the arc length L (ba_end_speed_dev()). A stepper that steps tau
+ * uniformly by the time law (EF_STEP_UNIFORM, the drives' segment mode) moves at
+ * v |f'(tau)| / L, so at a junction with a line (|f'| / L = 1) the feed jumps by v times this
+ * difference in one servo period. The table's optimum for a lopsided corner (one side trimmed
+ * far more than the other, or a tight arc on one side) can be far off: 0.4 and 0.9 were seen,
+ * and at 9 mm/s the jump was 1 mm/s in 1 ms, 1000 mm/s^2 (tests/fuzz, issue 18). Such a
+ * trial's end speeds are set to L (ba_even_ends()); the corners of the sample and benchmark
+ * programs are below 1e-3 and keep the table's curve. */
+#ifndef EF_BA_END_SPEED_REL
+#define EF_BA_END_SPEED_REL 2e-3f
+#endif
+/* Passes of ba_even_ends() (L depends weakly on the end speeds: each pass cuts the
+ * difference by about an order of magnitude). */
+#define EF_BA_EVEN_ITER 3
 
 /* Finite test without libm (NaN fails x == x, inf fails x - x == 0). */
 static int ba_finite(float x)
@@ -108,6 +123,58 @@ static void ba_d12(const ef_vec3_t *h1, const ef_vec3_t *h2, float t, ef_vec3_t 
     r = ef_v3_axpy(r, 3.0f * u2 * t, h2[1]);
     r = ef_v3_axpy(r, 3.0f * u * t2, h2[2]);
     *d2 = ef_v3_axpy(r, t2 * t, h2[3]);
+}
+
+/* max(| |f'(0)| / L - 1 |, | |f'(1)| / L - 1 |) of a quintic b; its arc length L in *len, by
+ * 16-point Gauss–Legendre quadrature of |f'| (6 points were off by up to 0.6 % on lopsided
+ * blends whose speed varies by tens of per cent inside: tests/blend/test_prim.c). */
+static float ba_end_speed_dev(const ef_vec3_t *b, float *len)
+{
+    static const float gx[8] = {0.0950125098f, 0.2816035508f, 0.4580167777f, 0.6178762444f,
+                                0.7554044084f, 0.8656312024f, 0.9445750231f, 0.9894009350f};
+    static const float gw[8] = {0.1894506105f, 0.1826034150f, 0.1691565194f, 0.1495959888f,
+                                0.1246289713f, 0.0951585117f, 0.0622535239f, 0.0271524594f};
+    ef_vec3_t h1[5];
+    for (int i = 0; i < 5; i++)
+        h1[i] = ef_v3_scale(ef_v3_sub(b[i + 1], b[i]), 5.0f);
+    float l = 0.0f;
+    for (int k = 0; k < 16; k++) {
+        float t = 0.5f + ((k & 1) ? 0.5f : -0.5f) * gx[k >> 1];
+        float u = 1.0f - t, t2 = t * t, u2 = u * u;
+        ef_vec3_t r = ef_v3_scale(h1[0], u2 * u2);
+        r = ef_v3_axpy(r, 4.0f * u2 * u * t, h1[1]);
+        r = ef_v3_axpy(r, 6.0f * u2 * t2, h1[2]);
+        r = ef_v3_axpy(r, 4.0f * u * t2 * t, h1[3]);
+        r = ef_v3_axpy(r, t2 * t2, h1[4]);
+        l += 0.5f * gw[k >> 1] * ef_v3_norm(r);
+    }
+    *len = l;
+    float inv = 1.0f / ef_maxf(l, 1e-30f);
+    float d0 = ef_fabsf(ef_v3_norm(h1[0]) * inv - 1.0f);
+    float d1 = ef_fabsf(ef_v3_norm(h1[4]) * inv - 1.0f);
+    return ef_maxf(d0, d1);
+}
+
+/* A quintic's end speeds set to its arc length, the end data and the table's tangential
+ * second-derivative DOFs kept, when they differ from it by more than EF_BA_END_SPEED_REL;
+ * a fixed EF_BA_EVEN_ITER passes, since L moves with them. The curve stays G2 with its
+ * neighbours (the curvature terms follow the speeds, ef_seg_from_dofs()). Returns the
+ * remaining difference. */
+static float ba_even_ends(const ef_endpoint_t *e0, const ef_endpoint_t *e1, ef_seg_t *seg)
+{
+    float len = 0.0f;
+    float dev = ba_end_speed_dev(seg->b, &len);
+    for (int it = 0; it < EF_BA_EVEN_ITER && dev > EF_BA_END_SPEED_REL; it++) {
+        float dof[4] = {len, seg->dof[1], len, seg->dof[3]};
+        ef_seg_t s2;
+        if (ef_seg_from_dofs(e0, e1, 5, dof, &s2) != EF_OK)
+            break;
+        s2.flags = seg->flags;
+        s2.clamp = seg->clamp;
+        *seg = s2;
+        dev = ba_end_speed_dev(seg->b, &len);
+    }
+    return dev;
 }
 
 /* sin x for |x| <= pi/4 (fdlibm's float kernel, about 1 ulp). */
@@ -338,6 +405,7 @@ static void ba_try(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in
     ef_prim_frame(v, out, lo, &gb);
     ef_endpoint_t e0 = ef_frame_endpoint(&ga), e1 = ef_frame_endpoint(&gb);
     int rc = ef_seg_g2_quintic(g2, &e0, &e1, &tr->seg);
+    float uneven = rc == EF_OK ? ba_even_ends(&e0, &e1, &tr->seg) : 0.0f;
     tr->pa = ga.p;
     tr->pb = gb.p;
     tr->li = li;
@@ -401,10 +469,12 @@ static void ba_try(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in
     /* A configuration whose tangent angles the table had to clamp (a lopsided hairpin: a
      * tangent beyond 90 degrees from the chord) gives a poor curve; such a trial does not
      * count. (A clamped curvature, a tight arc, is fine: the curve still meets the end data
-     * exactly and its deviation is measured.) */
+     * exactly and its deviation is measured.) Nor does one whose end speeds ba_even_ends()
+     * could not bring within EF_BA_END_SPEED_REL of its mean. */
     uint32_t bad = EF_LOOKUP_CLAMP_ALPHA | EF_LOOKUP_CLAMP_BETA;
-    tr->ok =
-        (rc == EF_OK) & (tr->seg.degree == 5) & ba_finite(tr->dev) & ((tr->seg.clamp & bad) == 0u);
+    int even = uneven <= EF_BA_END_SPEED_REL;
+    tr->ok = (rc == EF_OK) & (tr->seg.degree == 5) & ba_finite(tr->dev) &
+             ((tr->seg.clamp & bad) == 0u) & even;
 }
 
 /* G2 blend of a corner or tangent join with arc ends (contract in ef_blend.h). */
