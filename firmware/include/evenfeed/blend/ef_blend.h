@@ -64,7 +64,10 @@
  * fixed number of steps (::EF_BLEND_ITER) until the measured deviation is within
  * tol - q; if none is, the outcome is ::EF_BLEND_STOP. Trims are limited by max_in and
  * max_out separately (asymmetric trims: a short neighbour on one side shortens only that
- * side, the other keeps the trim the tolerance allows).
+ * side, the other keeps the trim the tolerance allows). Where the table's curve for such a lopsided
+ * corner has end speeds |f'(0)|, |f'(1)| more than 0.2 % off its arc length, they are set to
+ * it (the tangential DOFs kept, still G2): a stepper that steps the parameter uniformly (the
+ * drives' segment mode) would otherwise jump in feed at both junctions.
  *
  * ## Tangent joins (ef_blend_prims())
  * A vertex whose tangents turn by less than ::EF_BLEND_MIN_TURN but whose curvature vectors
