@@ -429,6 +429,22 @@ uint32_t ef_plan_space(const ef_plan_t *p)
     return p ? (uint32_t)EF_LOOKAHEAD - p->mcount : 0u;
 }
 
+/** Tangential jerk every axis leaves at speed v and tangential acceleration a:
+ *  min_i (J - g_i v^3 - 3 k_i v a) / t_i over the axes the move drives. */
+static float pl_jt(const float t[3], const float k[3], const float g[3], float J, float v, float a)
+{
+    float j = 0.0f;
+    int have = 0;
+    for (int i = 0; i < 3; i++) {
+        if (!(t[i] > 0.0f))
+            continue;
+        float ji = (J - g[i] * v * v * v - 3.0f * k[i] * v * a) / t[i];
+        j = have ? ef_minf(j, ji) : ji;
+        have = 1;
+    }
+    return j;
+}
+
 /** A move's speed limit, tangential acceleration and tangential jerk (ef_plan.h, "Limits of
  *  a move"). Per axis i, with tangent bound t_i = tabs_i, curvature-vector bound k_i = kabs_i
  *  and third-derivative bound g_i = kjerk_i, the axis acceleration is at most
@@ -481,13 +497,25 @@ static void pl_limits(const ef_limits_t *l, const ef_move_t *m, float *v_out, fl
             }
         }
         /* Each later lowering of a only frees jerk: recompute with the final a. */
-        have = 0;
-        for (int i = 0; i < 3; i++) {
-            if (!(t[i] > 0.0f))
-                continue;
-            float ji = (J - g[i] * v * v * v - 3.0f * k[i] * v * a) / t[i];
-            j = have ? ef_minf(j, ji) : ji;
-            have = 1;
+        j = pl_jt(t, k, g, J, v, a);
+        /* On a curved move a and j share the jerk budget (3 k_i v a): take the a that makes
+         * the ramp from rest to v_max shortest, not the largest a. */
+        if (v > 0.0f && (k[0] > 0.0f || k[1] > 0.0f || k[2] > 0.0f)) {
+            float lo = EF_PLAN_A_SEARCH_LO * a, hi = a;
+            for (int it = 0; it < EF_PLAN_A_SEARCH_ITER; it++) {
+                float m1 = lo + 0.381966f * (hi - lo), m2 = hi - 0.381966f * (hi - lo);
+                float T1 = pl_ramp_time(v, m1, pl_jt(t, k, g, J, v, m1));
+                float T2 = pl_ramp_time(v, m2, pl_jt(t, k, g, J, v, m2));
+                if (T1 <= T2)
+                    hi = m2;
+                else
+                    lo = m1;
+            }
+            float as = 0.5f * (lo + hi), js = pl_jt(t, k, g, J, v, as);
+            if (pl_ramp_time(v, as, js) < pl_ramp_time(v, a, j)) {
+                a = as;
+                j = js;
+            }
         }
     }
     *v_out = v;

@@ -20,7 +20,12 @@
  *   line, k = 0, gets the whole budget of its most loaded axis);
  * - j_max (the move's) = min_i (j_max - g_i v_max^3 - 3 k_i v_max a_max) / t_i, at least
  *   EF_PLAN_JT_MIN j_max / t_i (a_max is lowered where the centripetal growth term would
- *   leave less).
+ *   leave less);
+ * - on a curved move a_max and j_max share the jerk budget (3 k_i v_max a_max), so a_max is
+ *   then the a in [EF_PLAN_A_SEARCH_LO, 1] x the above that makes the S-curve from rest to
+ *   v_max shortest (a golden-section search of EF_PLAN_A_SEARCH_ITER steps), j_max what the
+ *   axes leave at it. On a circle of R 10 at 50 mm/s and J 20 000 the largest a left the
+ *   ramps 0.18 J (0.24 s from rest, tests/motion/test_plan.c "curved share").
  * The bounds take each maximum over the whole curve, so they hold at every instant of the
  * move whatever its speed profile (within v_max, a_max, j_max).
  *
@@ -91,6 +96,15 @@ extern "C" {
  *  the geometry's and the centripetal part's growth while the speed changes). */
 #ifndef EF_PLAN_JT_MIN
 #define EF_PLAN_JT_MIN 0.25f
+#endif
+
+/** Search for a curved move's tangential acceleration (its jerk is what is left of the
+ *  budget after 3 k_i v_max a): golden-section steps over [EF_PLAN_A_SEARCH_LO a_max, a_max]. */
+#ifndef EF_PLAN_A_SEARCH_ITER
+#define EF_PLAN_A_SEARCH_ITER 16
+#endif
+#ifndef EF_PLAN_A_SEARCH_LO
+#define EF_PLAN_A_SEARCH_LO 0.05f
 #endif
 
 /** Share of each axis's acceleration limit and of the jerk limit the planner plans to. The
