@@ -18,6 +18,7 @@
 #include "evenfeed/blend/ef_blend.h"
 #include "evenfeed/core/ef_err.h"
 #include "evenfeed/path/ef_path.h"
+#include "evenfeed/seg/ef_seg.h"
 
 extern const ef_table_t ef_tbl_g2_default;
 #define G2 (&ef_tbl_g2_default)
@@ -1224,6 +1225,105 @@ static void test_blend_prims_args(void)
     EF_CHECK_EQ(b.seg.degree, 0);
 }
 
+/* Speed ripple of a quintic in double: max | |f'(t)| / L - 1 | over 400 samples (L by the
+ * mean of 4000 midpoint samples); *kjerk: max |f'''_i| / L^3 over the axes. */
+static double speed_ripple_d(const ef_vec3_t *b, double *kjerk)
+{
+    double L = 0, r = 0, kj = 0;
+    for (int i = 0; i < 4000; i++) {
+        dv3 p, d1;
+        bez_d(b, 5, (i + 0.5) / 4000, &p, &d1, NULL);
+        L += dnorm(d1) / 4000;
+    }
+    /* third derivative: 60 x the third differences of the control points, a quadratic */
+    dv3 d3c[3];
+    for (int i = 0; i < 3; i++)
+        d3c[i] = dscale(dsub(dsub(dv(b[i + 3]), dscale(dv(b[i + 2]), 3)),
+                             dsub(dv(b[i]), dscale(dv(b[i + 1]), 3))),
+                        60);
+    for (int i = 0; i <= 400; i++) {
+        double t = i / 400.0, u = 1 - t;
+        dv3 p, d1;
+        bez_d(b, 5, t, &p, &d1, NULL);
+        r = fmax(r, fabs(dnorm(d1) / L - 1));
+        dv3 j = daxpy(daxpy(dscale(d3c[0], u * u), 2 * u * t, d3c[1]), t * t, d3c[2]);
+        kj = fmax(kj, fmax(fabs(j.x), fmax(fabs(j.y), fabs(j.z))) / (L * L * L));
+    }
+    if (kjerk)
+        *kjerk = kj;
+    return r;
+}
+
+/* ef_seg_g2_even(): on short pieces of circles (arc pieces, CAM sections) the arc-length
+ * choice x1 = L, x2 = 0 wins and moves at an even parametric speed, its third derivative
+ * near the circle's own 1/R^2 (the table's ripple of +-5e-4 made it 5-7 times that on the
+ * LinuxCNC corpus's quantized circle); on a 90 degree corner between lines the table's
+ * optimum is the more even one and is kept; the result is never less even than the table's. */
+static void test_seg_even(void)
+{
+    double worst_arc = 0, worst_kj = 0, tab_arc = 0, tab_kj = 0;
+    int wins = 0, n = 0;
+    unsigned long long seed = 5;
+    for (int i = 0; i < 400; i++) {
+        double r = log_uniform(&seed, 0.5, 500), sw = ef_t_uniform(&seed, 0.02, 0.3);
+        double a0 = ef_t_uniform(&seed, -M_PI, M_PI), a1 = a0 + sw;
+        ef_endpoint_t e0, e1;
+        e0.p = ef_v3((float)(r * cos(a0)), (float)(r * sin(a0)), 0);
+        e0.t = ef_v3((float)-sin(a0), (float)cos(a0), 0);
+        e0.n = ef_v3((float)-cos(a0), (float)-sin(a0), 0);
+        e0.kappa = (float)(1 / r);
+        e1.p = ef_v3((float)(r * cos(a1)), (float)(r * sin(a1)), 0);
+        e1.t = ef_v3((float)-sin(a1), (float)cos(a1), 0);
+        e1.n = ef_v3((float)-cos(a1), (float)-sin(a1), 0);
+        e1.kappa = (float)(1 / r);
+        ef_seg_t tab, ev;
+        if (ef_seg_g2_quintic(G2, &e0, &e1, &tab) != EF_OK) {
+            EF_CHECK(0);
+            continue;
+        }
+        ev = tab;
+        float dev = -1;
+        int won = ef_seg_g2_even(&e0, &e1, &ev, &dev);
+        double kt, ke;
+        double rt = speed_ripple_d(tab.b, &kt), re = speed_ripple_d(ev.b, &ke);
+        n++;
+        wins += won;
+        EF_CHECK(re <= rt + 1e-6);     /* never less even */
+        EF_CHECK(dev >= 0 && dev < 1); /* reported */
+        EF_CHECK_EQ(ev.degree, 5);
+        /* still interpolates the ends */
+        EF_CHECK(memcmp(&ev.b[0], &e0.p, sizeof e0.p) == 0);
+        EF_CHECK(memcmp(&ev.b[5], &e1.p, sizeof e1.p) == 0);
+        worst_arc = fmax(worst_arc, re);
+        worst_kj = fmax(worst_kj, ke * r * r);
+        tab_arc = fmax(tab_arc, rt);
+        tab_kj = fmax(tab_kj, kt * r * r);
+    }
+    printf("seg even, circle pieces (%d, r 0.5..500, sweep 0.02..0.3): arc-length choice won %d; "
+           "speed ripple max %.2g (table %.2g); |f'''|/L^3 max %.2f / r^2 (table %.2f / r^2)\n",
+           n, wins, worst_arc, tab_arc, worst_kj, tab_kj);
+    EF_CHECK(n == 400);
+    EF_CHECK(wins >= 390);
+    EF_CHECK(worst_arc < 1e-4);
+    EF_CHECK(worst_kj < 1.5);
+
+    /* 90 degree corner between lines (curvature 0 at both ends): the table stays */
+    ef_endpoint_t c0 = {ef_v3(0, 0, 0), ef_v3(1, 0, 0), ef_v3(0, 1, 0), 0};
+    ef_endpoint_t c1 = {ef_v3(1, 1, 0), ef_v3(0, 1, 0), ef_v3(-1, 0, 0), 0};
+    ef_seg_t t0, t1;
+    EF_CHECK_EQ(ef_seg_g2_quintic(G2, &c0, &c1, &t0), EF_OK);
+    t1 = t0;
+    EF_CHECK_EQ(ef_seg_g2_even(&c0, &c1, &t1, NULL), 0);
+    EF_CHECK(memcmp(&t0, &t1, sizeof t0) == 0);
+    /* not a quintic, NULL: nothing changes */
+    ef_seg_t cub;
+    memset(&cub, 0, sizeof cub);
+    cub.degree = 3;
+    EF_CHECK_EQ(ef_seg_g2_even(&c0, &c1, &cub, NULL), 0);
+    EF_CHECK_EQ(ef_seg_g2_even(NULL, &c1, &t1, NULL), 0);
+    EF_CHECK_EQ(ef_seg_g2_even(&c0, &c1, NULL, NULL), 0);
+}
+
 int main(int argc, char **argv)
 {
     static const ef_test_part_t parts[] = {
@@ -1231,6 +1331,7 @@ int main(int argc, char **argv)
         {"frame", test_frame},
         {"measure", test_measure},
         {"arc_piece", test_arc_piece},
+        {"seg_even", test_seg_even},
         {"blend_prims_args", test_blend_prims_args},
         {"blend_prims", test_blend_prims},
         {"tangent_joins", test_tangent_joins},

@@ -125,34 +125,15 @@ static void ba_d12(const ef_vec3_t *h1, const ef_vec3_t *h2, float t, ef_vec3_t 
     *d2 = ef_v3_axpy(r, t2 * t, h2[3]);
 }
 
-/* max(| |f'(0)| / L - 1 |, | |f'(1)| / L - 1 |) of a quintic b; its arc length L in *len, by
- * 16-point Gauss–Legendre quadrature of |f'| (6 points were off by up to 0.6 % on lopsided
- * blends whose speed varies by tens of per cent inside: tests/blend/test_prim.c). */
+/* Largest difference of a quintic's end speeds |f'(0)|, |f'(1)| from its arc length,
+ * relative to it; the length in *len (16-point Gauss–Legendre: 6 points were off by up to
+ * 0.6 % on lopsided blends whose speed varies by tens of per cent inside,
+ * tests/blend/test_prim.c). */
 static float ba_end_speed_dev(const ef_vec3_t *b, float *len)
 {
-    static const float gx[8] = {0.0950125098f, 0.2816035508f, 0.4580167777f, 0.6178762444f,
-                                0.7554044084f, 0.8656312024f, 0.9445750231f, 0.9894009350f};
-    static const float gw[8] = {0.1894506105f, 0.1826034150f, 0.1691565194f, 0.1495959888f,
-                                0.1246289713f, 0.0951585117f, 0.0622535239f, 0.0271524594f};
-    ef_vec3_t h1[5];
-    for (int i = 0; i < 5; i++)
-        h1[i] = ef_v3_scale(ef_v3_sub(b[i + 1], b[i]), 5.0f);
-    float l = 0.0f;
-    for (int k = 0; k < 16; k++) {
-        float t = 0.5f + ((k & 1) ? 0.5f : -0.5f) * gx[k >> 1];
-        float u = 1.0f - t, t2 = t * t, u2 = u * u;
-        ef_vec3_t r = ef_v3_scale(h1[0], u2 * u2);
-        r = ef_v3_axpy(r, 4.0f * u2 * u * t, h1[1]);
-        r = ef_v3_axpy(r, 6.0f * u2 * t2, h1[2]);
-        r = ef_v3_axpy(r, 4.0f * u * t2 * t, h1[3]);
-        r = ef_v3_axpy(r, t2 * t2, h1[4]);
-        l += 0.5f * gw[k >> 1] * ef_v3_norm(r);
-    }
-    *len = l;
-    float inv = 1.0f / ef_maxf(l, 1e-30f);
-    float d0 = ef_fabsf(ef_v3_norm(h1[0]) * inv - 1.0f);
-    float d1 = ef_fabsf(ef_v3_norm(h1[4]) * inv - 1.0f);
-    return ef_maxf(d0, d1);
+    float ends = 0.0f;
+    ef_seg_speed_stats(b, len, &ends);
+    return ends;
 }
 
 /* A quintic's end speeds set to its arc length, the end data and the table's tangential
@@ -314,6 +295,7 @@ int ef_blend_arc_piece(const ef_table_t *g2, ef_vec3_t start, const ef_prim_t *p
     rc = ef_seg_g2_quintic(g2, &e0, &e1, &seg);
     if (rc != EF_OK)
         return rc;
+    ef_seg_g2_even(&e0, &e1, &seg, 0); /* a piece of a circle: nearly its arc-length form */
 
     /* Deviation from the true arc piece: EF_BA_PIECE_SAMPLES interior samples. */
     float dev = 0.0f;
@@ -405,7 +387,13 @@ static void ba_try(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in
     ef_prim_frame(v, out, lo, &gb);
     ef_endpoint_t e0 = ef_frame_endpoint(&ga), e1 = ef_frame_endpoint(&gb);
     int rc = ef_seg_g2_quintic(g2, &e0, &e1, &tr->seg);
-    float uneven = rc == EF_OK ? ba_even_ends(&e0, &e1, &tr->seg) : 0.0f;
+    float uneven = 0.0f;
+    if (rc == EF_OK) {
+        uneven = ba_even_ends(&e0, &e1, &tr->seg);
+        float l;
+        if (ef_seg_g2_even(&e0, &e1, &tr->seg, 0)) /* its end speeds are L: recheck */
+            uneven = ba_end_speed_dev(tr->seg.b, &l);
+    }
     tr->pa = ga.p;
     tr->pb = gb.p;
     tr->li = li;

@@ -260,6 +260,7 @@ static int sm_smooth_move(ef_smooth_t *s, ef_move_t *m, const ef_frame_t *f0, co
                                        : ef_seg_g1_cubic(s->cfg.g1, &e0, &e1, &seg);
     if (rc != EF_OK)
         return rc;
+    ef_seg_g2_even(&e0, &e1, &seg, 0); /* short near-circular pieces: x2 = 0 is more even */
     ef_move_t zero = {0};
     *m = zero;
     for (int i = 0; i <= seg.degree; i++)

@@ -131,3 +131,85 @@ int ef_seg_from_dofs(const ef_endpoint_t *e0, const ef_endpoint_t *e1, int degre
         seg_quintic(e0, e1, &nm, out);
     return EF_OK;
 }
+
+/* |f'(t)| of a quintic from its hodograph's 5 control points h (Bernstein form). */
+static float seg_speed(const ef_vec3_t *h, float t)
+{
+    float u = 1.0f - t, t2 = t * t, u2 = u * u;
+    ef_vec3_t r = ef_v3_scale(h[0], u2 * u2);
+    r = ef_v3_axpy(r, 4.0f * u2 * u * t, h[1]);
+    r = ef_v3_axpy(r, 6.0f * u2 * t2, h[2]);
+    r = ef_v3_axpy(r, 4.0f * u * t2 * t, h[3]);
+    r = ef_v3_axpy(r, t2 * t2, h[4]);
+    return ef_v3_norm(r);
+}
+
+/* A quintic's hodograph control points. */
+static void seg_hodo(const ef_vec3_t *b, ef_vec3_t *h)
+{
+    for (int i = 0; i < 5; i++)
+        h[i] = ef_v3_scale(ef_v3_sub(b[i + 1], b[i]), 5.0f);
+}
+
+/* Arc length from the hodograph, 16-node Gauss–Legendre. */
+static float seg_len(const ef_vec3_t *h)
+{
+    static const float gx[8] = {0.0950125098f, 0.2816035508f, 0.4580167777f, 0.6178762444f,
+                                0.7554044084f, 0.8656312024f, 0.9445750231f, 0.9894009350f};
+    static const float gw[8] = {0.1894506105f, 0.1826034150f, 0.1691565194f, 0.1495959888f,
+                                0.1246289713f, 0.0951585117f, 0.0622535239f, 0.0271524594f};
+    float l = 0.0f;
+    for (int k = 0; k < 16; k++)
+        l += 0.5f * gw[k >> 1] * seg_speed(h, 0.5f + ((k & 1) ? 0.5f : -0.5f) * gx[k >> 1]);
+    return l;
+}
+
+/* Length, then the speed samples (contract in ef_seg.h). */
+float ef_seg_speed_stats(const ef_vec3_t *b, float *len, float *dev_ends)
+{
+    ef_vec3_t h[5];
+    seg_hodo(b, h);
+    float l = seg_len(h);
+    *len = l;
+    float inv = 1.0f / ef_maxf(l, 1e-30f), dev = 0.0f;
+    for (int i = 0; i <= EF_SEG_SPEED_SAMPLES; i++) {
+        float sp = seg_speed(h, (float)i / (float)EF_SEG_SPEED_SAMPLES);
+        dev = ef_maxf(dev, ef_fabsf(sp * inv - 1.0f));
+    }
+    if (dev_ends)
+        *dev_ends = ef_maxf(ef_fabsf(ef_v3_norm(h[0]) * inv - 1.0f),
+                            ef_fabsf(ef_v3_norm(h[4]) * inv - 1.0f));
+    return dev;
+}
+
+/* Both candidates measured, the more even kept (contract in ef_seg.h). */
+int ef_seg_g2_even(const ef_endpoint_t *e0, const ef_endpoint_t *e1, ef_seg_t *seg, float *dev)
+{
+    if (!seg || seg->degree != 5 || !e0 || !e1) {
+        if (dev)
+            *dev = 0.0f;
+        return 0;
+    }
+    float len = 0.0f;
+    float d_tab = ef_seg_speed_stats(seg->b, &len, 0);
+    ef_seg_t c = *seg;
+    int ok = 1;
+    for (int it = 0; it < EF_SEG_EVEN_ITER; it++) {
+        float dof[4] = {len, 0.0f, len, 0.0f};
+        if (ok)
+            ok = ef_seg_from_dofs(e0, e1, 5, dof, &c) == EF_OK;
+        ef_vec3_t h[5];
+        seg_hodo(c.b, h);
+        len = seg_len(h);
+    }
+    float d_arc = ok ? ef_seg_speed_stats(c.b, &len, 0) : 3.4e38f;
+    int win = ok && d_arc < d_tab;
+    if (win) {
+        c.flags = seg->flags;
+        c.clamp = seg->clamp;
+        *seg = c;
+    }
+    if (dev)
+        *dev = win ? d_arc : d_tab;
+    return win;
+}

@@ -81,6 +81,49 @@ int ef_seg_g2_quintic(const ef_table_t *tbl, const ef_endpoint_t *e0, const ef_e
 int ef_seg_from_dofs(const ef_endpoint_t *e0, const ef_endpoint_t *e1, int degree, const float *dof,
                      ef_seg_t *out);
 
+/** Samples (intervals) ef_seg_speed_stats() takes of |f'(tau)|. */
+#ifndef EF_SEG_SPEED_SAMPLES
+#define EF_SEG_SPEED_SAMPLES 16
+#endif
+/** Passes of the arc-length choice in ef_seg_g2_even() (its x1 is its own length, which
+ *  moves with x1: each pass cuts the difference by about an order of magnitude). */
+#ifndef EF_SEG_EVEN_ITER
+#define EF_SEG_EVEN_ITER 3
+#endif
+
+/**
+ * @brief Arc length and evenness of a quintic's parametric speed.
+ * @param b        the 6 control points
+ * @param len      out: arc length L (16-node Gauss–Legendre)
+ * @param dev_ends out (may be NULL): max(| |f'(0)| / L - 1 |, | |f'(1)| / L - 1 |)
+ * @return the largest | |f'(tau)| / L - 1 | at tau = i / EF_SEG_SPEED_SAMPLES (ends
+ *         included): how far uniform stepping of tau strays from constant feed
+ */
+float ef_seg_speed_stats(const ef_vec3_t *b, float *len, float *dev_ends);
+
+/**
+ * @brief Replace a G2 quintic by the arc-length choice of its DOFs where that moves at a more
+ * even parametric speed. Constant instruction count for valid input.
+ *
+ * The arc-length choice is x1 = L, x2 = 0 at both ends (f' = L t, f'' = L^2 kappa n): the
+ * end data of the curve's arc-length parametrization scaled to [0, 1], so on a piece whose
+ * curvature changes little along it (CAM sections, arc pieces) the quintic is nearly that
+ * parametrization itself. The table's optimum is interpolated on a grid, and on such short
+ * near-circular pieces its x2 is off just enough that |f'| / L ripples by +-5e-4, which makes
+ * |f'''| / L^3 (the jerk of uniform stepping, the drives' segment mode) 5-7 times the
+ * curve's own third derivative (measured on a circle of 0.86 mm sections: 0.07 against 0.01
+ * / mm^2). Where the curvature changes much (a corner blend between lines) the table's
+ * optimum is the more even one and is kept. The winner is the one with the smaller
+ * ef_seg_speed_stats(); both are always computed. flags and clamp stay as the lookup set them.
+ *
+ * @param e0,e1  the end data seg was built for
+ * @param seg    a valid G2 quintic (degree 5); replaced in place when the choice wins
+ * @param dev    out (may be NULL): ef_seg_speed_stats() of the result
+ * @retval 1  the arc-length choice replaced seg
+ * @retval 0  seg kept (also: seg not a quintic, NULL pointers, or the choice not buildable)
+ */
+int ef_seg_g2_even(const ef_endpoint_t *e0, const ef_endpoint_t *e1, ef_seg_t *seg, float *dev);
+
 #ifdef __cplusplus
 }
 #endif
