@@ -11,7 +11,10 @@ then one table row: cycle times and their ratio, the feed-limited bound and each
 planner's efficiency against it, peak per-axis acceleration and jerk of both from second
 and third differences of the sampled positions, and the deviation from the programmed
 path (evenfeed's own summary figure, and the distance of each planner's setpoints from
-the programmed lines and arcs). A summary with the goals of issue 18 follows. It is a
+the programmed lines and arcs). A program may name a section between the comment lines
+"(bench section: WHAT)" and "(bench section end)" (the quantized circles name the circle):
+its cycle time (first to last moving period on its lines) and bound are reported on their
+own. A summary with the goals of issue 18 follows. It is a
 benchmark: it prints figures, and exits non-zero only when a run is broken (2), or 77
 when LinuxCNC is not installed.
 
@@ -151,6 +154,37 @@ class Arc:
         return out
 
 
+SECTION_BEGIN = re.compile(r"^\s*\(bench section: ([^)]*)\)\s*$")
+SECTION_END = re.compile(r"^\s*\(bench section end\)\s*$")
+
+
+def section_lines(path):
+    """The source lines (1-based) between a program's "(bench section: WHAT)" and "(bench
+    section end)" comment lines, and WHAT; (None, None) without such a section."""
+    with open(path, errors="replace") as f:
+        text = f.read().splitlines()
+    lo = hi = name = None
+    for i, ln in enumerate(text, 1):
+        m = SECTION_BEGIN.match(ln)
+        if m and lo is None:
+            lo, name = i, m.group(1).strip()
+        elif SECTION_END.match(ln) and lo is not None and hi is None:
+            hi = i
+    if lo is None or hi is None or hi <= lo + 1:
+        return None, None
+    return set(range(lo + 1, hi)), name
+
+
+def section_time(traj, lines):
+    """Time from the first to the last period in which the position changed on one of the
+    source lines (s)."""
+    pos = traj.pos
+    moving = [k for k in range(1, len(pos)) if pos[k] != pos[k - 1] and traj.on_lines(k, lines)]
+    if not moving:
+        raise Broken("no motion on the section's lines")
+    return (moving[-1] - moving[0] + 1) * DT
+
+
 class Program:
     """The programmed path from evenfeed's own G-code reader (`evenfeed gcode --json`):
     positions in mm whatever the program's units."""
@@ -181,17 +215,19 @@ class Program:
                 self.g53_lines.add(it["line"])
         if not self.prims:
             raise Broken("%s: no motion" % path)
+        self.section, self.section_name = section_lines(path)
         self.by_line = {}
         for i, pr in enumerate(self.prims):
             self.by_line.setdefault(pr.line, i)
         self.start = self.prims[0].a
 
-    def bound(self):
+    def bound(self, lines=None):
         """Feed-limited cycle time: every move at min(F, path cap, axis-limited speed along
-        it), infinite acceleration; rapids at the path cap (VMAX), as both planners do."""
+        it), infinite acceleration; rapids at the path cap (VMAX), as both planners do. Only
+        the moves of the given source lines when lines is a set."""
         total = 0.0
         for pr in self.prims:
-            if pr.length == 0:
+            if pr.length == 0 or (lines is not None and pr.line not in lines):
                 continue
             ts = pr.tangents()
             axis = min((VMAX / max(abs(c) for c in t) for t in ts), default=VMAX)
@@ -445,6 +481,11 @@ def compare(args, prog, cache_dir):
     row["ef"]["eff"] = row["bound"] / row["ef"]["cycle"]
     row["lc"]["eff"] = row["bound"] / row["lc"]["cycle"]
     row["end_gap"] = math.dist(row["ef"]["end"], row["lc"]["end"])
+    if program.section:
+        sb = program.bound(program.section)
+        row["section"] = {"name": program.section_name, "bound": sb,
+                          "ef": section_time(ef_traj, program.section),
+                          "lc": section_time(lc_traj, program.section)}
     return row
 
 
@@ -498,10 +539,21 @@ def summary(rows, jerk):
     print("  median ratio <= 0.90: %.2f: %s" % (med, verdict(med <= 0.90)))
     circles = [r for r in rows if r["program"].startswith("circle_q")]
     if circles:
-        worst_c = max(circles, key=lambda r: 1 / r["ef"]["eff"])
-        print("  quantized circle within 1.2x its feed-limited bound: %s: %s"
-              % (", ".join("%s %.2fx" % (r["program"], 1 / r["ef"]["eff"]) for r in circles),
-                 verdict(1 / worst_c["ef"]["eff"] <= 1.2)))
+        # the circle itself (its G1 lines, from rest to rest) decides; the whole program adds
+        # a rapid, a plunge and a retract, each from rest to rest (under J a 1 mm move takes
+        # (32 mm / J)^(1/3) = 0.12 s against 0.01-0.02 s at the feed)
+        secs = [r for r in circles if "section" in r]
+        if secs:
+            worst_s = max(r["section"]["ef"] / r["section"]["bound"] for r in secs)
+            print("  quantized circle within 1.2x its feed-limited bound: the circle (its G1 "
+                  "lines, rest to rest): %s: %s"
+                  % (", ".join("%s %.2fx (LinuxCNC %.2fx)" % (
+                      r["program"], r["section"]["ef"] / r["section"]["bound"],
+                      r["section"]["lc"] / r["section"]["bound"]) for r in secs),
+                     verdict(worst_s <= 1.2)))
+        print("    the whole program (with its rapid, plunge and retract): %s"
+              % ", ".join("%s %.2fx (LinuxCNC %.2fx)" % (r["program"], 1 / r["ef"]["eff"],
+                                                         1 / r["lc"]["eff"]) for r in circles))
     # jerk: 1 ms differences within J + floor everywhere proves it; a JERK_BASE-period
     # difference above J + its floor anywhere disproves it (it is an average of the jerk)
     proven = all(r["ef"]["j"] <= jerk + r["ef"]["floor"]["j"] for r in rows)

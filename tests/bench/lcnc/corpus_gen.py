@@ -46,6 +46,11 @@ class Prog:
         self.lines.append(text)
         self.last = None
 
+    def mark(self, text):
+        """A comment line naming a section compare.py measures on its own (SECTION_BEGIN /
+        SECTION_END there); modal state is unchanged."""
+        self.lines.append("(%s)" % text)
+
     def words(self, **kv):
         out = []
         for k in ("X", "Y", "Z", "I", "J", "K", "R"):
@@ -99,9 +104,11 @@ def circle_inch():
     n = int(round(2 * math.pi * r * 25.4 / 0.016))
     p.move("G0", X=r, Y=0, Z=0.04)
     p.move("G1", Z=0, f=120)
+    p.mark("bench section: the circle")
     for i in range(1, n + 1):
         a = 2 * math.pi * i / n
         p.move("G1", X=r * math.cos(a), Y=r * math.sin(a))
+    p.mark("bench section end")
     p.move("G0", Z=0.04)
     return p
 
@@ -114,9 +121,11 @@ def circle_mm():
     n = int(round(2 * math.pi * r / 0.016))
     p.move("G0", X=r, Y=0, Z=1)
     p.move("G1", Z=0, f=3000)
+    p.mark("bench section: the circle")
     for i in range(1, n + 1):
         a = 2 * math.pi * i / n
         p.move("G1", X=r * math.cos(a), Y=r * math.sin(a))
+    p.mark("bench section end")
     p.move("G0", Z=1)
     return p
 
