@@ -178,8 +178,35 @@ static int cmp_d(const void *a, const void *b)
 #define NCORNER 30000
 static double ratios[NCORNER], lg_ratio[NCORNER];
 
+/* |f'(0)| / L - 1 and |f'(1)| / L - 1 of a quintic in double, the larger in magnitude (L by
+ * 4000 midpoint samples of the hodograph). */
+static double end_speed_dev(const ef_vec3_t *b)
+{
+    double h[5][3];
+    for (int i = 0; i < 5; i++) {
+        h[i][0] = 5.0 * ((double)b[i + 1].x - b[i].x);
+        h[i][1] = 5.0 * ((double)b[i + 1].y - b[i].y);
+        h[i][2] = 5.0 * ((double)b[i + 1].z - b[i].z);
+    }
+    double L = 0;
+    for (int k = 0; k < 4000; k++) {
+        double t = (k + 0.5) / 4000, u = 1 - t;
+        double w[5] = {u * u * u * u, 4 * u * u * u * t, 6 * u * u * t * t, 4 * u * t * t * t,
+                       t * t * t * t};
+        double r[3] = {0, 0, 0};
+        for (int i = 0; i < 5; i++)
+            for (int c = 0; c < 3; c++)
+                r[c] += w[i] * h[i][c];
+        L += sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]) / 4000;
+    }
+    double s0 = sqrt(h[0][0] * h[0][0] + h[0][1] * h[0][1] + h[0][2] * h[0][2]);
+    double s1 = sqrt(h[4][0] * h[4][0] + h[4][1] * h[4][1] + h[4][2] * h[4][2]);
+    return fmax(fabs(s0 / L - 1), fabs(s1 / L - 1));
+}
+
 static void test_random_corners(void)
 {
+    double max_end_speed = 0, max_end_speed_hp = 0;
     unsigned long long rs = 2026;
     int n_blend = 0, n_clamped = 0, n_straight = 0, n_stop = 0, n_rev = 0, n_near_rev_ok = 0;
     double max_ratio = 0, max_ratio_unclamped = 0, max_pred_err = 0, max_vt_err = 0;
@@ -288,6 +315,23 @@ static void test_random_corners(void)
             lg_ratio[nlg++] =
                 L * bl.gain / (tol - 4.0 * FLT_EPSILON * scale); /* tol less the margin */
         }
+        /* End speeds equal the arc length (uniform stepping's feed is continuous at the
+         * junctions with the lines), up to the control points' rounding (2 ulp of the
+         * coordinates in |b1 - b0| = L / 5) and, at hairpins beyond 175 degrees, the
+         * quadrature of L (|f'| dips deep at the middle there: up to 1 %, at blends that are
+         * jerk-bound to a crawl). */
+        {
+            double es = end_speed_dev(bl.seg.b);
+            double es_slack = 5.0 * 2.0 * FLT_EPSILON * fmax(scale, L) / fmax(L, 1e-30);
+            int hairpin = th > 3.05;
+            if (es_slack < 1e-4) {
+                if (hairpin)
+                    max_end_speed_hp = fmax(max_end_speed_hp, es);
+                else
+                    max_end_speed = fmax(max_end_speed, es);
+            }
+            EF_CHECK(es <= (hairpin ? 1.5e-2 : 1e-4) + es_slack);
+        }
         /* The programmed corner's farthest point is v, and the curve's nearest point to v is
          * its midpoint: measured |v - curve| = |f(1/2) - v| = predicted dev. */
         max_pred_err = fmax(max_pred_err, (fabs(m.v_dist - bl.dev) - slack) / fmax(bl.dev, 1e-30));
@@ -357,6 +401,9 @@ static void test_random_corners(void)
         "ends, all blends: position err/L beyond rounding %.3g; unit tangent err and curvature*L "
         "over max(1, 1e3 x rounding/L): %.3g, %.3g\n",
         max_pos_err, max_tan_err, max_curv);
+    printf("end speed / L - 1 where rounding is below 1e-4: max %.3g (turns above 3.05 rad: "
+           "%.3g)\n",
+           max_end_speed, max_end_speed_hp);
     EF_CHECK(n_blend > 12000);
     EF_CHECK(n_near_rev_ok > 100);
 }

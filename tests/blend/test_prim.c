@@ -929,7 +929,7 @@ static void corner_case(stats_t *st, unsigned long long *seed, int in_arc, int o
                     dnorm(kv));
     }
     /* end speeds against the arc length (what uniform stepping's feed is at the ends, in
-     * units of the planned speed): within EF_BA_END_SPEED_REL (2e-3) of 1, ef_blend_arc.c,
+     * units of the planned speed): within EF_SEG_END_SPEED_REL (2e-3) of 1, ef_seg.h,
      * plus the quadrature's error and float32 rounding of the control points at the corner's
      * coordinates (2 ulp of |b1 - b0| = x1 / 5) */
     {
@@ -1283,13 +1283,16 @@ static void test_seg_even(void)
         }
         ev = tab;
         float dev = -1;
-        int won = ef_seg_g2_even(&e0, &e1, &ev, &dev);
+        float dend = -1;
+        int won = ef_seg_g2_even(&e0, &e1, &ev, &dev, &dend) == EF_SEG_EVEN_ARC;
         double kt, ke;
         double rt = speed_ripple_d(tab.b, &kt), re = speed_ripple_d(ev.b, &ke);
         n++;
         wins += won;
         EF_CHECK(re <= rt + 1e-6);     /* never less even */
         EF_CHECK(dev >= 0 && dev < 1); /* reported */
+        EF_CHECK(dend >= 0 && dend <= EF_SEG_END_SPEED_REL);
+        EF_CHECK(dend <= dev);
         EF_CHECK_EQ(ev.degree, 5);
         /* still interpolates the ends */
         EF_CHECK(memcmp(&ev.b[0], &e0.p, sizeof e0.p) == 0);
@@ -1313,15 +1316,15 @@ static void test_seg_even(void)
     ef_seg_t t0, t1;
     EF_CHECK_EQ(ef_seg_g2_quintic(G2, &c0, &c1, &t0), EF_OK);
     t1 = t0;
-    EF_CHECK_EQ(ef_seg_g2_even(&c0, &c1, &t1, NULL), 0);
+    EF_CHECK_EQ(ef_seg_g2_even(&c0, &c1, &t1, NULL, NULL), EF_SEG_EVEN_TABLE);
     EF_CHECK(memcmp(&t0, &t1, sizeof t0) == 0);
     /* not a quintic, NULL: nothing changes */
     ef_seg_t cub;
     memset(&cub, 0, sizeof cub);
     cub.degree = 3;
-    EF_CHECK_EQ(ef_seg_g2_even(&c0, &c1, &cub, NULL), 0);
-    EF_CHECK_EQ(ef_seg_g2_even(NULL, &c1, &t1, NULL), 0);
-    EF_CHECK_EQ(ef_seg_g2_even(&c0, &c1, NULL, NULL), 0);
+    EF_CHECK_EQ(ef_seg_g2_even(&c0, &c1, &cub, NULL, NULL), EF_SEG_EVEN_TABLE);
+    EF_CHECK_EQ(ef_seg_g2_even(NULL, &c1, &t1, NULL, NULL), EF_SEG_EVEN_TABLE);
+    EF_CHECK_EQ(ef_seg_g2_even(&c0, &c1, NULL, NULL, NULL), EF_SEG_EVEN_TABLE);
 }
 
 int main(int argc, char **argv)

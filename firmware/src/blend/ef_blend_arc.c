@@ -40,21 +40,14 @@
 #define EF_BA_KAPPA_REL   1e-4f
 /* First trim estimate for a tangent join: deviation ~ dk L^2 / EF_BA_TANGENT_GAIN. */
 #define EF_BA_TANGENT_GAIN 1.0f
-/* Largest relative difference between a blend's parametric speed at either end, |f'(0)| or
- * |f'(1)|, and its mean, the arc length L (ba_end_speed_dev()). A stepper that steps tau
- * uniformly by the time law (EF_STEP_UNIFORM, the drives' segment mode) moves at
- * v |f'(tau)| / L, so at a junction with a line (|f'| / L = 1) the feed jumps by v times this
- * difference in one servo period. The table's optimum for a lopsided corner (one side trimmed
- * far more than the other, or a tight arc on one side) can be far off: 0.4 and 0.9 were seen,
- * and at 9 mm/s the jump was 1 mm/s in 1 ms, 1000 mm/s^2 (tests/fuzz, issue 18). Such a
- * trial's end speeds are set to L (ba_even_ends()); the corners of the sample and benchmark
- * programs are below 1e-3 and keep the table's curve. */
-#ifndef EF_BA_END_SPEED_REL
-#define EF_BA_END_SPEED_REL 2e-3f
-#endif
-/* Passes of ba_even_ends() (L depends weakly on the end speeds: each pass cuts the
- * difference by about an order of magnitude). */
-#define EF_BA_EVEN_ITER 3
+/* A blend's end speeds |f'(0)|, |f'(1)| are set to its arc length L by ef_seg_g2_even(): a
+ * stepper that steps tau uniformly by the time law (EF_STEP_UNIFORM, the drives' segment
+ * mode) moves at v |f'(tau)| / L, so at a junction with a line (|f'| / L = 1) the feed would
+ * jump by v times the difference in one servo period. The table's optimum for a lopsided
+ * corner (one side trimmed far more than the other, or a tight arc on one side) can be far
+ * off: 0.4 and 0.9 were seen, and at 9 mm/s the jump was 1 mm/s in 1 ms, 1000 mm/s^2
+ * (tests/fuzz, issue 18). A trial whose ends ef_seg_g2_even() could not bring within
+ * EF_SEG_END_SPEED_REL is not a blend. */
 
 /* Finite test without libm (NaN fails x == x, inf fails x - x == 0). */
 static int ba_finite(float x)
@@ -123,39 +116,6 @@ static void ba_d12(const ef_vec3_t *h1, const ef_vec3_t *h2, float t, ef_vec3_t 
     r = ef_v3_axpy(r, 3.0f * u2 * t, h2[1]);
     r = ef_v3_axpy(r, 3.0f * u * t2, h2[2]);
     *d2 = ef_v3_axpy(r, t2 * t, h2[3]);
-}
-
-/* Largest difference of a quintic's end speeds |f'(0)|, |f'(1)| from its arc length,
- * relative to it; the length in *len (16-point Gauss–Legendre: 6 points were off by up to
- * 0.6 % on lopsided blends whose speed varies by tens of per cent inside,
- * tests/blend/test_prim.c). */
-static float ba_end_speed_dev(const ef_vec3_t *b, float *len)
-{
-    float ends = 0.0f;
-    ef_seg_speed_stats(b, len, &ends);
-    return ends;
-}
-
-/* A quintic's end speeds set to its arc length, the end data and the table's tangential
- * second-derivative DOFs kept, when they differ from it by more than EF_BA_END_SPEED_REL;
- * a fixed EF_BA_EVEN_ITER passes, since L moves with them. The curve stays G2 with its
- * neighbours (the curvature terms follow the speeds, ef_seg_from_dofs()). Returns the
- * remaining difference. */
-static float ba_even_ends(const ef_endpoint_t *e0, const ef_endpoint_t *e1, ef_seg_t *seg)
-{
-    float len = 0.0f;
-    float dev = ba_end_speed_dev(seg->b, &len);
-    for (int it = 0; it < EF_BA_EVEN_ITER && dev > EF_BA_END_SPEED_REL; it++) {
-        float dof[4] = {len, seg->dof[1], len, seg->dof[3]};
-        ef_seg_t s2;
-        if (ef_seg_from_dofs(e0, e1, 5, dof, &s2) != EF_OK)
-            break;
-        s2.flags = seg->flags;
-        s2.clamp = seg->clamp;
-        *seg = s2;
-        dev = ba_end_speed_dev(seg->b, &len);
-    }
-    return dev;
 }
 
 /* sin x for |x| <= pi/4 (fdlibm's float kernel, about 1 ulp). */
@@ -295,7 +255,7 @@ int ef_blend_arc_piece(const ef_table_t *g2, ef_vec3_t start, const ef_prim_t *p
     rc = ef_seg_g2_quintic(g2, &e0, &e1, &seg);
     if (rc != EF_OK)
         return rc;
-    ef_seg_g2_even(&e0, &e1, &seg, 0); /* a piece of a circle: nearly its arc-length form */
+    ef_seg_g2_even(&e0, &e1, &seg, 0, 0); /* a piece of a circle: nearly its arc-length form */
 
     /* Deviation from the true arc piece: EF_BA_PIECE_SAMPLES interior samples. */
     float dev = 0.0f;
@@ -388,12 +348,8 @@ static void ba_try(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in
     ef_endpoint_t e0 = ef_frame_endpoint(&ga), e1 = ef_frame_endpoint(&gb);
     int rc = ef_seg_g2_quintic(g2, &e0, &e1, &tr->seg);
     float uneven = 0.0f;
-    if (rc == EF_OK) {
-        uneven = ba_even_ends(&e0, &e1, &tr->seg);
-        float l;
-        if (ef_seg_g2_even(&e0, &e1, &tr->seg, 0)) /* its end speeds are L: recheck */
-            uneven = ba_end_speed_dev(tr->seg.b, &l);
-    }
+    if (rc == EF_OK)
+        ef_seg_g2_even(&e0, &e1, &tr->seg, 0, &uneven);
     tr->pa = ga.p;
     tr->pb = gb.p;
     tr->li = li;
@@ -457,10 +413,10 @@ static void ba_try(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in
     /* A configuration whose tangent angles the table had to clamp (a lopsided hairpin: a
      * tangent beyond 90 degrees from the chord) gives a poor curve; such a trial does not
      * count. (A clamped curvature, a tight arc, is fine: the curve still meets the end data
-     * exactly and its deviation is measured.) Nor does one whose end speeds ba_even_ends()
-     * could not bring within EF_BA_END_SPEED_REL of its mean. */
+     * exactly and its deviation is measured.) Nor does one whose end speeds ef_seg_g2_even()
+     * could not bring within EF_SEG_END_SPEED_REL of its mean. */
     uint32_t bad = EF_LOOKUP_CLAMP_ALPHA | EF_LOOKUP_CLAMP_BETA;
-    int even = uneven <= EF_BA_END_SPEED_REL;
+    int even = uneven <= EF_SEG_END_SPEED_REL;
     tr->ok = (rc == EF_OK) & (tr->seg.degree == 5) & ba_finite(tr->dev) &
              ((tr->seg.clamp & bad) == 0u) & even;
 }

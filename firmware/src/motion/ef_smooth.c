@@ -260,7 +260,8 @@ static int sm_smooth_move(ef_smooth_t *s, ef_move_t *m, const ef_frame_t *f0, co
                                        : ef_seg_g1_cubic(s->cfg.g1, &e0, &e1, &seg);
     if (rc != EF_OK)
         return rc;
-    ef_seg_g2_even(&e0, &e1, &seg, 0); /* short near-circular pieces: x2 = 0 is more even */
+    if (seg.degree == 5) /* even ends; short near-circular pieces: x2 = 0 is more even */
+        ef_seg_g2_even(&e0, &e1, &seg, 0, 0);
     ef_move_t zero = {0};
     *m = zero;
     for (int i = 0; i <= seg.degree; i++)
@@ -854,6 +855,10 @@ static int sm_next_move(ef_smooth_t *s, ef_move_t *m)
             } else {
                 if (h->trim_start > 0.0f)
                     a = h->blend_in_end;
+                /* exactly where the blend starts: its frame point on a long line is rounded
+                 * at the line's scale, not at its end's (a fuzzed gap of 4e-6) */
+                if (h->end_kind == EF_V_BLEND && h->blend.seg.degree == 5)
+                    b = h->blend.seg.b[0];
                 if (ef_v3_norm(ef_v3_sub(b, a)) < EF_MIN_CHORD) {
                     /* Both blends took the whole line: nothing straight is left. */
                     return sm_skip_body(s, h, m);

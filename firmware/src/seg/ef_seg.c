@@ -151,17 +151,27 @@ static void seg_hodo(const ef_vec3_t *b, ef_vec3_t *h)
         h[i] = ef_v3_scale(ef_v3_sub(b[i + 1], b[i]), 5.0f);
 }
 
-/* Arc length from the hodograph, 16-node Gauss–Legendre. */
-static float seg_len(const ef_vec3_t *h)
+/* Arc length from the hodograph, 16-node Gauss–Legendre; sym: |f'| is symmetric about
+ * tau = 1/2, so the 8 nodes below it, doubled, give the same sum. */
+static float seg_len(const ef_vec3_t *h, int sym)
 {
     static const float gx[8] = {0.0950125098f, 0.2816035508f, 0.4580167777f, 0.6178762444f,
                                 0.7554044084f, 0.8656312024f, 0.9445750231f, 0.9894009350f};
     static const float gw[8] = {0.1894506105f, 0.1826034150f, 0.1691565194f, 0.1495959888f,
                                 0.1246289713f, 0.0951585117f, 0.0622535239f, 0.0271524594f};
     float l = 0.0f;
-    for (int k = 0; k < 16; k++)
+    int step = sym ? 2 : 1;
+    for (int k = 0; k < 16; k += step)
         l += 0.5f * gw[k >> 1] * seg_speed(h, 0.5f + ((k & 1) ? 0.5f : -0.5f) * gx[k >> 1]);
-    return l;
+    return sym ? 2.0f * l : l;
+}
+
+/* Arc length of a quintic (contract in ef_seg.h). */
+float ef_seg_length(const ef_vec3_t *b, int sym)
+{
+    ef_vec3_t h[5];
+    seg_hodo(b, h);
+    return seg_len(h, sym);
 }
 
 /* Length, then the speed samples (contract in ef_seg.h). */
@@ -169,7 +179,7 @@ float ef_seg_speed_stats(const ef_vec3_t *b, float *len, float *dev_ends)
 {
     ef_vec3_t h[5];
     seg_hodo(b, h);
-    float l = seg_len(h);
+    float l = seg_len(h, 0);
     *len = l;
     float inv = 1.0f / ef_maxf(l, 1e-30f), dev = 0.0f;
     for (int i = 0; i <= EF_SEG_SPEED_SAMPLES; i++) {
@@ -182,34 +192,70 @@ float ef_seg_speed_stats(const ef_vec3_t *b, float *len, float *dev_ends)
     return dev;
 }
 
-/* Both candidates measured, the more even kept (contract in ef_seg.h). */
-int ef_seg_g2_even(const ef_endpoint_t *e0, const ef_endpoint_t *e1, ef_seg_t *seg, float *dev)
+/* A quintic with end speeds x1 = its own length (x1 = L solved by ef_seg_even_next() over
+ * EF_SEG_EVEN_ITER curves, from len, the length of a neighbouring candidate), tangential
+ * DOFs x20, x21. 0 when it cannot be built. */
+static int seg_even_ends(const ef_endpoint_t *e0, const ef_endpoint_t *e1, float len, float x20,
+                         float x21, ef_seg_t *c)
+{
+    int ok = 1;
+    float xa = len, ga = 0.0f, x = len;
+    for (int it = 0; it < EF_SEG_EVEN_ITER; it++) {
+        float dof[4] = {x, x20, x, x21};
+        if (ok)
+            ok = ef_seg_from_dofs(e0, e1, 5, dof, c) == EF_OK;
+        ef_vec3_t h[5];
+        seg_hodo(c->b, h);
+        float g = seg_len(h, 0) - x;
+        float xn = it == 0 ? x + g : ef_seg_even_next(xa, ga, x, g);
+        xa = x;
+        ga = g;
+        x = ef_selectf(xn > 0.0f, xn, x); /* the last curve built is the result */
+    }
+    return ok;
+}
+
+/* Three candidates measured, the most even with even ends kept (contract in ef_seg.h). */
+int ef_seg_g2_even(const ef_endpoint_t *e0, const ef_endpoint_t *e1, ef_seg_t *seg, float *dev,
+                   float *dev_ends)
 {
     if (!seg || seg->degree != 5 || !e0 || !e1) {
         if (dev)
             *dev = 0.0f;
-        return 0;
+        if (dev_ends)
+            *dev_ends = 0.0f;
+        return EF_SEG_EVEN_TABLE;
     }
-    float len = 0.0f;
-    float d_tab = ef_seg_speed_stats(seg->b, &len, 0);
-    ef_seg_t c = *seg;
-    int ok = 1;
-    for (int it = 0; it < EF_SEG_EVEN_ITER; it++) {
-        float dof[4] = {len, 0.0f, len, 0.0f};
-        if (ok)
-            ok = ef_seg_from_dofs(e0, e1, 5, dof, &c) == EF_OK;
-        ef_vec3_t h[5];
-        seg_hodo(c.b, h);
-        len = seg_len(h);
+    float len = 0.0f, end_t = 0.0f, end_a = 0.0f, end_b = 0.0f;
+    float d_t = ef_seg_speed_stats(seg->b, &len, &end_t);
+    ef_seg_t a = *seg, b = *seg;
+    int ok_a = seg_even_ends(e0, e1, len, seg->dof[1], seg->dof[3], &a);
+    int ok_b = seg_even_ends(e0, e1, len, 0.0f, 0.0f, &b);
+    float d_a = ok_a ? ef_seg_speed_stats(a.b, &len, &end_a) : 3.4e38f;
+    float d_b = ok_b ? ef_seg_speed_stats(b.b, &len, &end_b) : 3.4e38f;
+    int pick = EF_SEG_EVEN_TABLE;
+    float d = end_t <= EF_SEG_END_SPEED_REL ? d_t : 3.4e38f, e = end_t;
+    if (d_a < d) {
+        pick = EF_SEG_EVEN_ENDS;
+        d = d_a;
+        e = end_a;
     }
-    float d_arc = ok ? ef_seg_speed_stats(c.b, &len, 0) : 3.4e38f;
-    int win = ok && d_arc < d_tab;
-    if (win) {
-        c.flags = seg->flags;
-        c.clamp = seg->clamp;
-        *seg = c;
+    if (d_b < d) {
+        pick = EF_SEG_EVEN_ARC;
+        d = d_b;
+        e = end_b;
+    }
+    if (pick == EF_SEG_EVEN_TABLE) {
+        d = d_t; /* also when nothing could be built */
+    } else {
+        ef_seg_t *w = pick == EF_SEG_EVEN_ARC ? &b : &a;
+        w->flags = seg->flags;
+        w->clamp = seg->clamp;
+        *seg = *w;
     }
     if (dev)
-        *dev = win ? d_arc : d_tab;
-    return win;
+        *dev = d;
+    if (dev_ends)
+        *dev_ends = e;
+    return pick;
 }

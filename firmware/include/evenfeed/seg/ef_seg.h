@@ -85,11 +85,35 @@ int ef_seg_from_dofs(const ef_endpoint_t *e0, const ef_endpoint_t *e1, int degre
 #ifndef EF_SEG_SPEED_SAMPLES
 #define EF_SEG_SPEED_SAMPLES 16
 #endif
-/** Passes of the arc-length choice in ef_seg_g2_even() (its x1 is its own length, which
- *  moves with x1: each pass cuts the difference by about an order of magnitude). */
+/** Curves ef_seg_g2_even() builds per candidate with x1 = L, and ef_blend_corner() per
+ *  corner: L moves with x1, so x1 = L is solved for by ef_seg_even_next() (a fixed-point
+ *  step, then secant steps; fixed-point steps alone left 1.3 % at hairpins). */
 #ifndef EF_SEG_EVEN_ITER
-#define EF_SEG_EVEN_ITER 3
+#define EF_SEG_EVEN_ITER 5
 #endif
+
+/**
+ * @brief Next end speed x1 in the search for x1 = L(x1): the secant step through (xa, ga) and
+ * (xb, gb) of g(x) = L(x) - x, or the fixed-point step xb + gb where the secant is flat or
+ * would leave [xb / 2, 2 xb].
+ */
+static inline float ef_seg_even_next(float xa, float ga, float xb, float gb)
+{
+    float den = gb - ga;
+    int usable = ef_fabsf(den) > 1e-30f;
+    float sec = xb - gb * (xb - xa) / ef_selectf(usable, den, 1.0f);
+    int inside = usable & (sec >= 0.5f * xb) & (sec <= 2.0f * xb);
+    return ef_selectf(inside, sec, xb + gb);
+}
+
+/**
+ * @brief Arc length of a quintic, 16-node Gauss–Legendre on |f'| (6 nodes were off by up to
+ * 0.6 % on lopsided blends whose speed varies by tens of per cent inside).
+ * @param b    the 6 control points
+ * @param sym  nonzero when |f'(tau)| = |f'(1 - tau)| (a symmetric corner blend): half the
+ *             evaluations, the same result
+ */
+float ef_seg_length(const ef_vec3_t *b, int sym);
 
 /**
  * @brief Arc length and evenness of a quintic's parametric speed.
@@ -101,28 +125,53 @@ int ef_seg_from_dofs(const ef_endpoint_t *e0, const ef_endpoint_t *e1, int degre
  */
 float ef_seg_speed_stats(const ef_vec3_t *b, float *len, float *dev_ends);
 
+/** Largest difference of a curve's end speeds |f'(0)|, |f'(1)| from its arc length L,
+ *  relative to L, that ef_seg_g2_even() keeps. Uniform stepping of tau (the drives' segment
+ *  mode) moves at v |f'(tau)| / L, so at a junction the feed steps by v times the difference
+ *  of the two curves' ratios within one period: at 100 mm/s and 1 ms, 2e-3 is 200 mm/s^2. */
+#ifndef EF_SEG_END_SPEED_REL
+#define EF_SEG_END_SPEED_REL 2e-3f
+#endif
+
+/** ef_seg_g2_even() results: which DOFs the segment has. */
+enum {
+    EF_SEG_EVEN_TABLE = 0, /**< the table's, unchanged */
+    EF_SEG_EVEN_ENDS = 1,  /**< the table's x2, x1 = L at both ends */
+    EF_SEG_EVEN_ARC = 2,   /**< the arc-length choice: x1 = L, x2 = 0 */
+};
+
 /**
- * @brief Replace a G2 quintic by the arc-length choice of its DOFs where that moves at a more
- * even parametric speed. Constant instruction count for valid input.
+ * @brief Give a G2 quintic end speeds equal to its arc length and, of the DOFs that do, those
+ * with the most even parametric speed. Constant instruction count for valid input.
  *
- * The arc-length choice is x1 = L, x2 = 0 at both ends (f' = L t, f'' = L^2 kappa n): the
- * end data of the curve's arc-length parametrization scaled to [0, 1], so on a piece whose
- * curvature changes little along it (CAM sections, arc pieces) the quintic is nearly that
- * parametrization itself. The table's optimum is interpolated on a grid, and on such short
- * near-circular pieces its x2 is off just enough that |f'| / L ripples by +-5e-4, which makes
- * |f'''| / L^3 (the jerk of uniform stepping, the drives' segment mode) 5-7 times the
- * curve's own third derivative (measured on a circle of 0.86 mm sections: 0.07 against 0.01
- * / mm^2). Where the curvature changes much (a corner blend between lines) the table's
- * optimum is the more even one and is kept. The winner is the one with the smaller
- * ef_seg_speed_stats(); both are always computed. flags and clamp stay as the lookup set them.
+ * Three candidates, each measured by ef_seg_speed_stats(): the table's DOFs (only while its
+ * end speeds are within ::EF_SEG_END_SPEED_REL of L); the table's x2 with x1 = L; and the
+ * arc-length choice x1 = L, x2 = 0 (f' = L t, f'' = L^2 kappa n: the end data of the
+ * curve's arc-length parametrization scaled to [0, 1]). The smallest largest deviation of
+ * |f'| / L from 1 wins. Why:
+ * - the table's optimum is interpolated on a grid; on short near-circular pieces (CAM
+ *   sections, arc pieces) its x2 is off just enough that |f'| / L ripples by +-5e-4,
+ *   which makes |f'''| / L^3 (the jerk of uniform stepping) 5-7 times the curve's own
+ *   third derivative (a circle of 0.86 mm sections: 0.07 against 0.01 / mm^2); there the
+ *   arc-length choice is nearly the arc-length parametrization itself;
+ * - a lopsided corner (one side trimmed far more than the other, a tight arc on one side)
+ *   or a tiny arc piece can have table end speeds far from L (0.4, 0.87 and 0.94 were seen
+ *   by the fuzzer: a step in the feed at each junction);
+ * - where the curvature changes much along the curve (a corner between lines) the table's
+ *   optimum is the most even and is kept.
+ * x1 = L is a fixed point (L moves with x1): EF_SEG_EVEN_ITER passes. flags and clamp stay
+ * as the lookup set them.
  *
- * @param e0,e1  the end data seg was built for
- * @param seg    a valid G2 quintic (degree 5); replaced in place when the choice wins
- * @param dev    out (may be NULL): ef_seg_speed_stats() of the result
- * @retval 1  the arc-length choice replaced seg
- * @retval 0  seg kept (also: seg not a quintic, NULL pointers, or the choice not buildable)
+ * @param e0,e1    the end data seg was built for
+ * @param seg      a valid G2 quintic (degree 5); replaced in place by the winner
+ * @param dev      out (may be NULL): the winner's largest | |f'| / L - 1 |
+ * @param dev_ends out (may be NULL): the winner's end speed difference (ef_seg_speed_stats())
+ * @return which DOFs seg has now: EF_SEG_EVEN_TABLE (also for NULL pointers, a seg that is
+ *         not a quintic, or when no candidate could be built), EF_SEG_EVEN_ENDS or
+ *         EF_SEG_EVEN_ARC
  */
-int ef_seg_g2_even(const ef_endpoint_t *e0, const ef_endpoint_t *e1, ef_seg_t *seg, float *dev);
+int ef_seg_g2_even(const ef_endpoint_t *e0, const ef_endpoint_t *e1, ef_seg_t *seg, float *dev,
+                   float *dev_ends);
 
 #ifdef __cplusplus
 }
