@@ -775,6 +775,65 @@ static void test_curved_share(void)
     EF_CHECK_EQ(checked, 3);
 }
 
+/* A move of degree 3 with the given control points, measured. */
+static ef_move_t mk_cubic(ef_vec3_t b0, ef_vec3_t b1, ef_vec3_t b2, ef_vec3_t b3, float feed)
+{
+    ef_move_t m;
+    memset(&m, 0, sizeof m);
+    m.degree = 3;
+    m.kind = EF_MOVE_SMOOTH;
+    m.b[0] = b0;
+    m.b[1] = b1;
+    m.b[2] = b2;
+    m.b[3] = b3;
+    m.feed = feed;
+    EF_CHECK_EQ(ef_move_measure(&m), EF_OK);
+    return m;
+}
+
+/* Curvature jump at a junction (G1 cubic sections): the entry speed of the move after it is
+ * capped so that the acceleration step dk_i v^2 is one the jerk limit makes in
+ * EF_PLAN_JUMP_T (the fuzzed case: 1.2 J at 19 mm/s across a jump of 0.2 / mm); a G2
+ * junction (a line into a cubic that starts straight) is not capped; without a jerk limit
+ * nothing is. */
+static void test_curvature_jump(void)
+{
+    const double S = EF_PLAN_LIMIT_SHARE;
+    /* a line along x, then a cubic leaving along x that bends (start curvature 2 b2y / (3
+     * (b1x)^2 ... computed below in double), then a long line */
+    ef_vec3_t p0 = ef_v3(0, 0, 0), p1 = ef_v3(20, 0, 0);
+    ef_move_t l1 = mk_line(p0, p1, 100, 0);
+    ef_move_t bend = mk_cubic(p1, ef_v3(21, 0, 0), ef_v3(22, 0.2f, 0), ef_v3(23, 0.6f, 0), 100);
+    ef_move_t flat = mk_cubic(p1, ef_v3(21, 0, 0), ef_v3(22, 0, 0), ef_v3(23, 0.6f, 0), 100);
+    /* start curvature vector of the bent cubic: f' = 3 (b1 - b0), f'' = 6 (b2 - 2 b1 + b0) */
+    double d1x = 3.0, d2y = 6.0 * 0.2, ky = d2y / (d1x * d1x);
+    for (int c = 0; c < 3; c++) {
+        float J = c == 2 ? 0.0f : 20000.0f;
+        ef_limits_t lim = {{100, 100, 100}, {1000, 1000, 1000}, J, 0.5f};
+        ef_plan_t p;
+        EF_CHECK_EQ(ef_plan_init(&p, &lim), EF_OK);
+        EF_CHECK_EQ(ef_plan_push(&p, &l1), EF_OK);
+        EF_CHECK_EQ(ef_plan_push(&p, c == 1 ? &flat : &bend), EF_OK);
+        ef_move_t l2 = mk_line((c == 1 ? flat : bend).b[3], ef_v3(43, 0.6f, 0), 100, 0);
+        EF_CHECK_EQ(ef_plan_push(&p, &l2), EF_OK);
+        ef_plan_finish(&p);
+        ef_move_t o[3];
+        for (int i = 0; i < 3; i++)
+            EF_CHECK_EQ(ef_plan_pull(&p, &o[i]), EF_OK);
+        double vj = o[1].v_entry, cap = sqrt(EF_PLAN_JUMP_T * S * 20000 / ky);
+        printf("  curvature jump %s, J %.0f: junction speed %.3f mm/s (cap %.3f, move v_max "
+               "%.3f)\n",
+               c == 1 ? "none (G2)" : "0.13 / mm", J, vj, cap, o[1].v_max);
+        EF_CHECK_NEAR(o[1].v_entry, o[0].v_exit, 1e-4);
+        if (c == 0) {
+            EF_CHECK(vj <= cap * 1.001);
+            EF_CHECK(vj >= cap * 0.99); /* the cap binds, nothing else here does */
+        } else {
+            EF_CHECK(vj > cap * 1.5); /* G2, or no jerk limit: only the move's own limits */
+        }
+    }
+}
+
 /* ------------------------------------------------------------------ (5) interpolator */
 
 typedef struct {
@@ -1243,6 +1302,7 @@ int main(int argc, char **argv)
         {"plan", test_window},
         {"plan", test_axis_limits},
         {"plan", test_curved_share},
+        {"plan", test_curvature_jump},
         {"plan", test_random_streams},
         {"plan", test_incremental_bounds},
         {"plan", test_groups},

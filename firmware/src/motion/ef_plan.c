@@ -378,7 +378,7 @@ static float pl_bound(const ef_plan_t *p, uint32_t n, float v_next)
     float v = ef_minf(q->v_max, pl_ramp_top(exit_b, q->length, q->a_max, q->j_max, 1));
     if (n > 0)
         v = ef_minf(v, p->q[(p->head + n - 1u) % EF_LOOKAHEAD].v_max);
-    return v;
+    return ef_minf(v, q->v_in);
 }
 
 /** Incremental backward pass after a push: the newest group's bound, then the earlier ones
@@ -418,6 +418,8 @@ int ef_plan_init(ef_plan_t *p, const ef_limits_t *lim)
     p->finished = 0;
     p->open = 0;
     p->rel_n = 0;
+    p->k_end = ef_v3(0.0f, 0.0f, 0.0f);
+    p->have_k = 0;
     for (uint32_t i = 0; i < EF_LOOKAHEAD; i++)
         p->v_lim[i] = 0.0f;
     return EF_OK;
@@ -523,6 +525,41 @@ static void pl_limits(const ef_limits_t *l, const ef_move_t *m, float *v_out, fl
     *j_out = j;
 }
 
+/** Curvature vector of a move's curve at tau = 0 (end 0) or 1 (end 1), from its control
+ *  points: (f'' - <f'', t> t) / |f'|^2; zero for a line. */
+static ef_vec3_t pl_kvec(const ef_move_t *m, int end)
+{
+    int n = m->degree;
+    if (n < 2)
+        return ef_v3(0.0f, 0.0f, 0.0f);
+    const ef_vec3_t *b = m->b;
+    ef_vec3_t d1 = end ? ef_v3_sub(b[n], b[n - 1]) : ef_v3_sub(b[1], b[0]);
+    ef_vec3_t d2 = end ? ef_v3_add(ef_v3_sub(b[n], ef_v3_scale(b[n - 1], 2.0f)), b[n - 2])
+                       : ef_v3_add(ef_v3_sub(b[2], ef_v3_scale(b[1], 2.0f)), b[0]);
+    d1 = ef_v3_scale(d1, (float)n);
+    d2 = ef_v3_scale(d2, (float)(n * (n - 1)));
+    float s2 = ef_v3_dot(d1, d1);
+    if (!(s2 > 0.0f))
+        return ef_v3(0.0f, 0.0f, 0.0f);
+    ef_vec3_t k = ef_v3_axpy(d2, -ef_v3_dot(d2, d1) / s2, d1);
+    return ef_v3_scale(k, 1.0f / s2);
+}
+
+/** Entry speed cap of move m after the last pushed move (EF_PLAN_JUMP_T): the acceleration
+ *  step of the curvature jump at their junction. */
+static float pl_jump_cap(const ef_plan_t *p, const ef_move_t *m)
+{
+    float J = EF_PLAN_LIMIT_SHARE * p->lim.j_max, cap = 3.4e38f;
+    if (!p->have_k || !(J > 0.0f))
+        return cap;
+    ef_vec3_t dk = ef_v3_sub(pl_kvec(m, 0), p->k_end);
+    float d[3] = {ef_fabsf(dk.x), ef_fabsf(dk.y), ef_fabsf(dk.z)};
+    for (int i = 0; i < 3; i++)
+        if (d[i] > 0.0f)
+            cap = ef_minf(cap, ef_sqrtf(EF_PLAN_JUMP_T * J / d[i]));
+    return cap;
+}
+
 /* A move's limits without queueing it (see ef_plan.h). */
 int ef_plan_move_limits(const ef_limits_t *lim, const ef_move_t *m, float *v_max, float *a_max,
                         float *j_max)
@@ -563,6 +600,9 @@ int ef_plan_push(ef_plan_t *p, const ef_move_t *m)
         !ef_finitef(jmax))
         return EF_ERR_FEED;
 
+    float v_in = pl_jump_cap(p, m);
+    p->k_end = pl_kvec(m, 1);
+    p->have_k = 1;
     ef_move_t *q = &p->mv[(p->mhead + p->mcount) % EF_LOOKAHEAD];
     *q = *m;
     q->flags = (uint16_t)(m->flags & (EF_MOVE_STOP_END | EF_MOVE_CLAMPED | EF_MOVE_BLEND_CLAMPED));
@@ -587,7 +627,8 @@ int ef_plan_push(ef_plan_t *p, const ef_move_t *m)
         const float vr = EF_PLAN_GROUP_VRATIO, ar = EF_PLAN_GROUP_ARATIO;
         join = vmax >= vr * g->v_max && g->v_max >= vr * vmax && amax >= ar * g->a_max &&
                g->a_max >= ar * amax && jmax >= ar * g->j_max && g->j_max >= ar * jmax &&
-               g->length < pl_ramp_dist(0.0f, g->v_max, g->a_max, g->j_max);
+               g->length < pl_ramp_dist(0.0f, g->v_max, g->a_max, g->j_max) &&
+               v_in >= ef_minf(g->v_max, vmax); /* a capped junction starts a group */
     }
     if (join) {
         g->length += q->length;
@@ -602,6 +643,7 @@ int ef_plan_push(ef_plan_t *p, const ef_move_t *m)
         g->v_max = vmax;
         g->a_max = amax;
         g->j_max = jmax;
+        g->v_in = v_in;
         g->flags = 0;
         g->n = 1;
         p->v_lim[idx] = 0.0f;

@@ -107,6 +107,16 @@ extern "C" {
 #define EF_PLAN_A_SEARCH_LO 0.05f
 #endif
 
+/** Junctions where the curvature jumps (G1 cubic smooth sections, `smooth_degree` 3: a cubic
+ *  cannot meet its neighbours' curvature) step every axis's acceleration by dk_i v^2 at
+ *  once. With a jerk limit the entry of the move after such a junction is capped at
+ *  v = min_i sqrt(EF_PLAN_JUMP_T j_max / dk_i): a step the jerk limit could make within
+ *  EF_PLAN_JUMP_T seconds (one 1 ms servo period; the fuzzer found 1.2 J at 19 mm/s across
+ *  a jump of 0.2 / mm). G2 junctions (every other kind) jump by float rounding only. */
+#ifndef EF_PLAN_JUMP_T
+#define EF_PLAN_JUMP_T 1e-3f
+#endif
+
 /** Share of each axis's acceleration limit and of the jerk limit the planner plans to. The
  *  rest covers what the plan takes from samples of the curve (tabs, kabs, kjerk at 17
  *  points, ~0.2 %, ef_path.h) and the float32 evaluation of the setpoints (about one ulp of
@@ -159,6 +169,8 @@ typedef struct {
     float v_max;    /**< smallest member speed limit */
     float a_max;    /**< smallest member tangential acceleration */
     float j_max;    /**< smallest member tangential jerk */
+    float v_in;     /**< cap on the entry speed from a curvature jump at the first member's
+                         start (EF_PLAN_JUMP_T), 3.4e38 where there is none */
     uint16_t flags; /**< EF_MOVE_STOP_END when the last member has it */
     uint16_t n;     /**< members (in the move ring, after the previous groups' members) */
 } ef_plan_group_t;
@@ -178,6 +190,8 @@ typedef struct {
     float v_last;                    /**< exit speed of the last released move */
     int finished;                    /**< ef_plan_finish() called since the last push */
     int open;                        /**< the newest group may still take moves */
+    ef_vec3_t k_end;                 /**< curvature vector at the end of the last pushed move */
+    int have_k;                      /**< k_end is set (a move was pushed) */
     /* Release of the oldest group under way (rel_n > 0): its law and where it stands. */
     ef_move_t rel;  /**< the group's law (as a move of the group's length) */
     uint32_t rel_n; /**< members still to release */
