@@ -5,12 +5,15 @@
  * huge coordinates, zero lengths, reversals, zero and negative feeds, inconsistent arcs,
  * exact stops), pushed through ef_smooth (EF_ERR_FULL handled by draining), the moves into
  * the interpolator, stepped at 1 ms. Whatever the input, every emitted move must be finite,
- * start where the previous one ended, keep its speeds within its limit and continuous,
- * and every setpoint must be finite and move no axis faster than its limit; over every
- * run of consecutive 1 ms setpoints each axis's acceleration (second differences) must
- * stay within its limit and, with a jerk limit, its jerk (third differences) within J,
- * up to the float32 and sampling margins of tests/motion/ef_sp_check.h. A refused
- * primitive must leave the stream usable. Broken invariants abort.
+ * start where the previous one ended, keep its speeds within its limit and continuous, and
+ * at every junction passed at speed have the same parametric end speed ratio |f'| / L as
+ * the previous one (EF_FZ_RHO_JUMP, EF_FZ_STEP_SHARE: in the drives' uniform stepping a
+ * difference is a step in the feed); every setpoint must be finite and move no axis faster
+ * than its limit; over every run of consecutive 1 ms setpoints each axis's acceleration
+ * (second differences) must stay within its limit and, with a jerk limit, its jerk (third
+ * differences) within J, up to the float32 and sampling margins of
+ * tests/motion/ef_sp_check.h. A refused primitive must leave the stream usable. Broken
+ * invariants abort.
  *
  * Built with -DEF_FUZZ_REPLAY_MAIN it is a plain-C replay driver (smooth_fuzz_replay
  * DIR|FILE...): every seed ("ok-*") must run without breaking an invariant.
@@ -85,15 +88,47 @@ typedef struct {
     ef_vec3_t end;   /* where the last move ended */
     float v_exit;    /* its exit speed */
     float v_axis[3]; /* the axis speed limits */
+    float a_min;     /* the smallest axis acceleration limit */
     float scale;     /* largest coordinate magnitude of any move so far */
     ef_vec3_t last;  /* last setpoint */
     int have_sp;
+    float rho_exit;  /* the last move's exit speed ratio (ef_fz_rho()), 0 before the first */
+    float rho_slack; /* and its float32 slack */
+    int kind;        /* the last move's kind and length, for the report */
+    float length;
     spc_t chk; /* setpoint continuity over consecutive 1 ms periods */
     double t;  /* time of the last setpoint (s) */
 } ef_fz_state_t;
 
 static ef_smooth_t S;
 static ef_interp_t IP;
+
+/* A move's parametric end speed |f'| at tau = 0 (end 0) or 1 (end 1) over its length: what
+ * uniform stepping of tau (the drives' segment mode) moves at, relative to the planned
+ * speed. */
+static float ef_fz_rho(const ef_move_t *m, int end)
+{
+    int n = m->degree;
+    ef_vec3_t d = end ? ef_v3_sub(m->b[n], m->b[n - 1]) : ef_v3_sub(m->b[1], m->b[0]);
+    return (float)n * ef_v3_norm(d) / m->length;
+}
+
+/* Float32 slack of ef_fz_rho(): the control points' rounding (2 ulps of the largest
+ * coordinate per difference) over the length, times the degree. */
+static float ef_fz_rho_slack(const ef_move_t *m)
+{
+    float big = 0.0f;
+    for (int k = 0; k <= m->degree; k++)
+        big = fmaxf(big, fmaxf(fmaxf(fabsf(m->b[k].x), fabsf(m->b[k].y)), fabsf(m->b[k].z)));
+    return (float)m->degree * 2.0f * 1.2e-7f * big / m->length;
+}
+
+/* Largest difference of the end speed ratios at a junction passed at speed: uniform stepping
+ * changes the feed there by v times it within one period (ef_seg_g2_even()). A larger one
+ * fails only where that step is felt: above EF_FZ_STEP_SHARE of the smallest axis
+ * acceleration limit over one 1 ms period (a 0.1 mm corner at 0.002 mm/s is not). */
+#define EF_FZ_RHO_JUMP   5e-3f
+#define EF_FZ_STEP_SHARE 0.05f
 
 /* Check one move against the chain so far. */
 static void ef_fz_move(ef_fz_state_t *st, const ef_move_t *m)
@@ -114,6 +149,25 @@ static void ef_fz_move(ef_fz_state_t *st, const ef_move_t *m)
         ef_fz_fail("speed above limit", m->v_max);
     if ((m->flags & EF_MOVE_STOP_END) && m->v_exit != 0.0f)
         ef_fz_fail("stop with speed", m->v_exit);
+    float rho0 = ef_fz_rho(m, 0);
+    float jump = fabsf(rho0 - st->rho_exit) - ef_fz_rho_slack(m) - st->rho_slack;
+    if (m->v_entry > 0.0f && st->rho_exit > 0.0f && !(jump <= EF_FZ_RHO_JUMP) &&
+        !(m->v_entry * jump <= EF_FZ_STEP_SHARE * st->a_min * 1e-3f)) {
+        fprintf(stderr,
+                "junction at %.6g %.6g %.6g, v %.6g: move kind %d degree %d length %.6g "
+                "ratio %.6g after kind %d length %.6g ratio %.6g\n",
+                (double)m->b[0].x, (double)m->b[0].y, (double)m->b[0].z, (double)m->v_entry,
+                m->kind, m->degree, (double)m->length, (double)rho0, st->kind, (double)st->length,
+                (double)st->rho_exit);
+        for (int k = 0; k <= m->degree; k++)
+            fprintf(stderr, "  b%d %.9g %.9g %.9g\n", k, (double)m->b[k].x, (double)m->b[k].y,
+                    (double)m->b[k].z);
+        ef_fz_fail("end speed ratios differ at a junction passed at speed", rho0 - st->rho_exit);
+    }
+    st->rho_exit = ef_fz_rho(m, 1);
+    st->rho_slack = ef_fz_rho_slack(m);
+    st->kind = m->kind;
+    st->length = m->length;
     /* the move's extent bounds the float32 error of its setpoints (ef_sp_check.h) */
     double ext = m->length;
     for (int k = 1; k <= m->degree; k++)
@@ -211,6 +265,7 @@ static void ef_fz_run(const uint8_t *data, size_t size)
     memset(&st, 0, sizeof st);
     for (int i = 0; i < 3; i++)
         st.v_axis[i] = c.lim.v_axis[i];
+    st.a_min = fminf(c.lim.a_axis[0], fminf(c.lim.a_axis[1], c.lim.a_axis[2]));
     spc_init(&st.chk, 1e-3, &c.lim);
     ef_vec3_t pos = ef_v3(0, 0, 0);
     for (int n = 0; n < 400 && in.i < in.n; n++) {
