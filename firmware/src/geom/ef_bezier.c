@@ -136,3 +136,25 @@ int ef_bezier_functional(const ef_vec3_t *b, int degree, float *out)
     *out = ef_sqrtf(sum);
     return EF_OK;
 }
+
+/* Gauss–Legendre, 16 nodes on [0, 1]: offsets from 1/2 and weights of each symmetric pair's
+ * members. Exact for polynomials up to degree 31; |f'| of a quintic with near-constant speed
+ * is smooth, so the rule's error is far below float32 rounding for evenfeed's curves. */
+static const float bz_gl16[8][2] = {
+    {4.750625492e-02f, 9.472530523e-02f}, {1.408017754e-01f, 9.130170752e-02f},
+    {2.290083888e-01f, 8.457825970e-02f}, {3.089381222e-01f, 7.479799441e-02f},
+    {3.777022042e-01f, 6.231448563e-02f}, {4.328156012e-01f, 4.757925584e-02f},
+    {4.722875115e-01f, 3.112676197e-02f}, {4.947004675e-01f, 1.357622971e-02f},
+};
+
+/* Sum over the symmetric node pairs (contract in ef_bezier.h). */
+float ef_bezier_h4_length(const ef_vec3_t *h, int sym)
+{
+    float len = 0.0f;
+    for (int i = 0; i < 8; i++) {
+        float a = ef_v3_norm(ef_bezier_b4(h, 0.5f - bz_gl16[i][0]));
+        float b = sym ? a : ef_v3_norm(ef_bezier_b4(h, 0.5f + bz_gl16[i][0]));
+        len += bz_gl16[i][1] * (a + b);
+    }
+    return len;
+}

@@ -482,7 +482,6 @@ static void pl_limits(const ef_limits_t *l, const ef_move_t *m, float *v_out, fl
         have = 1;
     }
     if (J > 0.0f) {
-        have = 0;
         for (int i = 0; i < 3; i++) {
             float gv = J - g[i] * v * v * v;
             if (t[i] > 0.0f) {
@@ -493,12 +492,9 @@ static void pl_limits(const ef_limits_t *l, const ef_move_t *m, float *v_out, fl
                 float room = gv - jt * J * ef_minf(t[i], 1.0f);
                 if (k[i] > 0.0f && v > 0.0f && 3.0f * k[i] * v * a > room)
                     a = ef_maxf(0.0f, room / (3.0f * k[i] * v));
-                float ji = (gv - 3.0f * k[i] * v * a) / t[i];
-                j = have ? ef_minf(j, ji) : ji;
-                have = 1;
             }
         }
-        /* Each later lowering of a only frees jerk: recompute with the final a. */
+        /* The jerk every axis leaves at the final a. */
         j = pl_jt(t, k, g, J, v, a);
         /* On a curved move a and j share the jerk budget (3 k_i v a): take the a that makes
          * the ramp from rest to v_max shortest, not the largest a. */

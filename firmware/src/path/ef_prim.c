@@ -211,29 +211,6 @@ int ef_prim_frame(ef_vec3_t start, const ef_prim_t *pr, float s, ef_frame_t *out
     return EF_OK;
 }
 
-/* Gauss–Legendre, 16 nodes on [0, 1]: offsets from 1/2 and weights of each symmetric pair's
- * members. Exact for polynomials up to degree 31; |f'| of a quintic with near-constant speed
- * is smooth, so the rule's error is far below float32 rounding for evenfeed's curves. */
-static const float ef_gl16[8][2] = {
-    {4.750625492e-02f, 9.472530523e-02f}, {1.408017754e-01f, 9.130170752e-02f},
-    {2.290083888e-01f, 8.457825970e-02f}, {3.089381222e-01f, 7.479799441e-02f},
-    {3.777022042e-01f, 6.231448563e-02f}, {4.328156012e-01f, 4.757925584e-02f},
-    {4.722875115e-01f, 3.112676197e-02f}, {4.947004675e-01f, 1.357622971e-02f},
-};
-
-/* Points of Bezier curves of degree 4 and 3 at t: the control points weighted by the
- * Bernstein polynomials (all positive, so no cancellation: as accurate as de Casteljau's
- * algorithm, at a fraction of its instructions). */
-static ef_vec3_t prim_mm_b4(const ef_vec3_t *p, float t)
-{
-    float u = 1.0f - t, t2 = t * t, u2 = u * u;
-    ef_vec3_t r = ef_v3_scale(p[0], u2 * u2);
-    r = ef_v3_axpy(r, 4.0f * u2 * u * t, p[1]);
-    r = ef_v3_axpy(r, 6.0f * u2 * t2, p[2]);
-    r = ef_v3_axpy(r, 4.0f * u * t2 * t, p[3]);
-    return ef_v3_axpy(r, t2 * t2, p[4]);
-}
-
 /* Cubic Bernstein evaluation, for the second hodograph in ef_move_measure(). */
 static ef_vec3_t prim_mm_b3(const ef_vec3_t *p, float t)
 {
@@ -317,19 +294,14 @@ int ef_move_measure(ef_move_t *m)
         prim_mm_elevate(h2, 2);
         h3[1] = h3[2] = h3[0]; /* a constant, as a quadratic */
     }
-    float len = 0.0f;
-    for (int i = 0; i < 8; i++) {
-        float a = ef_v3_norm(prim_mm_b4(h1, 0.5f - ef_gl16[i][0]));
-        float b = ef_v3_norm(prim_mm_b4(h1, 0.5f + ef_gl16[i][0]));
-        len += ef_gl16[i][1] * (a + b);
-    }
+    float len = ef_bezier_h4_length(h1, 0);
     float kmax = 0.0f;
     float ilen = 1.0f / ef_maxf(len, 1e-30f);
     float ilen2 = ilen * ilen, ilen3 = ilen2 * ilen;
     ef_vec3_t tabs = ef_v3(0.0f, 0.0f, 0.0f), kabs = tabs, kjerk = tabs;
     for (int i = 0; i <= EF_MOVE_SAMPLES; i++) {
         float t = (float)i * (1.0f / (float)EF_MOVE_SAMPLES);
-        ef_vec3_t d1 = prim_mm_b4(h1, t), d2 = prim_mm_b3(h2, t), d3 = prim_mm_b2(h3, t);
+        ef_vec3_t d1 = ef_bezier_b4(h1, t), d2 = prim_mm_b3(h2, t), d3 = prim_mm_b2(h3, t);
         float sp = ef_v3_norm(d1);
         float isp = 1.0f / ef_maxf(sp, 1e-30f);
         float k = ef_v3_norm(ef_v3_cross(d1, d2)) * isp * isp * isp;

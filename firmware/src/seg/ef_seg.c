@@ -2,6 +2,7 @@
 /* Bézier segments from end data: DOFs from a table (or given), then control points. */
 #include "evenfeed/seg/ef_seg.h"
 #include "evenfeed/core/ef_err.h"
+#include "evenfeed/geom/ef_bezier.h"
 
 /* Zero the whole segment so a failed call leaves nothing a caller could send to a drive. */
 static int seg_fail(ef_seg_t *out, int rc)
@@ -132,16 +133,10 @@ int ef_seg_from_dofs(const ef_endpoint_t *e0, const ef_endpoint_t *e1, int degre
     return EF_OK;
 }
 
-/* |f'(t)| of a quintic from its hodograph's 5 control points h (Bernstein form). */
+/* |f'(t)| of a quintic from its hodograph's 5 control points h. */
 static float seg_speed(const ef_vec3_t *h, float t)
 {
-    float u = 1.0f - t, t2 = t * t, u2 = u * u;
-    ef_vec3_t r = ef_v3_scale(h[0], u2 * u2);
-    r = ef_v3_axpy(r, 4.0f * u2 * u * t, h[1]);
-    r = ef_v3_axpy(r, 6.0f * u2 * t2, h[2]);
-    r = ef_v3_axpy(r, 4.0f * u * t2 * t, h[3]);
-    r = ef_v3_axpy(r, t2 * t2, h[4]);
-    return ef_v3_norm(r);
+    return ef_v3_norm(ef_bezier_b4(h, t));
 }
 
 /* A quintic's hodograph control points. */
@@ -151,27 +146,12 @@ static void seg_hodo(const ef_vec3_t *b, ef_vec3_t *h)
         h[i] = ef_v3_scale(ef_v3_sub(b[i + 1], b[i]), 5.0f);
 }
 
-/* Arc length from the hodograph, 16-node Gauss–Legendre; sym: |f'| is symmetric about
- * tau = 1/2, so the 8 nodes below it, doubled, give the same sum. */
-static float seg_len(const ef_vec3_t *h, int sym)
-{
-    static const float gx[8] = {0.0950125098f, 0.2816035508f, 0.4580167777f, 0.6178762444f,
-                                0.7554044084f, 0.8656312024f, 0.9445750231f, 0.9894009350f};
-    static const float gw[8] = {0.1894506105f, 0.1826034150f, 0.1691565194f, 0.1495959888f,
-                                0.1246289713f, 0.0951585117f, 0.0622535239f, 0.0271524594f};
-    float l = 0.0f;
-    int step = sym ? 2 : 1;
-    for (int k = 0; k < 16; k += step)
-        l += 0.5f * gw[k >> 1] * seg_speed(h, 0.5f + ((k & 1) ? 0.5f : -0.5f) * gx[k >> 1]);
-    return sym ? 2.0f * l : l;
-}
-
 /* Arc length of a quintic (contract in ef_seg.h). */
 float ef_seg_length(const ef_vec3_t *b, int sym)
 {
     ef_vec3_t h[5];
     seg_hodo(b, h);
-    return seg_len(h, sym);
+    return ef_bezier_h4_length(h, sym);
 }
 
 /* Length, then the speed samples (contract in ef_seg.h). */
@@ -179,7 +159,7 @@ float ef_seg_speed_stats(const ef_vec3_t *b, float *len, float *dev_ends)
 {
     ef_vec3_t h[5];
     seg_hodo(b, h);
-    float l = seg_len(h, 0);
+    float l = ef_bezier_h4_length(h, 0);
     *len = l;
     float inv = 1.0f / ef_maxf(l, 1e-30f), dev = 0.0f;
     for (int i = 0; i <= EF_SEG_SPEED_SAMPLES; i++) {
@@ -206,7 +186,7 @@ static int seg_even_ends(const ef_endpoint_t *e0, const ef_endpoint_t *e1, float
             ok = ef_seg_from_dofs(e0, e1, 5, dof, c) == EF_OK;
         ef_vec3_t h[5];
         seg_hodo(c->b, h);
-        float g = seg_len(h, 0) - x;
+        float g = ef_bezier_h4_length(h, 0) - x;
         float xn = it == 0 ? x + g : ef_seg_even_next(xa, ga, x, g);
         xa = x;
         ga = g;
