@@ -47,6 +47,8 @@ static void cgc_print_json(const ef_gcode_item_t *it)
         printf(", \"dir\": %d, \"plane\": %d, \"turns\": %d, \"radius\": ", it->dir, it->plane,
                it->turns);
         cli_json_num(stdout, it->radius);
+        fputs(", \"radius_end\": ", stdout);
+        cli_json_num(stdout, it->radius_end);
         fputs(", \"sweep\": ", stdout);
         cli_json_num(stdout, it->sweep);
         fputs(", \"feed\": ", stdout);
@@ -89,6 +91,8 @@ static void cgc_print_text(const ef_gcode_item_t *it)
                it->start[0], it->start[1], it->start[2], it->end[0], it->end[1], it->end[2],
                it->centre[0], it->centre[1], it->centre[2], it->dir > 0 ? "ccw" : "cw", it->plane,
                it->radius, it->sweep * 57.29577951308232, it->turns, it->feed);
+        if (it->radius_end != it->radius)
+            printf(" spiral to r %.4f", it->radius_end);
         break;
     case EF_GC_TOLERANCE:
         if (it->path_mode == EF_GC_PATH_EXACT)

@@ -34,9 +34,19 @@ static void ef_fuzz_vec(const double *v, const char *what)
 }
 
 /* Read the whole input; 0 when it read to an end item, else the error code. */
+static int ef_fuzz_read1(ef_gcode_t *rp, const uint8_t *data, size_t size);
+
 static int ef_fuzz_read(const uint8_t *data, size_t size)
 {
     static ef_gcode_t r; /* large: keep it off the stack */
+    int rc = ef_fuzz_read1(&r, data, size);
+    ef_gcode_free(&r); /* the queue of a long expansion */
+    return rc;
+}
+
+static int ef_fuzz_read1(ef_gcode_t *rp, const uint8_t *data, size_t size)
+{
+    ef_gcode_t *r = rp;
     ef_gcode_item_t it;
     ef_msg_t m = {{0}};
     size_t lines = 1;
@@ -44,18 +54,18 @@ static int ef_fuzz_read(const uint8_t *data, size_t size)
 
     for (size_t k = 0; k < size; k++)
         lines += data[k] == '\n';
-    if (ef_gcode_init(&r, (const char *)data, size, "fuzz") != EF_OK)
+    if (ef_gcode_init(r, (const char *)data, size, "fuzz") != EF_OK)
         ef_fuzz_fail("init", 0);
     for (;;) {
-        rc = ef_gcode_next(&r, &it, &m);
+        rc = ef_gcode_next(r, &it, &m);
         if (rc != EF_OK) {
             if (rc != EF_ERR_GCODE || strncmp(m.text, "fuzz:", 5) != 0)
                 ef_fuzz_fail("bad error code or message", rc);
-            if (ef_gcode_next(&r, &it, &m) != rc) /* errors are sticky */
+            if (ef_gcode_next(r, &it, &m) != rc) /* errors are sticky */
                 ef_fuzz_fail("error not sticky", rc);
             return rc;
         }
-        if (it.kind < EF_GC_RAPID || it.kind > EF_GC_END)
+        if (it.kind < EF_GC_RAPID || it.kind > EF_GC_NOTE)
             ef_fuzz_fail("unknown kind", it.kind);
         if (it.line < 1 || it.line > lines || it.col < 1)
             ef_fuzz_fail("line/col outside the input", (long)it.line);
@@ -69,12 +79,14 @@ static int ef_fuzz_read(const uint8_t *data, size_t size)
         if ((it.kind == EF_GC_LINE || it.kind == EF_GC_ARC) &&
             !(it.feed > 0 && it.feed <= EF_GCODE_MAX_FEED))
             ef_fuzz_fail("feed", it.kind);
-        if (it.kind == EF_GC_ARC && (!(it.radius > 0) || !isfinite(it.sweep) || it.sweep == 0 ||
-                                     it.turns < 1 || it.dir * it.sweep < 0))
+        if (it.kind == EF_GC_ARC &&
+            (!(it.radius > 0) || !(it.radius_end > 0) || !isfinite(it.radius_end) ||
+             fabs(it.radius_end - it.radius) > 3.0 || !isfinite(it.sweep) || it.sweep == 0 ||
+             it.turns < 1 || it.dir * it.sweep < 0))
             ef_fuzz_fail("arc", it.turns);
         if (it.kind == EF_GC_END) {
             ef_gcode_item_t again;
-            if (ef_gcode_next(&r, &again, &m) != EF_OK || again.kind != EF_GC_END)
+            if (ef_gcode_next(r, &again, &m) != EF_OK || again.kind != EF_GC_END)
                 ef_fuzz_fail("end not repeated", 0);
             return 0;
         }

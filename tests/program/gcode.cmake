@@ -13,9 +13,9 @@ add_test(NAME gcode_unit COMMAND test_gcode)
 add_test(NAME gcode_cli_sample COMMAND evenfeed gcode ${PROJECT_SOURCE_DIR}/samples/bracket.ngc)
 add_test(NAME gcode_cli_sample_json
          COMMAND evenfeed gcode ${PROJECT_SOURCE_DIR}/samples/bracket.ngc --json)
-set_tests_properties(gcode_cli_sample PROPERTIES PASS_REGULAR_EXPRESSION "62:6 end +M30")
+set_tests_properties(gcode_cli_sample PROPERTIES PASS_REGULAR_EXPRESSION "61:6 end +M30")
 set_tests_properties(gcode_cli_sample_json PROPERTIES
-                     PASS_REGULAR_EXPRESSION "\"kind\": \"end\", \"line\": 62, .*\"text\": \"M30\"")
+                     PASS_REGULAR_EXPRESSION "\"kind\": \"end\", \"line\": 61, .*\"text\": \"M30\"")
 add_test(NAME gcode_cli_missing COMMAND evenfeed gcode ${CMAKE_CURRENT_BINARY_DIR}/no-such.ngc)
 set_tests_properties(gcode_cli_missing PROPERTIES WILL_FAIL TRUE)
 # A bad program: the message names file, line and column; exit status 11 (EF_ERR_GCODE).
@@ -23,7 +23,7 @@ add_test(NAME gcode_cli_error
          COMMAND sh -c "$<TARGET_FILE:evenfeed> gcode \"$1\"; echo \"exit $?\"" sh
                  ${EF_GCODE_DIR}/fuzz/corpus_gcode/bad-radius.ngc)
 set_tests_properties(gcode_cli_error PROPERTIES
-                     PASS_REGULAR_EXPRESSION "bad-radius.ngc:2:1: G2 arc radius mismatch: start 5.000 end 4.000 .tolerance 0.005.*exit 11")
+                     PASS_REGULAR_EXPRESSION "bad-radius.ngc:2:1: G2 arc radius mismatch: start 5.0000 end 4.0000 .differ by 1 mm.*exit 11")
 
 # Seed corpus replay through the fuzz entry point, without libFuzzer: "ok-*" seeds must
 # read to the end, "bad-*" seeds must be rejected.
@@ -39,11 +39,39 @@ if(EF_FUZZ)
       -fno-omit-frame-pointer)
   get_target_property(EF_GCODE_HOST_DIR ef_host SOURCE_DIR)
   add_executable(fuzz_gcode ${EF_GCODE_DIR}/fuzz/fuzz_gcode.c
-                            ${EF_GCODE_HOST_DIR}/lib/program/ef_gcode.c ${EF_GCODE_HOST_DIR}/lib/core/ef_host.c)
+                            ${EF_GCODE_HOST_DIR}/lib/program/ef_gcode.c ${EF_GCODE_HOST_DIR}/lib/program/ef_gcode_cycle.c
+                            ${EF_GCODE_HOST_DIR}/lib/program/ef_gcode_flow.c ${EF_GCODE_HOST_DIR}/lib/core/ef_host.c)
   target_include_directories(fuzz_gcode PRIVATE ${EF_GCODE_HOST_DIR}/include
                              ${PROJECT_SOURCE_DIR}/firmware/include)
   target_compile_definitions(fuzz_gcode PRIVATE _DEFAULT_SOURCE _GNU_SOURCE)
   target_compile_options(fuzz_gcode PRIVATE -fsanitize=fuzzer ${EF_GCODE_FUZZ_SAN})
   target_link_options(fuzz_gcode PRIVATE -fsanitize=fuzzer ${EF_GCODE_FUZZ_SAN})
   target_link_libraries(fuzz_gcode PRIVATE m)
+endif()
+
+# Reference corpus (tests/data/gcode): each NAME.ngc with its expected path NAME.path, in
+# the normalized form of tests/program/gcode_ref.py. gcode_path_NAME checks evenfeed's
+# reading; gcode_lcnc_NAME checks the expectation against LinuxCNC's rs274 for programs
+# marked "(ref: linuxcnc)" in their first lines (skipped where rs274 is not installed).
+find_package(Python3 COMPONENTS Interpreter)
+if(Python3_Interpreter_FOUND)
+  set(EF_GCODE_REF ${EF_GCODE_DIR}/program/gcode_ref.py)
+  set(EF_GCODE_DATA ${PROJECT_SOURCE_DIR}/tests/data/gcode)
+  file(GLOB EF_GCODE_PATHS CONFIGURE_DEPENDS ${EF_GCODE_DATA}/*.path)
+  foreach(EF_GCODE_PATH ${EF_GCODE_PATHS})
+    get_filename_component(EF_GCODE_NAME ${EF_GCODE_PATH} NAME_WE)
+    set(EF_GCODE_NGC ${EF_GCODE_DATA}/${EF_GCODE_NAME}.ngc)
+    add_test(NAME gcode_path_${EF_GCODE_NAME}
+             COMMAND ${Python3_EXECUTABLE} ${EF_GCODE_REF} check $<TARGET_FILE:evenfeed>
+                     ${EF_GCODE_NGC} ${EF_GCODE_PATH})
+    set_tests_properties(gcode_path_${EF_GCODE_NAME} PROPERTIES LABELS gcode_path)
+    file(READ ${EF_GCODE_NGC} EF_GCODE_HEAD LIMIT 200)
+    if(EF_GCODE_HEAD MATCHES "^([^\n]*\n)?\\(ref: linuxcnc\\)")
+      add_test(NAME gcode_lcnc_${EF_GCODE_NAME}
+               COMMAND ${Python3_EXECUTABLE} ${EF_GCODE_REF} check-ref ${EF_GCODE_NGC}
+                       ${EF_GCODE_PATH})
+      set_tests_properties(gcode_lcnc_${EF_GCODE_NAME} PROPERTIES SKIP_RETURN_CODE 77
+                           LABELS gcode_lcnc)
+    endif()
+  endforeach()
 endif()

@@ -180,9 +180,9 @@ static void test_item_prim(void)
     int ni = 0;
     ef_gcode_init(&R,
                   "G1 X10 F600\nG3 X0 Y10 I-10 J0\nG18 G2 X-10 Z10 I0 K10\n"
-                  "G19 G3 Y0 Z0 J-10 K0\nG17 G2 X-10 Y0 Z-5 I5 J0 P2\n",
+                  "G19 G3 Y0 Z0 J-10 K0\nG17 G2 X-10 Y0 Z-5 I5 J0 P2\nM2\n",
                   strlen("G1 X10 F600\nG3 X0 Y10 I-10 J0\nG18 G2 X-10 Z10 I0 K10\n"
-                         "G19 G3 Y0 Z0 J-10 K0\nG17 G2 X-10 Y0 Z-5 I5 J0 P2\n"),
+                         "G19 G3 Y0 Z0 J-10 K0\nG17 G2 X-10 Y0 Z-5 I5 J0 P2\nM2\n"),
                   "t.ngc");
     while (ni < 8 && ef_gcode_next(&R, &its[ni], NULL) == EF_OK && its[ni].kind != EF_GC_END)
         ni++;
@@ -404,10 +404,10 @@ static void test_refused(void)
     EF_CHECK_NEAR(ST.end[0], 10, 1e-5);
     EF_CHECK_NEAR(ST.end[1], 10, 1e-5);
     EF_CHECK(joined(ef_v3(0, 0, 0), 1e-4));
-    /* An arc too small for the firmware. */
+    /* An arc below LinuxCNC's zero radius (0.00127 mm): the reader refuses it, at its line. */
     rc = run("G1 X1 F100\nG2 X1 Y0 I0.0000001\nG1 X2\n");
-    EF_CHECK_EQ(rc, EF_ERR_DEGENERATE);
-    EF_CHECK(!strncmp(MSG.text, "t.ngc:2: ", 9));
+    EF_CHECK_EQ(rc, EF_ERR_GCODE);
+    EF_CHECK(!strncmp(MSG.text, "t.ngc:2:1: G2 arc radius is zero", 32));
     EF_CHECK_NEAR(ST.end[0], 1, 1e-6);
     /* Reader errors also stop in a controlled way and keep the reader's message. */
     rc = run("G1 X10 F600\nY10\n#1=[0/0]\nX0\n");
@@ -456,12 +456,12 @@ static void test_bracket(int degree)
     if (rc)
         fprintf(stderr, "bracket: %s\n", MSG.text);
     EF_CHECK(joined(ef_v3(0, 0, 0), 1e-3));
-    /* Program end: X75 Y40 Z25 (the G53 move is an event and does not move the path). */
+    /* Program end: X75 Y40 Z25. */
     EF_CHECK_NEAR(ST.end[0], 75, 1e-4);
     EF_CHECK_NEAR(ST.end[1], 40, 1e-4);
     EF_CHECK_NEAR(ST.end[2], 25, 1e-4);
     EF_CHECK_EQ(ST.units, 21);
-    EF_CHECK_EQ(ST.events, 8);
+    EF_CHECK_EQ(ST.events, 5); /* T1 M6, S M3, M8, M9, M5 (G54 is applied, not an event) */
     EF_CHECK_EQ(ST.rapids, 9);
     EF_CHECK_EQ(ST.arcs, 12);
     EF_CHECK_EQ(ST.dev_over, 0);

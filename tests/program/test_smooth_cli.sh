@@ -105,7 +105,7 @@ expect 11 'f0.ngc:1:1: feed move with no feed rate' -- smooth "$tmp/f0.ngc"
 printf 'G1 X10 F600\nG2 X10 Y0 I-1 P2000\nG1 X20\n' >"$tmp/arc.ngc"
 expect 15 'arc.ngc:2: inconsistent arc' -- smooth "$tmp/arc.ngc"
 printf 'G1 X1 F100\nG2 X1 Y0 I0.0000001\n' >"$tmp/tiny.ngc"
-expect 3 'tiny.ngc:2: ' -- smooth "$tmp/tiny.ngc"
+expect 11 'tiny.ngc:2:1: G2 arc radius is zero' -- smooth "$tmp/tiny.ngc"
 printf 'G1 X1 F100\nG1 X1\nG40\nM2\n' >"$tmp/zero.ngc"
 expect 0 'note: .*zero.ngc:2:1: zero-length G1 move' -- smooth "$tmp/zero.ngc"
 # A refused program still writes the JSON of what was accepted, with its status.

@@ -1,17 +1,14 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* G-code reader: the RS274NGC subset of CAM post-processors, as a stream of items. */
+/* G-code reader: RS274NGC as LinuxCNC reads it (docs/gcode.md), as a stream of items.
+ * This file holds lines, words, expressions, parameters, offsets and motion; O-words are
+ * in ef_gcode_flow.c and canned cycles in ef_gcode_cycle.c. */
 #include <errno.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include "evenfeed/host/program/ef_gcode.h"
-
-#define EF_GC_MAX_WORDS  64 /* words on one line */
-#define EF_GC_MAX_ASSIGN 32 /* parameter assignments on one line */
-#define EF_GC_MAX_DEPTH  64 /* expression nesting: bounds the recursion on hostile input */
-#define EF_GC_INCH       25.4
+#include "ef_gcode_int.h"
 
 /* Modal groups of G codes (RS274NGC numbering; 0 is the non-modal group). */
 enum {
@@ -28,46 +25,13 @@ enum {
     GR_COORD = 12,
     GR_PATH = 13,
     GR_SPINDLEMODE = 14,
-    GR_COUNT = 15
+    GR_LATHE = 15,
+    GR_COUNT = 16
 };
 /* What a G code does here. */
-enum { GA_MODAL, GA_EVENT, GA_IGNORE, GA_UNSUPPORTED };
+enum { GA_MODAL, GA_IGNORE, GA_UNSUPPORTED };
 
-/* One word of a line, in source order. */
-typedef struct {
-    char letter;
-    int code; /* G and M: value x 10, rounded */
-    double v;
-    uint32_t col;
-} ef_gc_word_t;
-
-/* A pending "#n = value" or "#<name> = value": applied after the whole line is read. */
-typedef struct {
-    int index; /* numbered parameter, or 0 for a named one */
-    char name[EF_GCODE_NAME_MAX + 1];
-    double v;
-    uint32_t col;
-} ef_gc_assign_t;
-
-/* One source line with whitespace and comments removed, and what was read from it. */
-typedef struct {
-    ef_gcode_t *r;
-    char c[EF_GCODE_LINE_MAX + 1];
-    uint32_t col[EF_GCODE_LINE_MAX + 1];
-    size_t n, i;
-    uint32_t end_col;
-    int depth;
-    int block_delete;
-    ef_gc_word_t w[EF_GC_MAX_WORDS];
-    int nw;
-    int letter[26]; /* index into w + 1, 0 when absent (G and M may repeat) */
-    ef_gc_assign_t as[EF_GC_MAX_ASSIGN];
-    int nas;
-} ef_gc_line_t;
-
-/* Record a sticky error "name:line:col: text". */
-__attribute__((format(printf, 3, 4))) static int ef_gc_err(ef_gcode_t *r, uint32_t col,
-                                                           const char *fmt, ...)
+int ef_gc_err(ef_gcode_t *r, uint32_t col, const char *fmt, ...)
 {
     char text[320];
     va_list ap;
@@ -94,6 +58,176 @@ static int gc_is_digit(char ch)
 static int gc_is_letter(char ch)
 {
     return ch >= 'A' && ch <= 'Z';
+}
+
+/* ---- parameters ----------------------------------------------------------------------- */
+
+/* Length parameters held in mm: a pointer to the value, or NULL. */
+static double *gc_param_len(ef_gcode_t *r, int n)
+{
+    if (n >= 5161 && n <= 5163)
+        return &r->g28[n - 5161];
+    if (n >= 5181 && n <= 5183)
+        return &r->g30[n - 5181];
+    if (n >= 5211 && n <= 5213)
+        return &r->g92_saved[n - 5211];
+    if (n >= 5221 && n <= 5390 && (n - 5221) % 20 < 3)
+        return &r->g5x[(n - 5221) / 20][(n - 5221) % 20];
+    return NULL;
+}
+
+double ef_gc_param_get(const ef_gcode_t *r, int n)
+{
+    double scale = r->units == 20 ? EF_GC_INCH : 1.0;
+    ef_gcode_t *w = (ef_gcode_t *)r; /* gc_param_len only points into r */
+    const double *p = gc_param_len(w, n);
+    if (p)
+        return *p / scale;
+    if (n == 5210)
+        return r->g92_on;
+    if (n == 5220)
+        return r->cs;
+    if (n >= 5230 && n <= 5390 && (n - 5230) % 20 == 0)
+        return r->rot[(n - 5230) / 20];
+    if (n == 5400)
+        return r->tool_cur;
+    if (n >= 5401 && n <= 5403)
+        return r->tlo[n - 5401] / scale;
+    if (n >= 5420 && n <= 5422) {
+        double pp[3];
+        ef_gc_to_prog(r, r->cur, pp);
+        return pp[n - 5420] / scale;
+    }
+    return r->param[n];
+}
+
+void ef_gc_param_set(ef_gcode_t *r, int n, double v)
+{
+    double scale = r->units == 20 ? EF_GC_INCH : 1.0;
+    double *p = gc_param_len(r, n);
+    if (p)
+        *p = v * scale;
+    else if (n >= 5230 && n <= 5390 && (n - 5230) % 20 == 0)
+        r->rot[(n - 5230) / 20] = v;
+    else if (n == 5210)
+        r->g92_on = v != 0;
+    r->param[n] = v;
+}
+
+/* Read-only names LinuxCNC predefines; -1 when name is not one of them. */
+static int gc_named_builtin(const ef_gcode_t *r, const char *name, double *v)
+{
+    double scale = r->units == 20 ? EF_GC_INCH : 1.0, pp[3];
+    ef_gc_to_prog(r, r->cur, pp);
+    if (!strcmp(name, "_X") || !strcmp(name, "_Y") || !strcmp(name, "_Z"))
+        *v = pp[name[1] - 'X'] / scale;
+    else if (!strcmp(name, "_FEED"))
+        *v = r->feed / scale;
+    else if (!strcmp(name, "_METRIC"))
+        *v = r->units == 21;
+    else if (!strcmp(name, "_IMPERIAL"))
+        *v = r->units == 20;
+    else if (!strcmp(name, "_ABSOLUTE"))
+        *v = r->absolute;
+    else if (!strcmp(name, "_INCREMENTAL"))
+        *v = !r->absolute;
+    else if (!strcmp(name, "_COORD_SYSTEM"))
+        *v = r->cs <= 6 ? 530 + 10 * r->cs : 590 + (r->cs - 6);
+    else if (!strcmp(name, "_CURRENT_TOOL"))
+        *v = r->tool_cur;
+    else if (!strcmp(name, "_SELECTED_TOOL"))
+        *v = r->tool_prep;
+    else if (!strcmp(name, "_PLANE"))
+        *v = r->plane * 10;
+    else if (!strcmp(name, "_MOTION_MODE"))
+        *v = r->motion < 0 ? 800 : r->motion;
+    else if (!strcmp(name, "_LINE"))
+        *v = r->line;
+    else if (!strcmp(name, "_CALL_LEVEL"))
+        *v = r->depth;
+    else
+        return -1;
+    return 0;
+}
+
+/* Index of name at its level (globals start with '_'), or -1. */
+static int gc_named_index(const ef_gcode_t *r, const char *name)
+{
+    int level = name[0] == '_' ? -1 : r->depth;
+    for (int k = r->nnamed - 1; k >= 0; k--)
+        if (r->named[k].level == level && !strcmp(r->named[k].name, name))
+            return k;
+    return -1;
+}
+
+int ef_gc_named_get(const ef_gcode_t *r, const char *name, double *v)
+{
+    int k = gc_named_index(r, name);
+    if (k >= 0) {
+        *v = r->named[k].v;
+        return 0;
+    }
+    return gc_named_builtin(r, name, v);
+}
+
+int ef_gc_named_set(ef_gcode_t *r, const char *name, double v, uint32_t col)
+{
+    int k = gc_named_index(r, name);
+    if (k < 0) {
+        if (r->nnamed >= EF_GCODE_NNAMED)
+            return ef_gc_err(r, col, "more than %d named parameters", EF_GCODE_NNAMED);
+        k = r->nnamed++;
+        snprintf(r->named[k].name, sizeof r->named[k].name, "%s", name);
+        r->named[k].level = name[0] == '_' ? -1 : r->depth;
+    }
+    r->named[k].v = v;
+    return EF_OK;
+}
+
+void ef_gc_named_drop_level(ef_gcode_t *r, int level)
+{
+    int j = 0;
+    for (int k = 0; k < r->nnamed; k++)
+        if (r->named[k].level != level)
+            r->named[j++] = r->named[k];
+    r->nnamed = j;
+}
+
+/* ---- coordinates ---------------------------------------------------------------------- */
+
+/* Rotation of v (XY only) by the active system's G10 L2 R angle (degrees); sign -1 undoes it. */
+static void gc_rotate(const ef_gcode_t *r, int cs, int sign, double v[3])
+{
+    double a = sign * r->rot[cs - 1] * (EF_GC_PI / 180.0);
+    if (a != 0) {
+        double c = cos(a), s = sin(a), x = c * v[0] - s * v[1], y = s * v[0] + c * v[1];
+        v[0] = x;
+        v[1] = y;
+    }
+}
+
+/* Machine = rotation(program + G92 offset) + work offset + tool length offset (mm), as
+ * LinuxCNC's canon maps them: G92 shifts the program frame before the G10 L2 R rotation, the
+ * rotation turns X and Y about the work offset's origin. */
+void ef_gc_to_prog(const ef_gcode_t *r, const double m[3], double p[3])
+{
+    const double *o = r->g5x[r->cs - 1];
+    for (int k = 0; k < 3; k++)
+        p[k] = m[k] - o[k] - r->tlo[k];
+    gc_rotate(r, r->cs, -1, p);
+    for (int k = 0; k < 3; k++)
+        p[k] -= r->g92[k];
+}
+
+void ef_gc_from_prog(const ef_gcode_t *r, const double p[3], double m[3])
+{
+    double cp[3], d[3];
+    ef_gc_to_prog(r, r->cur, cp);
+    for (int k = 0; k < 3; k++)
+        d[k] = p[k] - cp[k];
+    gc_rotate(r, r->cs, 1, d);
+    for (int k = 0; k < 3; k++)
+        m[k] = d[k] == 0 ? r->cur[k] : r->cur[k] + d[k];
 }
 
 /* ---- expressions ---------------------------------------------------------------------- */
@@ -148,15 +282,6 @@ static int gc_number(ef_gc_line_t *L, double *out)
     tmp[k] = 0;
     *out = strtod(tmp, NULL);
     return EF_OK;
-}
-
-/* Index of a named parameter, or -1. */
-static int gc_named_find(const ef_gcode_t *r, const char *name)
-{
-    for (int k = 0; k < r->nnamed; k++)
-        if (!strcmp(r->named_key[k], name))
-            return k;
-    return -1;
 }
 
 /* After '#': either <name> or a value giving the parameter number. */
@@ -282,7 +407,7 @@ static int gc_expr(ef_gc_line_t *L, int min_prec, double *out)
 }
 
 /* '[' expression ']' with the cursor on '['. */
-static int gc_bracket(ef_gc_line_t *L, double *out)
+int ef_gc_bracket(ef_gc_line_t *L, double *out)
 {
     uint32_t col = gc_here(L);
     L->i++;
@@ -308,6 +433,20 @@ static int gc_function(ef_gc_line_t *L, double *out)
                                   "FUP",  "LN",  "ROUND", "SIN",  "SQRT", "TAN"};
     uint32_t col = gc_here(L);
     int f = -1;
+    if (gc_at(L, "EXISTS[#<")) { /* EXISTS[#<name>]: 1 when the name is set here */
+        char name[EF_GCODE_NAME_MAX + 1];
+        int index;
+        double v;
+        L->i += 8;
+        int rc = gc_param_ref(L, &index, name, col);
+        if (rc)
+            return rc;
+        if (gc_peek(L) != ']')
+            return ef_gc_err(L->r, gc_here(L), "EXISTS needs the form EXISTS[#<name>]");
+        L->i++;
+        *out = ef_gc_named_get(L->r, name, &v) >= 0;
+        return EF_OK;
+    }
     for (int k = 0; k < (int)(sizeof names / sizeof names[0]); k++)
         if (gc_at(L, names[k]) && L->i + strlen(names[k]) < L->n &&
             L->c[L->i + strlen(names[k])] == '[') {
@@ -318,7 +457,7 @@ static int gc_function(ef_gc_line_t *L, double *out)
         return ef_gc_err(L->r, col, "expected a number, parameter, '[' or function");
     L->i += strlen(names[f]);
     double a, b = 0, v;
-    int rc = gc_bracket(L, &a);
+    int rc = ef_gc_bracket(L, &a);
     if (rc)
         return rc;
     switch (f) {
@@ -326,7 +465,7 @@ static int gc_function(ef_gc_line_t *L, double *out)
         if (gc_peek(L) != '/' || L->i + 1 >= L->n || L->c[L->i + 1] != '[')
             return ef_gc_err(L->r, gc_here(L), "ATAN needs the form ATAN[y]/[x]");
         L->i++;
-        if ((rc = gc_bracket(L, &b)) != 0)
+        if ((rc = ef_gc_bracket(L, &b)) != 0)
             return rc;
         v = atan2(a, b) / EF_GC_D2R;
         break;
@@ -389,20 +528,16 @@ static int gc_value(ef_gc_line_t *L, double *out)
         if (ch == '-')
             *out = -*out;
     } else if (ch == '[') {
-        rc = gc_bracket(L, out);
+        rc = ef_gc_bracket(L, out);
     } else if (ch == '#') {
         int index;
         char name[EF_GCODE_NAME_MAX + 1];
         L->i++;
         rc = gc_param_ref(L, &index, name, col);
         if (!rc && index) {
-            *out = L->r->param[index];
-        } else if (!rc) {
-            int k = gc_named_find(L->r, name);
-            if (k < 0)
-                rc = ef_gc_err(L->r, col, "parameter #<%s> is not defined", name);
-            else
-                *out = L->r->named_val[k];
+            *out = ef_gc_param_get(L->r, index);
+        } else if (!rc && ef_gc_named_get(L->r, name, out) < 0) {
+            rc = ef_gc_err(L->r, col, "parameter #<%s> is not defined", name);
         }
     } else if (gc_is_digit(ch) || ch == '.') {
         rc = gc_number(L, out);
@@ -419,8 +554,7 @@ static int gc_value(ef_gc_line_t *L, double *out)
 
 /* ---- lines ---------------------------------------------------------------------------- */
 
-/* Strip whitespace and comments, upper-case the rest, keep each character's column. */
-static int gc_compact(ef_gcode_t *r, const char *s, size_t n, ef_gc_line_t *L)
+int ef_gc_compact(ef_gcode_t *r, const char *s, size_t n, ef_gc_line_t *L)
 {
     L->n = 0;
     L->i = 0;
@@ -468,11 +602,12 @@ static int gc_code(ef_gc_line_t *L, char letter, double v, uint32_t col, int *co
 }
 
 /* Read the words and assignments of a compacted line. */
-static int gc_words(ef_gc_line_t *L)
+static int gc_words(ef_gc_line_t *L, int *n_words)
 {
     int rc;
     L->nw = 0;
     L->nas = 0;
+    *n_words = 0;
     memset(L->letter, 0, sizeof L->letter);
     while (L->i < L->n) {
         char ch = L->c[L->i];
@@ -500,7 +635,7 @@ static int gc_words(ef_gc_line_t *L)
         if (strchr("ABCUVW", ch))
             return ef_gc_err(L->r, col, "axis word '%c' not supported (X Y Z only)", ch);
         if (ch == 'O')
-            return ef_gc_err(L->r, col, "O-word (subroutines, loops) not supported");
+            return ef_gc_err(L->r, col, "O-word not at the start of the line");
         if (!strchr("DFGHIJKLMNPQRSTXYZ", ch))
             return ef_gc_err(L->r, col, "unsupported word '%c'", ch);
         L->i++;
@@ -509,6 +644,7 @@ static int gc_words(ef_gc_line_t *L)
         double v;
         if ((rc = gc_value(L, &v)) != 0)
             return rc;
+        (*n_words)++;
         if (ch == 'N')
             continue; /* line numbers carry no meaning for the path */
         if (L->nw >= EF_GC_MAX_WORDS)
@@ -531,8 +667,7 @@ static int gc_words(ef_gc_line_t *L)
     return EF_OK;
 }
 
-/* The word for a letter, or NULL. */
-static const ef_gc_word_t *gc_get(const ef_gc_line_t *L, char letter)
+const ef_gc_word_t *ef_gc_get(const ef_gc_line_t *L, char letter)
 {
     int k = L->letter[letter - 'A'];
     return k ? &L->w[k - 1] : NULL;
@@ -547,16 +682,33 @@ static void gc_gclass(int code, int *group, int *action)
     case 10:
     case 20:
     case 30:
-        *group = GR_MOTION;
-        return;
+    case 730:
+    case 810:
+    case 820:
+    case 830:
+    case 850:
+    case 860:
+    case 880:
+    case 890:
     case 800:
         *group = GR_MOTION;
-        *action = GA_IGNORE;
         return;
     case 40:
+    case 100:
+    case 280:
+    case 281:
+    case 300:
+    case 301:
     case 530:
+    case 920:
+    case 921:
+    case 922:
+    case 923:
         *group = GR_NONMODAL;
-        *action = GA_EVENT;
+        return;
+    case 70:
+    case 80:
+        *group = GR_LATHE;
         return;
     case 170:
     case 180:
@@ -575,9 +727,9 @@ static void gc_gclass(int code, int *group, int *action)
     case 911:
         *group = GR_ARCDIST;
         return;
+    case 930:
     case 940:
         *group = GR_FEEDMODE;
-        *action = GA_IGNORE;
         return;
     case 400:
         *group = GR_CUTTER;
@@ -587,12 +739,10 @@ static void gc_gclass(int code, int *group, int *action)
     case 431:
     case 490:
         *group = GR_TOOLLEN;
-        *action = GA_EVENT;
         return;
     case 980:
     case 990:
         *group = GR_RETRACT;
-        *action = GA_IGNORE;
         return;
     case 540:
     case 550:
@@ -604,7 +754,6 @@ static void gc_gclass(int code, int *group, int *action)
     case 592:
     case 593:
         *group = GR_COORD;
-        *action = GA_EVENT;
         return;
     case 610:
     case 611:
@@ -626,24 +775,24 @@ static void gc_gclass(int code, int *group, int *action)
 /* Why a G code is refused, for the message. */
 static const char *gc_why(int code)
 {
+    if (code == 840 || code == 740 || code == 331)
+        return "rigid tapping is spindle-synchronized motion";
+    if (code == 870)
+        return "back boring needs spindle orientation";
     if (code >= 730 && code <= 890)
         return "canned cycle";
     if (code == 410 || code == 420 || code == 411 || code == 421)
-        return "cutter radius compensation";
-    if (code == 280 || code == 281 || code == 300 || code == 301)
-        return "return to a stored position (machine coordinates)";
-    if (code == 330 || code == 331 || code == 760)
-        return "threading";
+        return "cutter radius compensation: the program must give the tool centre's path";
+    if (code == 330 || code == 760)
+        return "threading is spindle-synchronized motion";
     if (code >= 380 && code <= 385)
         return "probing";
     if (code >= 50 && code <= 53)
         return "spline";
-    if (code == 100 || (code >= 920 && code <= 923) || code == 520)
-        return "coordinate system change";
-    if (code == 930)
-        return "inverse-time feed";
+    if (code == 520)
+        return "local coordinate system (G52)";
     if (code == 950)
-        return "feed per revolution";
+        return "feed per revolution is spindle-synchronized";
     return "not in the supported subset";
 }
 
@@ -668,10 +817,34 @@ static void gc_append(char *text, size_t n, const ef_gc_word_t *w)
     snprintf(text + len, n - len, "%s%s", len ? " " : "", tmp);
 }
 
-/* A fresh queue item of a kind. */
-static ef_gcode_item_t *gc_push(ef_gcode_t *r, int kind, uint32_t col)
+/* The queue in use: the heap array of a long expansion, else the inline one. */
+static ef_gcode_item_t *gc_queue(ef_gcode_t *r, size_t *cap)
 {
-    ef_gcode_item_t *it = &r->queue[r->qlen++];
+    *cap = r->queue ? r->qcap : sizeof r->queue0 / sizeof r->queue0[0];
+    return r->queue ? r->queue : r->queue0;
+}
+
+ef_gcode_item_t *ef_gc_push(ef_gcode_t *r, int kind, uint32_t col)
+{
+    size_t cap0;
+    ef_gcode_item_t *q0 = gc_queue(r, &cap0);
+    if (r->qlen >= cap0) {
+        if (cap0 >= EF_GCODE_LINE_ITEMS_MAX) {
+            ef_gc_err(r, col, "line expands into more than %d items", EF_GCODE_LINE_ITEMS_MAX);
+            return NULL;
+        }
+        size_t cap = cap0 * 4 > EF_GCODE_LINE_ITEMS_MAX ? EF_GCODE_LINE_ITEMS_MAX : cap0 * 4;
+        ef_gcode_item_t *q = malloc(cap * sizeof *q);
+        if (!q) {
+            ef_gc_err(r, col, "out of memory");
+            return NULL;
+        }
+        memcpy(q, q0, r->qlen * sizeof *q);
+        free(r->queue);
+        r->queue = q0 = q;
+        r->qcap = cap;
+    }
+    ef_gcode_item_t *it = &q0[r->qlen++];
     memset(it, 0, sizeof *it);
     it->kind = kind;
     it->line = r->line;
@@ -700,24 +873,127 @@ static void gc_plane_axes(int plane, int *a, int *b, int *nrm, char *la, char *l
     }
 }
 
-#define EF_GC_TWO_PI (2.0 * 3.14159265358979323846)
+/* A feed within the reader's limit; above it, clamped with a note naming the line. */
+static int gc_feed_clamp(ef_gcode_t *r, double *f, uint32_t col, const char *what)
+{
+    if (*f > r->max_feed) {
+        ef_gcode_item_t *it = ef_gc_push(r, EF_GC_NOTE, col);
+        if (!it)
+            return r->err;
+        snprintf(it->text, sizeof it->text, "%s %.6g mm/min above the limit %.6g mm/min: clamped",
+                 what, *f, r->max_feed);
+        *f = r->max_feed;
+    }
+    return EF_OK;
+}
 
-/* Build an arc item from the current position to end; errors point at col. */
-static int gc_arc(ef_gcode_t *r, const ef_gc_line_t *L, const double end[3], int g3, double scale,
-                  uint32_t col)
+int ef_gc_emit_straight(ef_gcode_t *r, int rapid, const double end[3], double feed, uint32_t col)
+{
+    int rc;
+    for (int k = 0; k < 3; k++)
+        if ((rc = gc_coord_ok(r, end[k], col, "coordinate")) != 0)
+            return rc;
+    double len = sqrt((end[0] - r->cur[0]) * (end[0] - r->cur[0]) +
+                      (end[1] - r->cur[1]) * (end[1] - r->cur[1]) +
+                      (end[2] - r->cur[2]) * (end[2] - r->cur[2]));
+    int zero = len <= EF_GCODE_ZERO_LEN;
+    if (!rapid && !zero && r->inverse_time) {
+        feed = feed * len; /* G93: F is 1 / minutes for this move */
+        if ((rc = gc_feed_clamp(r, &feed, col, "inverse-time feed")) != 0)
+            return rc;
+    }
+    ef_gcode_item_t *it = ef_gc_push(r,
+                                     zero    ? EF_GC_ZERO_MOVE
+                                     : rapid ? EF_GC_RAPID
+                                             : EF_GC_LINE,
+                                     col);
+    if (!it)
+        return r->err;
+    memcpy(it->start, r->cur, sizeof it->start);
+    memcpy(it->end, zero ? r->cur : end, sizeof it->end);
+    if (!rapid)
+        it->feed = feed;
+    if (zero)
+        snprintf(it->text, sizeof it->text, "G%d", rapid ? 0 : 1);
+    else
+        memcpy(r->cur, end, sizeof r->cur);
+    return EF_OK;
+}
+
+int ef_gc_emit_dwell(ef_gcode_t *r, double seconds, uint32_t col)
+{
+    char text[48];
+    snprintf(text, sizeof text, "G4 P%.6g", seconds);
+    return ef_gc_emit_event(r, text, col);
+}
+
+int ef_gc_emit_event(ef_gcode_t *r, const char *text, uint32_t col)
+{
+    ef_gcode_item_t *it = ef_gc_push(r, EF_GC_EVENT, col);
+    if (!it)
+        return r->err;
+    snprintf(it->text, sizeof it->text, "%s", text);
+    return EF_OK;
+}
+
+int ef_gc_emit_tolerance(ef_gcode_t *r, int mode, double p, double q, uint32_t col)
+{
+    ef_gcode_item_t *it = ef_gc_push(r, EF_GC_TOLERANCE, col);
+    if (!it)
+        return r->err;
+    it->path_mode = mode;
+    it->p_tol = mode == EF_GC_PATH_BLEND ? p : 0;
+    it->q_tol = mode == EF_GC_PATH_BLEND ? q : 0;
+    return EF_OK;
+}
+
+void ef_gc_jump(ef_gcode_t *r, ef_gcode_mark_t at)
+{
+    r->pos = at.pos;
+    r->line = at.line - 1;
+}
+
+ef_gcode_mark_t ef_gc_here_mark(const ef_gcode_t *r)
+{
+    ef_gcode_mark_t m = {r->pos, r->line + 1};
+    return m;
+}
+
+/* Once-only note of an ignored word or line kind (bit of ignored_seen). */
+static int gc_ignored_once(ef_gcode_t *r, int bit, uint32_t col, const char *text)
+{
+    if (r->ignored_seen & (1u << bit))
+        return EF_OK;
+    r->ignored_seen |= 1u << bit;
+    ef_gcode_item_t *it = ef_gc_push(r, EF_GC_IGNORED, col);
+    if (!it)
+        return r->err;
+    snprintf(it->text, sizeof it->text, "%s", text);
+    return EF_OK;
+}
+
+/* Arc from the current position (program frame sp, mm) to ep; the item in machine
+ * coordinates. Errors point at col. */
+static int gc_arc(ef_gcode_t *r, const ef_gc_line_t *L, const double sp[3], const double ep[3],
+                  int g3, double scale, uint32_t col)
 {
     int a, b, nrm;
     char la, lb, ln;
     gc_plane_axes(r->plane, &a, &b, &nrm, &la, &lb, &ln);
-    const ef_gc_word_t *wa = gc_get(L, la), *wb = gc_get(L, lb), *wn = gc_get(L, ln),
-                       *wr = gc_get(L, 'R'), *wp = gc_get(L, 'P');
+    const ef_gc_word_t *wa = ef_gc_get(L, la), *wb = ef_gc_get(L, lb), *wn = ef_gc_get(L, ln),
+                       *wr = ef_gc_get(L, 'R'), *wp = ef_gc_get(L, 'P');
     const char *gname = g3 ? "G3" : "G2";
-    double c[3] = {r->cur[0], r->cur[1], r->cur[2]};
-    double sa = r->cur[a], sb = r->cur[b], ea = end[a], eb = end[b];
-    double chord = hypot(ea - sa, eb - sb), radius;
+    double c[3] = {sp[0], sp[1], sp[2]};
+    double sa = sp[a], sb = sp[b], ea = ep[a], eb = ep[b];
+    double chord = hypot(ea - sa, eb - sb), radius, r1;
     int turns = 1, rc;
     if (wn)
         return ef_gc_err(r, wn->col, "%c word on a G%d-plane arc", ln, r->plane);
+    if (r->plane != 17 && r->rot[r->cs - 1] != 0)
+        return ef_gc_err(r, col,
+                         "G%d arc in a rotated coordinate system (G10 L2 R): only G17 "
+                         "arcs turn with it",
+                         r->plane);
     if (wp) {
         if (wp->v < 1 || wp->v != floor(wp->v) || wp->v > 1e6)
             return ef_gc_err(r, wp->col, "%s P (turns) must be a whole number >= 1, got %.6g",
@@ -734,9 +1010,11 @@ static int gc_arc(ef_gcode_t *r, const ef_gc_line_t *L, const double end[3], int
             return ef_gc_err(r, wr->col,
                              "%s R form with end equal to start (a full circle needs IJK)", gname);
         radius = fabs(R);
+        if (radius <= EF_GCODE_ZERO_LEN)
+            return ef_gc_err(r, wr->col, "%s R is zero", gname);
         h2 = radius * radius - chord * chord / 4;
-        if (h2 < 0) {
-            if (chord / 2 - radius > fmax(EF_GCODE_ARC_ABS_TOL, EF_GCODE_ARC_REL_TOL * radius))
+        if (h2 < 0 || chord / 2 / radius > 1 - 1e-12) {
+            if (chord / 2 - radius > EF_GCODE_ARC_R_TOL)
                 return ef_gc_err(r, wr->col, "%s radius %.4f smaller than half the chord %.4f",
                                  gname, radius, chord / 2);
             h2 = 0;
@@ -748,6 +1026,7 @@ static int gc_arc(ef_gcode_t *r, const ef_gc_line_t *L, const double end[3], int
         double ua = (ea - sa) / chord, ub = (eb - sb) / chord;
         c[a] = (sa + ea) / 2 + side * h * -ub;
         c[b] = (sb + eb) / 2 + side * h * ua;
+        r1 = radius;
     } else {
         if (!wa && !wb)
             return ef_gc_err(r, col, "%s needs %c%c offsets or R", gname, la, lb);
@@ -762,13 +1041,18 @@ static int gc_arc(ef_gcode_t *r, const ef_gc_line_t *L, const double end[3], int
             (rc = gc_coord_ok(r, c[b], col, "arc centre")) != 0)
             return rc;
         radius = hypot(sa - c[a], sb - c[b]);
-        double r1 = hypot(ea - c[a], eb - c[b]);
-        double tol = fmax(EF_GCODE_ARC_ABS_TOL, EF_GCODE_ARC_REL_TOL * radius);
-        if (radius <= EF_GCODE_ZERO_LEN)
-            return ef_gc_err(r, col, "%s arc radius is zero (centre at the start)", gname);
-        if (fabs(r1 - radius) > tol)
-            return ef_gc_err(r, col, "%s arc radius mismatch: start %.3f end %.3f (tolerance %.3f)",
-                             gname, radius, r1, tol);
+        r1 = hypot(ea - c[a], eb - c[b]);
+        if (radius < EF_GCODE_ARC_R_TOL || r1 < EF_GCODE_ARC_R_TOL)
+            return ef_gc_err(r, col, "%s arc radius is zero (start %.4f, end %.4f)", gname, radius,
+                             r1);
+        /* LinuxCNC 2.9's spiral rule; inside it the radius changes linearly with the angle */
+        double tol = r->units == 20 ? EF_GCODE_ARC_ABS_TOL_IN : EF_GCODE_ARC_ABS_TOL_MM;
+        double dr = fabs(r1 - radius), rel = dr / fmax(radius, r1);
+        if (dr > 100 * tol || (rel > EF_GCODE_ARC_REL_TOL && dr > tol))
+            return ef_gc_err(r, col,
+                             "%s arc radius mismatch: start %.4f end %.4f (differ by %.4g mm; "
+                             "allowed %.4g mm, or %.4g%% up to %.4g mm)",
+                             gname, radius, r1, dr, tol, 100 * EF_GCODE_ARC_REL_TOL, 100 * tol);
     }
     double sweep;
     if (chord <= EF_GCODE_ZERO_LEN) {
@@ -784,28 +1068,213 @@ static int gc_arc(ef_gcode_t *r, const ef_gc_line_t *L, const double end[3], int
         sweep = fabs(sweep);
     }
     sweep += (turns - 1) * EF_GC_TWO_PI;
-    ef_gcode_item_t *it = gc_push(r, EF_GC_ARC, col);
+    double feed = r->feed;
+    if (r->inverse_time) {
+        double rise = ep[nrm] - sp[nrm], flat = sweep * 0.5 * (radius + r1);
+        feed *= sqrt(flat * flat + rise * rise);
+        if ((rc = gc_feed_clamp(r, &feed, col, "inverse-time feed")) != 0)
+            return rc;
+    }
+    double em[3], cm[3];
+    ef_gc_from_prog(r, ep, em);
+    ef_gc_from_prog(r, c, cm);
+    for (int k = 0; k < 3; k++)
+        if ((rc = gc_coord_ok(r, em[k], col, "coordinate")) != 0 ||
+            (rc = gc_coord_ok(r, cm[k], col, "arc centre")) != 0)
+            return rc;
+    ef_gcode_item_t *it = ef_gc_push(r, EF_GC_ARC, col);
+    if (!it)
+        return r->err;
     memcpy(it->start, r->cur, sizeof it->start);
-    memcpy(it->end, end, sizeof it->end);
-    memcpy(it->centre, c, sizeof it->centre);
+    memcpy(it->end, em, sizeof it->end);
+    memcpy(it->centre, cm, sizeof it->centre);
+    it->centre[nrm] = r->cur[nrm];
     it->radius = radius;
+    it->radius_end = r1;
     it->sweep = g3 ? sweep : -sweep;
     it->dir = g3 ? 1 : -1;
     it->plane = r->plane;
     it->turns = turns;
-    it->feed = r->feed;
+    it->feed = feed;
+    memcpy(r->cur, em, sizeof r->cur);
     return EF_OK;
 }
 
-/* Carry out one read line: modal settings, events, tolerance, motion, stop. */
+/* The tool table entry of a tool, or NULL. */
+static ef_gcode_tool_t *gc_tool(ef_gcode_t *r, int tool, int create)
+{
+    for (int k = 0; k < r->ntools; k++)
+        if (r->tools[k].tool == tool)
+            return &r->tools[k];
+    if (!create || r->ntools >= EF_GCODE_NTOOLS)
+        return NULL;
+    ef_gcode_tool_t *t = &r->tools[r->ntools++];
+    memset(t, 0, sizeof *t);
+    t->tool = tool;
+    return t;
+}
+
+/* A whole number word in a range. */
+static int gc_int_word(ef_gcode_t *r, const ef_gc_word_t *w, int lo, int hi, const char *what,
+                       int *out)
+{
+    if (w->v != floor(w->v) || w->v < lo || w->v > hi)
+        return ef_gc_err(r, w->col, "%s %c%.6g: must be a whole number %d..%d", what, w->letter,
+                         w->v, lo, hi);
+    *out = (int)w->v;
+    return EF_OK;
+}
+
+/* G10 L1 / L2 / L10 / L11 / L20: tool table and work offsets. */
+static int gc_g10(ef_gcode_t *r, const ef_gc_line_t *L, const ef_gc_word_t *g,
+                  const ef_gc_word_t *axis[3], double scale)
+{
+    const ef_gc_word_t *wl = ef_gc_get(L, 'L'), *wp = ef_gc_get(L, 'P'), *wr = ef_gc_get(L, 'R');
+    int l = 0, p = 0, rc;
+    if (!wl)
+        return ef_gc_err(r, g->col, "G10 needs an L word (L1, L2, L10, L11 or L20)");
+    if (!wp)
+        return ef_gc_err(r, g->col, "G10 needs a P word");
+    if ((rc = gc_int_word(r, wl, 1, 20, "G10", &l)) != 0)
+        return rc;
+    if (l == 2 || l == 20) {
+        if ((rc = gc_int_word(r, wp, 0, 9, "G10 coordinate system", &p)) != 0)
+            return rc;
+        int cs = p == 0 ? r->cs : p;
+        double *o = r->g5x[cs - 1], pn[3], q[3];
+        /* L20: the offset that makes the current point read the given values in system cs,
+         * the other axes keeping their current reading there (with a rotation both X and Y
+         * of the offset change, as in LinuxCNC) */
+        for (int k = 0; k < 3; k++)
+            pn[k] = r->cur[k] - o[k] - r->tlo[k];
+        gc_rotate(r, cs, -1, pn);
+        for (int k = 0; k < 3; k++) {
+            pn[k] -= r->g92[k];
+            if (axis[k])
+                pn[k] = axis[k]->v * scale / (k == 0 && r->diameter ? 2 : 1);
+            q[k] = pn[k] + r->g92[k];
+        }
+        gc_rotate(r, cs, 1, q);
+        int xy = axis[0] || axis[1];
+        for (int k = 0; k < 3; k++) {
+            if (l == 2 ? !axis[k] : !(axis[k] || (k < 2 && xy)))
+                continue;
+            o[k] = l == 2 ? pn[k] : r->cur[k] - r->tlo[k] - q[k];
+            if ((rc = gc_coord_ok(r, o[k], axis[k] ? axis[k]->col : g->col, "work offset")) != 0)
+                return rc;
+        }
+        if (wr) {
+            if (!isfinite(wr->v) || fabs(wr->v) > 1e6)
+                return ef_gc_err(r, wr->col, "G10 rotation R%.6g out of range", wr->v);
+            r->rot[cs - 1] = wr->v;
+        }
+        return EF_OK;
+    }
+    if (l == 1 || l == 10 || l == 11) {
+        if ((rc = gc_int_word(r, wp, 1, 99999, "G10 tool", &p)) != 0)
+            return rc;
+        ef_gcode_tool_t *t = gc_tool(r, p, 1);
+        if (!t)
+            return ef_gc_err(r, wp->col, "tool table full (%d tools)", EF_GCODE_NTOOLS);
+        /* L10: the offset that makes the current point read the given values with the active
+         * offsets; L11: the same in G59.3 without G92 */
+        int cs = l == 11 ? 9 : r->cs;
+        const double *o = r->g5x[cs - 1];
+        double q[3];
+        ef_gc_to_prog(r, r->cur, q);
+        for (int k = 0; k < 3; k++) {
+            if (axis[k])
+                q[k] = axis[k]->v * scale;
+            q[k] += l == 11 ? 0 : r->g92[k];
+        }
+        gc_rotate(r, cs, 1, q);
+        for (int k = 0; k < 3; k++) {
+            if (!axis[k])
+                continue;
+            double v = axis[k]->v * scale;
+            t->off[k] = l == 1 ? v : r->cur[k] - o[k] - q[k];
+            if ((rc = gc_coord_ok(r, t->off[k], axis[k]->col, "tool offset")) != 0)
+                return rc;
+        }
+        if (wr)
+            t->diameter = 2 * fabs(wr->v) * scale;
+        return EF_OK;
+    }
+    return ef_gc_err(r, wl->col, "G10 L%d not supported (L1, L2, L10, L11, L20)", l);
+}
+
+/* G28 / G30 (go to a stored position, through an intermediate point given by axis words). */
+static int gc_home(ef_gcode_t *r, const double stored[3], const ef_gc_word_t *axis[3], double scale,
+                   uint32_t col)
+{
+    int any = axis[0] || axis[1] || axis[2], rc;
+    double cp[3], ip[3], im[3], end[3];
+    ef_gc_to_prog(r, r->cur, cp);
+    if (any) {
+        for (int k = 0; k < 3; k++) {
+            ip[k] = cp[k];
+            if (axis[k]) {
+                double v = axis[k]->v * scale;
+                if (k == 0 && r->diameter)
+                    v /= 2;
+                ip[k] = r->absolute ? v : cp[k] + v;
+            }
+        }
+        ef_gc_from_prog(r, ip, im);
+        if ((rc = ef_gc_emit_straight(r, 1, im, 0, col)) != 0)
+            return rc;
+    }
+    for (int k = 0; k < 3; k++)
+        end[k] = !any || axis[k] ? stored[k] + r->tlo[k] : r->cur[k];
+    return ef_gc_emit_straight(r, 1, end, 0, col);
+}
+
+/* G92 / G92.1 / G92.2 / G92.3. */
+static int gc_g92(ef_gcode_t *r, int code, const ef_gc_word_t *axis[3], double scale, uint32_t col)
+{
+    int rc;
+    if (code == 920) {
+        if (!axis[0] && !axis[1] && !axis[2])
+            return ef_gc_err(r, col, "G92 needs at least one axis word");
+        /* G92 lives in the program frame (before the rotation): the offset that makes the
+         * current point read the given values */
+        double cp[3];
+        ef_gc_to_prog(r, r->cur, cp);
+        for (int k = 0; k < 3; k++) {
+            if (!axis[k])
+                continue;
+            double v = axis[k]->v * scale;
+            if (k == 0 && r->diameter)
+                v /= 2;
+            r->g92[k] = cp[k] + r->g92[k] - v;
+            if ((rc = gc_coord_ok(r, r->g92[k], axis[k]->col, "G92 offset")) != 0)
+                return rc;
+        }
+        memcpy(r->g92_saved, r->g92, sizeof r->g92);
+        r->g92_on = 1;
+    } else if (code == 921) {
+        memset(r->g92, 0, sizeof r->g92);
+        memset(r->g92_saved, 0, sizeof r->g92_saved);
+        r->g92_on = 0;
+    } else if (code == 922) {
+        memset(r->g92, 0, sizeof r->g92);
+        r->g92_on = 0;
+    } else {
+        memcpy(r->g92, r->g92_saved, sizeof r->g92);
+        r->g92_on = 1;
+    }
+    return EF_OK;
+}
+
+/* Carry out one read line, in LinuxCNC's order of execution (docs/gcode.md). */
 static int gc_execute(ef_gcode_t *r, ef_gc_line_t *L)
 {
     const ef_gc_word_t *grp[GR_COUNT] = {0};
     const ef_gc_word_t *mgrp[10] = {0};
-    const ef_gc_word_t *stop = NULL, *wf = gc_get(L, 'F');
+    const ef_gc_word_t *stop = NULL, *wf = ef_gc_get(L, 'F'), *g80 = NULL;
     char pre[128] = "", post[128] = "";
     uint32_t pre_col = 0, post_col = 0;
-    int rc, action, group;
+    int rc, action, group, m_takes_pq = 0;
     char name[16];
 
     /* Modal-group conflicts and unsupported codes first, so nothing of a bad line happens. */
@@ -816,7 +1285,14 @@ static int gc_execute(ef_gcode_t *r, ef_gc_line_t *L)
             gc_fmt_code(name, sizeof name, 'G', w->code);
             if (action == GA_UNSUPPORTED)
                 return ef_gc_err(r, w->col, "unsupported %s (%s)", name, gc_why(w->code));
-            if (grp[group]) {
+            if (group == GR_MOTION && grp[group] && (w->code == 800 || grp[group]->code == 800)) {
+                /* LinuxCNC: with G80 and a motion code on one line the motion code wins */
+                if (w->code == 800) {
+                    g80 = w;
+                    continue;
+                }
+                g80 = grp[group];
+            } else if (grp[group]) {
                 char other[16];
                 gc_fmt_code(other, sizeof other, 'G', grp[group]->code);
                 return ef_gc_err(r, w->col, "%s and %s on one line are in the same modal group",
@@ -828,14 +1304,20 @@ static int gc_execute(ef_gcode_t *r, ef_gc_line_t *L)
             gc_fmt_code(name, sizeof name, 'M', c);
             if (c % 10 || c > 1990 || c == 470 || c == 980 || c == 990)
                 return ef_gc_err(r, w->col, "unsupported %s", name);
+            if (c >= 700 && c <= 730)
+                return ef_gc_err(r, w->col, "unsupported %s (modal state save and restore)", name);
             if (c == 0 || c == 10 || c == 20 || c == 300 || c == 600)
                 mg = 4;
-            else if (c == 60)
+            else if (c == 60 || c == 610)
                 mg = 6;
             else if (c >= 30 && c <= 50)
                 mg = 7;
             else if (c == 90)
                 mg = 8; /* M7 and M8 may share a line (both coolants on): only M9 is checked */
+            else if (c >= 620 && c <= 680)
+                mg = 5;
+            if (c == 610 || (c >= 620 && c <= 680))
+                m_takes_pq = 1;
             if (mg >= 0 && mgrp[mg]) {
                 char other[16];
                 gc_fmt_code(other, sizeof other, 'M', mgrp[mg]->code);
@@ -847,7 +1329,13 @@ static int gc_execute(ef_gcode_t *r, ef_gc_line_t *L)
         }
     }
 
-    /* Modal settings take effect before the line's values are read as coordinates. */
+    /* Feed mode, then (as before) units, plane and distance modes, then F. */
+    if (grp[GR_FEEDMODE]) {
+        int inv = grp[GR_FEEDMODE]->code == 930;
+        if (inv != r->inverse_time)
+            r->feed = 0; /* LinuxCNC: a feed mode change needs a new F */
+        r->inverse_time = inv;
+    }
     if (grp[GR_UNITS])
         r->units = grp[GR_UNITS]->code == 200 ? 20 : 21;
     if (grp[GR_PLANE])
@@ -856,62 +1344,78 @@ static int gc_execute(ef_gcode_t *r, ef_gc_line_t *L)
         r->absolute = grp[GR_DIST]->code == 900;
     if (grp[GR_ARCDIST])
         r->arc_absolute = grp[GR_ARCDIST]->code == 901;
+    if (grp[GR_LATHE])
+        r->diameter = grp[GR_LATHE]->code == 70;
+    if (grp[GR_RETRACT])
+        r->retract_r = grp[GR_RETRACT]->code == 990;
     double scale = r->units == 20 ? EF_GC_INCH : 1.0;
-
-    /* F: read in this line's units, kept in mm/min across later unit changes. */
     if (wf) {
-        double f = wf->v * scale;
-        if (!isfinite(f) || f < 0 || f > EF_GCODE_MAX_FEED)
-            return ef_gc_err(r, wf->col, "feed F%.6g outside 0..%g mm/min", wf->v,
-                             EF_GCODE_MAX_FEED);
+        double f = r->inverse_time ? wf->v : wf->v * scale;
+        if (!isfinite(f) || f < 0)
+            return ef_gc_err(r, wf->col, "feed F%.6g must not be negative", wf->v);
+        if (!r->inverse_time && (rc = gc_feed_clamp(r, &f, wf->col, "feed")) != 0)
+            return rc;
         r->feed = f;
     }
 
     /* Which words have a use on this line. */
-    int motion_word = grp[GR_MOTION] && grp[GR_MOTION]->code != 800;
+    const ef_gc_word_t *g0 = grp[GR_NONMODAL];
+    int g0c = g0 ? g0->code : -1;
     int motion = r->motion;
     if (grp[GR_MOTION])
-        motion = motion_word ? grp[GR_MOTION]->code / 10 + 1 : 0;
-    const ef_gc_word_t *axis[3] = {gc_get(L, 'X'), gc_get(L, 'Y'), gc_get(L, 'Z')};
+        motion = grp[GR_MOTION]->code == 800 ? -1 : grp[GR_MOTION]->code;
+    const ef_gc_word_t *axis[3] = {ef_gc_get(L, 'X'), ef_gc_get(L, 'Y'), ef_gc_get(L, 'Z')};
     const ef_gc_word_t *first_axis = NULL;
     for (int k = 0; k < 3; k++)
         if (axis[k] && (!first_axis || axis[k]->col < first_axis->col))
             first_axis = axis[k];
-    int g4 = grp[GR_NONMODAL] && grp[GR_NONMODAL]->code == 40;
-    int g53 = grp[GR_NONMODAL] && grp[GR_NONMODAL]->code == 530;
-    int arc = (motion == 3 || motion == 4) && first_axis && !g53;
+    int g4 = g0c == 40, g53 = g0c == 530, g10 = g0c == 100;
+    int axis_owner = g10 || g0c == 280 || g0c == 300 || g0c == 920 ||
+                     (grp[GR_TOOLLEN] && grp[GR_TOOLLEN]->code == 431);
+    int is_cycle = motion == 730 || (motion >= 810 && motion <= 890);
+    int arcmode = motion == 20 || motion == 30;
+    int ijk = ef_gc_get(L, 'I') || ef_gc_get(L, 'J') || ef_gc_get(L, 'K');
+    int moves = !axis_owner && (first_axis || (arcmode && ijk && !g53));
+    int arc = arcmode && moves && !g53;
+    int cycle = is_cycle && moves;
     int g64 = grp[GR_PATH] && grp[GR_PATH]->code == 640;
-    if (first_axis && motion == 0)
+    if (first_axis && !axis_owner && motion < 0)
         return ef_gc_err(r, first_axis->col, "axis word with no motion mode (G0, G1, G2 or G3)");
-    if (g53 && motion != 1 && motion != 2)
-        return ef_gc_err(r, grp[GR_NONMODAL]->col, "G53 needs G0 or G1");
+    if (g53 && motion != 0 && motion != 10)
+        return ef_gc_err(r, g0->col, "G53 needs G0 or G1");
+    if (g53 && !r->absolute)
+        return ef_gc_err(r, g0->col, "G53 needs absolute distance mode (G90)");
     static const char arc_letters[] = "IJKR";
     for (int k = 0; k < 4; k++) {
-        const ef_gc_word_t *w = gc_get(L, arc_letters[k]);
-        if (w && !arc) {
-            if ((motion == 3 || motion == 4) && !first_axis)
-                return ef_gc_err(r, w->col, "%s with no X, Y or Z word", motion == 3 ? "G2" : "G3");
-            return ef_gc_err(r, w->col, "%c word with no G2/G3 arc", arc_letters[k]);
+        const ef_gc_word_t *w = ef_gc_get(L, arc_letters[k]);
+        if (w && !arc && !cycle && !(g10 && arc_letters[k] == 'R')) {
+            if (arcmode && !first_axis)
+                return ef_gc_err(r, w->col, "%s with no X, Y or Z word",
+                                 motion == 20 ? "G2" : "G3");
+            return ef_gc_err(r, w->col, "%c word with no G2/G3 arc, canned cycle or G10",
+                             arc_letters[k]);
         }
     }
-    const ef_gc_word_t *wp = gc_get(L, 'P'), *wq = gc_get(L, 'Q');
-    if (wp && !g4 && !g64 && !arc)
-        return ef_gc_err(r, wp->col, "P word with no G4, G64 or G2/G3 arc");
-    if (wq && !g64)
-        return ef_gc_err(r, wq->col, "Q word with no G64");
-    if (wq && !wp)
-        return ef_gc_err(r, wq->col, "G64 Q needs a P tolerance");
+    const ef_gc_word_t *wp = ef_gc_get(L, 'P'), *wq = ef_gc_get(L, 'Q'), *wl = ef_gc_get(L, 'L');
+    if (wp && !g4 && !g64 && !arc && !cycle && !g10 && !m_takes_pq)
+        return ef_gc_err(r, wp->col,
+                         "P word with no G4, G10, G64, G2/G3 arc, canned cycle or M "
+                         "code that takes it");
+    if (wq && !g64 && !cycle && !m_takes_pq)
+        return ef_gc_err(r, wq->col, "Q word with no G64, canned cycle or M code that takes it");
+    if (wl && !g10 && !cycle && !m_takes_pq)
+        return ef_gc_err(r, wl->col, "L word with no G10, canned cycle or M code that takes it");
     if (g4 && (!wp || !(wp->v >= 0)))
-        return ef_gc_err(r, grp[GR_NONMODAL]->col, "G4 needs a dwell time P >= 0");
+        return ef_gc_err(r, g0->col, "G4 needs a dwell time P >= 0");
+    if (r->inverse_time && (motion == 10 || arcmode) && moves && !g53 && !wf)
+        return ef_gc_err(r, grp[GR_MOTION] ? grp[GR_MOTION]->col : first_axis->col,
+                         "G93 inverse-time feed: each G1/G2/G3 needs its F word");
 
     /* Pass-through words, in source order: before the motion, except the stops after it. */
     for (int k = 0; k < L->nw; k++) {
         const ef_gc_word_t *w = &L->w[k];
         int is_pre = 0;
-        if (w->letter == 'G') {
-            gc_gclass(w->code, &group, &action);
-            is_pre = action == GA_EVENT && w->code != 530;
-        } else if (w->letter == 'M') {
+        if (w->letter == 'M') {
             if (w->code == 20 || w->code == 300) {
                 stop = w;
             } else if (w->code == 0 || w->code == 10 || w->code == 600) {
@@ -920,7 +1424,10 @@ static int gc_execute(ef_gcode_t *r, ef_gc_line_t *L)
             } else {
                 is_pre = 1;
             }
-        } else if (strchr("DHLST", w->letter) || (w->letter == 'P' && g4)) {
+        } else if (w->letter == 'G') {
+            is_pre = w->code == 40;
+        } else if (strchr("DST", w->letter) || (w->letter == 'P' && (g4 || m_takes_pq)) ||
+                   (strchr("QL", w->letter) && m_takes_pq)) {
             is_pre = 1;
         }
         if (is_pre) {
@@ -928,101 +1435,163 @@ static int gc_execute(ef_gcode_t *r, ef_gc_line_t *L)
             pre_col = pre_col ? pre_col : w->col;
         }
     }
-    if (pre[0]) {
-        ef_gcode_item_t *it = gc_push(r, EF_GC_EVENT, pre_col);
-        snprintf(it->text, sizeof it->text, "%s", pre);
+    const ef_gc_word_t *wt = ef_gc_get(L, 'T');
+    if (wt && (rc = gc_int_word(r, wt, 0, 99999, "tool", &r->tool_prep)) != 0)
+        return rc;
+    for (int k = 0; k < L->nw; k++) {
+        const ef_gc_word_t *w = &L->w[k];
+        if (w->letter != 'M')
+            continue;
+        if (w->code == 60)
+            r->tool_cur = r->tool_prep;
+        else if (w->code == 610) {
+            if (!wq)
+                return ef_gc_err(r, w->col, "M61 needs a Q word (the tool number)");
+            if ((rc = gc_int_word(r, wq, 0, 99999, "M61 tool", &r->tool_cur)) != 0)
+                return rc;
+        } else if (w->code == 30 || w->code == 40 || w->code == 50)
+            r->spindle = w->code / 10;
     }
+    if (pre[0] && (rc = ef_gc_emit_event(r, pre, pre_col)) != 0)
+        return rc;
     /* Accepted words with no effect on the path: one note each, the first time only. */
-    static const int ignored[] = {800, 940, 400, 980, 990, 960, 970};
+    static const int ignored[] = {400, 960, 970};
     for (int k = 0; k < L->nw; k++) {
         const ef_gc_word_t *w = &L->w[k];
         for (int j = 0; j < (int)(sizeof ignored / sizeof ignored[0]); j++)
-            if (w->letter == 'G' && w->code == ignored[j] && !(r->ignored_seen & (1u << j))) {
-                r->ignored_seen |= 1u << j;
-                ef_gcode_item_t *it = gc_push(r, EF_GC_IGNORED, w->col);
-                gc_fmt_code(it->text, sizeof it->text, 'G', w->code);
+            if (w->letter == 'G' && w->code == ignored[j]) {
+                gc_fmt_code(name, sizeof name, 'G', w->code);
+                if ((rc = gc_ignored_once(r, j, w->col, name)) != 0)
+                    return rc;
             }
     }
-    if (L->block_delete && !(r->ignored_seen & (1u << 8))) {
-        r->ignored_seen |= 1u << 8;
-        ef_gcode_item_t *it = gc_push(r, EF_GC_IGNORED, 1);
-        snprintf(it->text, sizeof it->text, "/ (block delete is off: such lines are read)");
-    }
-    if (grp[GR_PATH]) {
-        ef_gcode_item_t *it = gc_push(r, EF_GC_TOLERANCE, grp[GR_PATH]->col);
-        it->path_mode = g64 ? EF_GC_PATH_BLEND : EF_GC_PATH_EXACT;
-        if (wp && g64) {
-            it->p_tol = wp->v * scale;
-            if ((rc = gc_coord_ok(r, it->p_tol, wp->col, "G64 P")) != 0)
-                return rc;
-            if (it->p_tol < 0)
-                return ef_gc_err(r, wp->col, "G64 P tolerance must not be negative");
-        }
-        if (wq) {
-            it->q_tol = wq->v * scale;
-            if ((rc = gc_coord_ok(r, it->q_tol, wq->col, "G64 Q")) != 0)
-                return rc;
-            if (it->q_tol < 0)
-                return ef_gc_err(r, wq->col, "G64 Q tolerance must not be negative");
-        }
-    }
+    if (g80 &&
+        (rc = gc_ignored_once(r, 3, g80->col,
+                              "G80 with a motion code on one line: the motion code wins")) != 0)
+        return rc;
+    if (L->block_delete &&
+        (rc = gc_ignored_once(r, 8, 1, "/ (block delete is off: such lines are read)")) != 0)
+        return rc;
 
-    /* Motion. */
-    r->motion = motion;
-    if (first_axis) {
-        double end[3];
-        uint32_t col = grp[GR_MOTION] && motion_word ? grp[GR_MOTION]->col : first_axis->col;
-        for (int k = 0; k < 3; k++) {
-            end[k] = r->cur[k];
-            if (axis[k]) {
-                double v = axis[k]->v * scale;
-                end[k] = r->absolute || g53 ? v : r->cur[k] + v;
-                if ((rc = gc_coord_ok(r, end[k], axis[k]->col, "coordinate")) != 0)
+    /* Tool length offset, coordinate system, path control. */
+    if (grp[GR_TOOLLEN]) {
+        int c = grp[GR_TOOLLEN]->code;
+        const ef_gc_word_t *wh = ef_gc_get(L, 'H');
+        if (c == 490) {
+            memset(r->tlo, 0, sizeof r->tlo);
+        } else if (c == 431) {
+            memset(r->tlo, 0, sizeof r->tlo);
+            for (int k = 0; k < 3; k++)
+                if (axis[k]) {
+                    r->tlo[k] = axis[k]->v * scale;
+                    if ((rc = gc_coord_ok(r, r->tlo[k], axis[k]->col, "tool offset")) != 0)
+                        return rc;
+                }
+        } else {
+            int tool = r->tool_cur;
+            if (wh && (rc = gc_int_word(r, wh, 0, 99999, "G43 tool", &tool)) != 0)
+                return rc;
+            ef_gcode_tool_t *t = gc_tool(r, tool, 0);
+            if (t) {
+                memcpy(r->tlo, t->off, sizeof r->tlo);
+            } else {
+                memset(r->tlo, 0, sizeof r->tlo);
+                if (tool != 0 && (rc = gc_ignored_once(r, 4, grp[GR_TOOLLEN]->col,
+                                                       "G43 of a tool with no G10 L1 entry: "
+                                                       "its length offset is 0 here")) != 0)
                     return rc;
             }
         }
-        if (motion != 1 && !(r->feed > 0))
-            return ef_gc_err(r, col, "feed move with no feed rate (F missing or zero)");
-        if (g53) {
-            /* Machine coordinates are unknown here: pass the move on, keep the position. */
-            ef_gcode_item_t *it = gc_push(r, EF_GC_EVENT, grp[GR_NONMODAL]->col);
-            char tmp[64];
-            snprintf(it->text, sizeof it->text, "G53 G%d", motion - 1);
-            for (int k = 0; k < 3; k++)
-                if (axis[k]) {
-                    snprintf(tmp, sizeof tmp, " %c%.6g", "XYZ"[k], axis[k] -> v);
-                    strncat(it->text, tmp, sizeof it->text - strlen(it->text) - 1);
-                }
-        } else if (motion == 3 || motion == 4) {
-            if ((rc = gc_arc(r, L, end, motion == 4, scale, col)) != 0)
+    } else if (ef_gc_get(L, 'H')) {
+        return ef_gc_err(r, ef_gc_get(L, 'H')->col, "H word with no G43");
+    }
+    if (grp[GR_COORD]) {
+        int c = grp[GR_COORD]->code;
+        r->cs = c <= 590 ? (c - 540) / 10 + 1 : 6 + (c - 590);
+    }
+    if (grp[GR_PATH]) {
+        double p = 0, q = 0;
+        if (wp && g64) {
+            p = wp->v * scale;
+            if ((rc = gc_coord_ok(r, p, wp->col, "G64 P")) != 0)
                 return rc;
-            memcpy(r->cur, end, sizeof end);
+            if (p < 0)
+                return ef_gc_err(r, wp->col, "G64 P tolerance must not be negative");
+        }
+        if (wq && g64) {
+            q = wq->v * scale;
+            if ((rc = gc_coord_ok(r, q, wq->col, "G64 Q")) != 0)
+                return rc;
+            if (q < 0)
+                return ef_gc_err(r, wq->col, "G64 Q tolerance must not be negative");
+        }
+        r->path_mode = g64 ? EF_GC_PATH_BLEND : EF_GC_PATH_EXACT;
+        r->path_p = p;
+        r->path_q = q;
+        if ((rc = ef_gc_emit_tolerance(r, r->path_mode, p, q, grp[GR_PATH]->col)) != 0)
+            return rc;
+    }
+
+    /* Offsets and stored positions (non-modal group). */
+    if (g10 && (rc = gc_g10(r, L, g0, axis, scale)) != 0)
+        return rc;
+    if (g0c == 281 || g0c == 301) {
+        double *s = g0c == 281 ? r->g28 : r->g30;
+        for (int k = 0; k < 3; k++)
+            s[k] = r->cur[k] - r->tlo[k];
+    }
+    if ((g0c == 280 || g0c == 300) &&
+        (rc = gc_home(r, g0c == 280 ? r->g28 : r->g30, axis, scale, g0->col)) != 0)
+        return rc;
+    if (g0c >= 920 && g0c <= 923 && (rc = gc_g92(r, g0c, axis, scale, g0->col)) != 0)
+        return rc;
+
+    /* Motion. */
+    if (!is_cycle || (grp[GR_MOTION] && motion != r->motion)) {
+        r->cyc_il_flag = 0; /* a new cycle mode (or none) forgets the initial level */
+        r->cyc_have_q = r->cyc_have_p = 0;
+    }
+    int same_cycle = is_cycle && motion == r->motion;
+    r->motion = motion;
+    if (cycle) {
+        uint32_t col = grp[GR_MOTION] ? grp[GR_MOTION]->col : first_axis->col;
+        if ((rc = ef_gc_cycle(r, L, motion, same_cycle, axis, scale, col)) != 0)
+            return rc;
+    } else if (moves) {
+        double cp[3], ep[3], em[3];
+        uint32_t col = grp[GR_MOTION] ? grp[GR_MOTION]->col : first_axis->col;
+        ef_gc_to_prog(r, r->cur, cp);
+        for (int k = 0; k < 3; k++) {
+            ep[k] = cp[k];
+            em[k] = r->cur[k];
+            if (axis[k]) {
+                double v = axis[k]->v * scale;
+                if (k == 0 && r->diameter)
+                    v /= 2;
+                ep[k] = r->absolute ? v : cp[k] + v;
+                em[k] = v + r->tlo[k]; /* G53: machine coordinates, tool offset applied */
+                if ((rc = gc_coord_ok(r, g53 ? em[k] : ep[k], axis[k]->col, "coordinate")) != 0)
+                    return rc;
+            }
+        }
+        if (motion != 0 && !(r->feed > 0))
+            return ef_gc_err(r, col, "feed move with no feed rate (F missing or zero)");
+        if (arc) {
+            if ((rc = gc_arc(r, L, cp, ep, motion == 30, scale, col)) != 0)
+                return rc;
         } else {
-            double len = sqrt((end[0] - r->cur[0]) * (end[0] - r->cur[0]) +
-                              (end[1] - r->cur[1]) * (end[1] - r->cur[1]) +
-                              (end[2] - r->cur[2]) * (end[2] - r->cur[2]));
-            int zero = len <= EF_GCODE_ZERO_LEN;
-            ef_gcode_item_t *it = gc_push(r,
-                                          zero          ? EF_GC_ZERO_MOVE
-                                          : motion == 1 ? EF_GC_RAPID
-                                                        : EF_GC_LINE,
-                                          col);
-            memcpy(it->start, r->cur, sizeof it->start);
-            memcpy(it->end, zero ? r->cur : end, sizeof it->end);
-            if (motion == 2)
-                it->feed = r->feed;
-            if (zero)
-                snprintf(it->text, sizeof it->text, "G%d", motion - 1);
-            else
-                memcpy(r->cur, end, sizeof end);
+            if (!g53)
+                ef_gc_from_prog(r, ep, em);
+            if ((rc = ef_gc_emit_straight(r, motion == 0, em, r->feed, col)) != 0)
+                return rc;
         }
     }
-    if (post[0]) {
-        ef_gcode_item_t *it = gc_push(r, EF_GC_EVENT, post_col);
-        snprintf(it->text, sizeof it->text, "%s", post);
-    }
+    if (post[0] && (rc = ef_gc_emit_event(r, post, post_col)) != 0)
+        return rc;
     if (stop) {
-        ef_gcode_item_t *it = gc_push(r, EF_GC_END, stop->col);
+        ef_gcode_item_t *it = ef_gc_push(r, EF_GC_END, stop->col);
+        if (!it)
+            return r->err;
         gc_fmt_code(it->text, sizeof it->text, 'M', stop->code);
         r->end_item = *it;
         r->ended = 1;
@@ -1031,18 +1600,10 @@ static int gc_execute(ef_gcode_t *r, ef_gc_line_t *L)
     /* Assignments take effect after the line, as in RS274NGC. */
     for (int k = 0; k < L->nas; k++) {
         const ef_gc_assign_t *a = &L->as[k];
-        if (a->index) {
-            r->param[a->index] = a->v;
-            continue;
-        }
-        int j = gc_named_find(r, a->name);
-        if (j < 0) {
-            if (r->nnamed >= EF_GCODE_NNAMED)
-                return ef_gc_err(r, a->col, "more than %d named parameters", EF_GCODE_NNAMED);
-            j = r->nnamed++;
-            snprintf(r->named_key[j], sizeof r->named_key[j], "%s", a->name);
-        }
-        r->named_val[j] = a->v;
+        if (a->index)
+            ef_gc_param_set(r, a->index, a->v);
+        else if ((rc = ef_gc_named_set(r, a->name, a->v, a->col)) != 0)
+            return rc;
     }
     return EF_OK;
 }
@@ -1057,25 +1618,42 @@ static int gc_line(ef_gcode_t *r)
     size_t rest = r->len - r->pos;
     const char *nl = memchr(s, '\n', rest);
     size_t n = nl ? (size_t)(nl - s) : rest;
+    r->line_pos = r->pos;
     r->pos += nl ? n + 1 : n;
     r->line++;
     r->qhead = r->qlen = 0;
     line->r = r;
-    int rc = gc_compact(r, s, n, line);
+    int rc = ef_gc_compact(r, s, n, line), nwords = 0;
+    size_t o = 0;
+    if (!rc && line->n && line->c[0] == 'N') /* a line number may precede an O-word */
+        for (o = 1; o < line->n && (gc_is_digit(line->c[o]) || line->c[o] == '.'); o++)
+            ;
     if (!rc && line->n == 1 && line->c[0] == '%') {
         if (r->line_seen || r->percent) {
-            ef_gcode_item_t *it = gc_push(r, EF_GC_END, line->col[0]);
-            snprintf(it->text, sizeof it->text, "%%");
-            r->end_item = *it;
-            r->ended = 1;
+            ef_gcode_item_t *it = ef_gc_push(r, EF_GC_END, line->col[0]);
+            if (it) {
+                snprintf(it->text, sizeof it->text, "%%");
+                r->end_item = *it;
+                r->ended = 1;
+            }
+            rc = r->err;
         } else {
             r->percent = 1;
         }
-    } else if (!rc && line->n) {
+    } else if (!rc && line->n && line->c[0] == '$') {
+        rc = gc_ignored_once(r, 5, line->col[0],
+                             "$ lines (grbl sender commands such as $H, $X) are not G-code: "
+                             "ignored");
+    } else if (!rc && o < line->n && line->c[o] == 'O') {
+        rc = ef_gc_flow_line(r, line);
         r->line_seen = 1;
-        rc = gc_words(line);
-        if (!rc)
+    } else if (!rc && line->n) {
+        rc = gc_words(line, &nwords);
+        if (!rc && line->nw == 0 && line->nas == 0)
+            rc = gc_ignored_once(r, 6, line->col[0], "lines with only a line number (N word)");
+        else if (!rc)
             rc = gc_execute(r, line);
+        r->line_seen = 1;
     }
     free(line);
     if (rc)
@@ -1095,6 +1673,20 @@ int ef_gcode_init(ef_gcode_t *r, const char *text, size_t len, const char *name)
     r->absolute = 1;
     r->arc_absolute = 0;
     r->plane = 17;
+    r->motion = -1;
+    r->max_feed = EF_GCODE_MAX_FEED;
+    r->cs = 1;
+    r->spindle = 5;
+    r->retract_r = 1; /* LinuxCNC starts in G99 */
+    r->path_mode = EF_GC_PATH_BLEND;
+    return EF_OK;
+}
+
+int ef_gcode_set_max_feed(ef_gcode_t *r, double feed)
+{
+    if (!r || !isfinite(feed) || !(feed > 0))
+        return EF_ERR_ARG;
+    r->max_feed = feed;
     return EF_OK;
 }
 
@@ -1147,6 +1739,11 @@ void ef_gcode_free(ef_gcode_t *r)
         r->buf = NULL;
         r->text = "";
         r->len = 0;
+        r->pos = 0;
+        free(r->queue);
+        r->queue = NULL;
+        r->qcap = 0;
+        r->qhead = r->qlen = 0;
     }
 }
 
@@ -1161,7 +1758,16 @@ int ef_gcode_next(ef_gcode_t *r, ef_gcode_item_t *it, ef_msg_t *m)
         }
         if (r->pos >= r->len) {
             r->qhead = r->qlen = 0;
-            ef_gcode_item_t *e = gc_push(r, EF_GC_END, 1);
+            if (ef_gc_flow_at_end(r))
+                break;
+            if (r->line_seen) {
+                ef_gcode_item_t *w = ef_gc_push(r, EF_GC_NOTE, 1);
+                w->line = r->line ? r->line : 1;
+                snprintf(w->text, sizeof w->text,
+                         "no M2, M30 or closing %%: the program ends with its text (LinuxCNC "
+                         "refuses such a file there)");
+            }
+            ef_gcode_item_t *e = ef_gc_push(r, EF_GC_END, 1);
             e->line = r->line ? r->line : 1;
             snprintf(e->text, sizeof e->text, "end of text");
             r->end_item = *e;
@@ -1175,13 +1781,14 @@ int ef_gcode_next(ef_gcode_t *r, ef_gcode_item_t *it, ef_msg_t *m)
             *m = r->errmsg;
         return r->err;
     }
-    *it = r->queue[r->qhead++];
+    size_t cap;
+    *it = gc_queue(r, &cap)[r->qhead++];
     return EF_OK;
 }
 
 const char *ef_gcode_kind_name(int kind)
 {
     static const char *names[] = {"?",     "rapid",   "line",      "arc", "zero",
-                                  "event", "ignored", "tolerance", "end"};
-    return kind >= 1 && kind <= EF_GC_END ? names[kind] : "?";
+                                  "event", "ignored", "tolerance", "end", "note"};
+    return kind >= 1 && kind <= EF_GC_NOTE ? names[kind] : "?";
 }

@@ -394,6 +394,82 @@ static int pipe_prim(ef_pipe_t *P, const ef_gcode_item_t *it, ef_msg_t *m)
     return pipe_pull(P, NULL, m);
 }
 
+/* Pieces a spiral arc is cut into: at most 45 degrees each, and enough that the circle
+ * through each piece's ends and middle stays within EF_PIPE_SPIRAL_DEV of the spiral (its
+ * error is about |dr| theta^2 / (24 n^3) for a sweep theta and radius change dr). */
+int ef_pipe_spiral_pieces(double sweep, double dr)
+{
+    double th = fabs(sweep), n1 = ceil(th / (0.25 * M_PI)),
+           n2 = ceil(cbrt(fabs(dr) * th * th / (24.0 * EF_PIPE_SPIRAL_DEV)));
+    double n = fmax(1.0, fmax(n1, n2));
+    return n > EF_PIPE_SPIRAL_MAX ? EF_PIPE_SPIRAL_MAX : (int)n;
+}
+
+/* Piece k of n of a spiral arc item: the circle through its ends and middle on the spiral
+ * (radius linear in the angle, rise linear in the angle). */
+int ef_pipe_spiral_piece(const ef_gcode_item_t *it, int k, int n, ef_gcode_item_t *out)
+{
+    if (!it || !out || it->kind != EF_GC_ARC || n < 1 || k < 0 || k >= n)
+        return EF_ERR_ARG;
+    int a = it->plane == 18 ? 2 : it->plane == 19 ? 1 : 0;
+    int b = it->plane == 18 ? 0 : it->plane == 19 ? 2 : 1;
+    int c = 3 - a - b;
+    double phi0 = atan2(it->start[b] - it->centre[b], it->start[a] - it->centre[a]);
+    double pt[3][3];
+    for (int j = 0; j < 3; j++) {
+        double f = (k + 0.5 * j) / n, ang = phi0 + f * it->sweep,
+               rho = it->radius + f * (it->radius_end - it->radius);
+        pt[j][a] = it->centre[a] + rho * cos(ang);
+        pt[j][b] = it->centre[b] + rho * sin(ang);
+        pt[j][c] = it->start[c] + f * (it->end[c] - it->start[c]);
+    }
+    if (k == n - 1)
+        memcpy(pt[2], it->end, sizeof pt[2]); /* the end exactly as given */
+    if (k == 0)
+        memcpy(pt[0], it->start, sizeof pt[0]);
+    /* circumcentre of the three in-plane points */
+    double ax = pt[0][a], ay = pt[0][b], bx = pt[1][a] - ax, by = pt[1][b] - ay, cx = pt[2][a] - ax,
+           cy = pt[2][b] - ay, d = 2 * (bx * cy - by * cx);
+    if (fabs(d) < 1e-300)
+        return EF_ERR_DEGENERATE;
+    double b2 = bx * bx + by * by, c2 = cx * cx + cy * cy;
+    double ux = (cy * b2 - by * c2) / d, uy = (bx * c2 - cx * b2) / d;
+    *out = *it;
+    memcpy(out->start, pt[0], sizeof out->start);
+    memcpy(out->end, pt[2], sizeof out->end);
+    out->centre[a] = ax + ux;
+    out->centre[b] = ay + uy;
+    out->centre[c] = pt[0][c];
+    out->radius = out->radius_end = hypot(ux, uy);
+    double s0 = atan2(-uy, -ux), s1 = atan2(cy - uy, cx - ux), sw = s1 - s0;
+    if (it->sweep > 0)
+        while (sw <= 0)
+            sw += 2 * M_PI;
+    else
+        while (sw >= 0)
+            sw -= 2 * M_PI;
+    out->sweep = sw;
+    out->turns = 1;
+    return EF_OK;
+}
+
+/* A path item; a spiral arc goes in as its circular pieces. */
+static int pipe_item(ef_pipe_t *P, const ef_gcode_item_t *it, ef_msg_t *m)
+{
+    if (it->kind != EF_GC_ARC || it->radius_end == it->radius)
+        return pipe_prim(P, it, m);
+    int n = ef_pipe_spiral_pieces(it->sweep, it->radius_end - it->radius), rc;
+    for (int k = 0; k < n; k++) {
+        ef_gcode_item_t piece;
+        if ((rc = ef_pipe_spiral_piece(it, k, n, &piece)) != 0)
+            return ef_fail(m, rc, "%s:%u: spiral arc piece %d of %d is degenerate", P->r->name,
+                           (unsigned)it->line, k + 1, n);
+        if ((rc = pipe_prim(P, &piece, m)) != 0)
+            return rc;
+    }
+    return EF_OK;
+}
+
 /* Reject a bad configuration with a message before anything is allocated. */
 static int pipe_check_cfg(const ef_pipe_cfg_t *c, const ef_pipe_cb_t *cb, ef_msg_t *m)
 {
@@ -445,7 +521,7 @@ static int pipe_loop(ef_pipe_t *P, ef_msg_t *m)
         case EF_GC_RAPID:
         case EF_GC_LINE:
         case EF_GC_ARC:
-            rc = pipe_prim(P, &it, m);
+            rc = pipe_item(P, &it, m);
             break;
         case EF_GC_ZERO_MOVE:
             P->st.zero_moves++;
@@ -456,6 +532,9 @@ static int pipe_loop(ef_pipe_t *P, ef_msg_t *m)
         case EF_GC_IGNORED:
             snprintf(txt, sizeof txt, "%s ignored", it.text);
             rc = pipe_note(P, &it, txt, m);
+            break;
+        case EF_GC_NOTE:
+            rc = pipe_note(P, &it, it.text, m);
             break;
         case EF_GC_TOLERANCE:
             if (it.path_mode == EF_GC_PATH_EXACT) {

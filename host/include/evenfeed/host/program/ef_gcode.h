@@ -39,33 +39,56 @@ extern "C" {
 #define EF_GCODE_ZERO_LEN 1e-9
 /** Largest accepted coordinate magnitude (mm), for positions, centres and radii. */
 #define EF_GCODE_MAX_COORD 1e6
-/** Largest accepted feed (mm/min). */
+/** Feeds above this (mm/min) are clamped to it, with an ::EF_GC_NOTE naming the line
+ *  (ef_gcode_set_max_feed() lowers it to a machine's limit). */
 #define EF_GCODE_MAX_FEED 1e7
-/** Arc radius consistency: absolute part of the tolerance (mm). */
-#define EF_GCODE_ARC_ABS_TOL 0.002
-/** Arc radius consistency: relative part of the tolerance (fraction of the start radius). */
+/** Arc radius consistency (LinuxCNC 2.9's spiral rule): an IJK arc whose end radius r1
+ *  differs from its start radius r0 is refused when |r1 - r0| > 100 x the absolute
+ *  tolerance, or when |r1 - r0| / max(r0, r1) > ::EF_GCODE_ARC_REL_TOL and |r1 - r0| >
+ *  the absolute tolerance; otherwise it is a spiral (radius linear in the angle). The
+ *  absolute tolerance depends on the program's units, as LinuxCNC's: this in mm... */
+#define EF_GCODE_ARC_ABS_TOL_MM 0.0282842712474619
+/** ...and this in inches (0.002 x sqrt 2 in, as mm). */
+#define EF_GCODE_ARC_ABS_TOL_IN (0.00282842712474619 * 25.4)
+/** Arc radius consistency: relative part (fraction of the larger radius). */
 #define EF_GCODE_ARC_REL_TOL 0.001
-/** Numbered parameters are #1 .. #EF_GCODE_NPARAM-1. */
-#define EF_GCODE_NPARAM 5400
-/** Named parameters (#<name>) a program may define. */
-#define EF_GCODE_NNAMED 64
-/** Longest named-parameter name (characters, spaces removed). */
+/** Radius tolerance of the R form (mm): R may be shorter than half the chord by this. */
+#define EF_GCODE_ARC_R_TOL 0.00127
+/** Numbered parameters are #1 .. #EF_GCODE_NPARAM-1 (LinuxCNC's range). */
+#define EF_GCODE_NPARAM 5602
+/** Named parameters (#<name>) live at once, all call levels together. */
+#define EF_GCODE_NNAMED 512
+/** Longest named-parameter or O-word name (characters, spaces removed). */
 #define EF_GCODE_NAME_MAX 31
 /** Longest accepted source line (bytes). */
 #define EF_GCODE_LINE_MAX 4096
 /** Largest file ef_gcode_open() loads (bytes). */
 #define EF_GCODE_FILE_MAX ((size_t)256 << 20)
+/** Subroutine call depth (LinuxCNC's limit). */
+#define EF_GCODE_CALL_DEPTH 10
+/** Open control structures (if, while, do, repeat) per call level. */
+#define EF_GCODE_FLOW_DEPTH 32
+/** Subroutines a program may define. */
+#define EF_GCODE_NSUBS 256
+/** Iterations of one loop before it is called a runaway (an error, not a hang). */
+#define EF_GCODE_MAX_ITER 1000000
+/** Items one source line may expand into (canned cycles with L repeats and pecks). */
+#define EF_GCODE_LINE_ITEMS_MAX 100000
+/** Tool table entries (G10 L1 / L10 / L11). */
+#define EF_GCODE_NTOOLS 64
 
 /** Item kinds. */
 typedef enum {
     EF_GC_RAPID = 1,     /**< G0 straight rapid: start, end */
     EF_GC_LINE = 2,      /**< G1 straight feed move: start, end, feed */
-    EF_GC_ARC = 3,       /**< G2/G3 arc or helix: start, end, centre, dir, plane, turns, feed */
+    EF_GC_ARC = 3,       /**< G2/G3 arc, helix or spiral: start, end, centre, radius,
+                              radius_end, dir, plane, turns, feed */
     EF_GC_ZERO_MOVE = 4, /**< G0/G1 whose end equals its start: position unchanged */
     EF_GC_EVENT = 5,     /**< words that do not move the path, as text (e.g. "T1 M6") */
-    EF_GC_IGNORED = 6,   /**< a word accepted and ignored, reported on its first use */
+    EF_GC_IGNORED = 6,   /**< a word or line accepted and ignored, reported on first use */
     EF_GC_TOLERANCE = 7, /**< path control change: G61 / G61.1 (exact) or G64 P Q */
     EF_GC_END = 8,       /**< M2, M30, closing % or end of text; repeated on later calls */
+    EF_GC_NOTE = 9,      /**< how a line was read, each time (a feed clamped) */
 } ef_gcode_kind_t;
 
 /** Path control modes of an ::EF_GC_TOLERANCE item. */
@@ -74,57 +97,144 @@ typedef enum {
     EF_GC_PATH_BLEND = 2, /**< G64: blend within p_tol (0: no tolerance given) */
 } ef_gcode_path_t;
 
-/** One item of the stream. Fields not used by a kind are zero. */
+/** One item of the stream. Fields not used by a kind are zero. Positions are machine
+ *  coordinates in mm: work offsets (G54-G59.3, G10 L2/L20), G92 offsets and the tool
+ *  length offset (G43) applied. */
 typedef struct {
-    int kind;         /**< ::ef_gcode_kind_t */
-    uint32_t line;    /**< 1-based source line */
-    uint32_t col;     /**< 1-based column (bytes) of the word that produced the item */
-    int units;        /**< program units when the item was read: 20 (inch) or 21 (mm) */
-    double start[3];  /**< X Y Z at the start (mm); also set for ZERO_MOVE */
-    double end[3];    /**< X Y Z at the end (mm) */
-    double centre[3]; /**< arc centre (mm); its normal-axis coordinate is the start's */
-    double radius;    /**< arc radius at the start (mm) */
-    double sweep;     /**< arc angle (rad) about the plane normal: > 0 for G3, < 0 for G2,
-                           full turns included */
-    double feed;      /**< LINE/ARC: feed in mm/min (> 0) */
-    int dir;          /**< arc direction: +1 G3 (counter-clockwise), -1 G2 (clockwise) */
-    int plane;        /**< arc plane: 17 (XY, normal +Z), 18 (ZX, normal +Y), 19 (YZ, +X) */
-    int turns;        /**< arc: P word, number of times the end angle is passed (>= 1) */
-    int path_mode;    /**< TOLERANCE: ::ef_gcode_path_t */
-    double p_tol;     /**< TOLERANCE: G64 P, path tolerance (mm), 0 when not given */
-    double q_tol;     /**< TOLERANCE: G64 Q, collinearity tolerance (mm), 0 when not given */
-    char text[128];   /**< EVENT/IGNORED: the words ("T1 M6", "G40"); END: what ended it
-                           ("M2", "M30", "%", "end of text") */
+    int kind;          /**< ::ef_gcode_kind_t */
+    uint32_t line;     /**< 1-based source line */
+    uint32_t col;      /**< 1-based column (bytes) of the word that produced it */
+    int units;         /**< program units when the item was read: 20 (inch) or 21 (mm) */
+    double start[3];   /**< X Y Z at the start (mm); also set for ZERO_MOVE */
+    double end[3];     /**< X Y Z at the end (mm) */
+    double centre[3];  /**< arc centre (mm); its normal-axis coordinate is the start's */
+    double radius;     /**< arc radius at the start (mm) */
+    double radius_end; /**< arc radius at the end (mm): equal to radius for a circle; a
+                            spiral's radius is linear in the angle between the two */
+    double sweep;      /**< arc angle (rad) about the plane normal: > 0 for G3, < 0 for G2,
+                            full turns included */
+    double feed;       /**< LINE/ARC: feed in mm/min (> 0; G93 converted) */
+    int dir;           /**< arc direction: +1 G3 (counter-clockwise), -1 G2 (clockwise) */
+    int plane;         /**< arc plane: 17 (XY, normal +Z), 18 (ZX, normal +Y), 19 (YZ, +X) */
+    int turns;         /**< arc: P word, number of times the end angle is passed (>= 1) */
+    int path_mode;     /**< TOLERANCE: ::ef_gcode_path_t */
+    double p_tol;      /**< TOLERANCE: G64 P, path tolerance (mm), 0 when not given */
+    double q_tol;      /**< TOLERANCE: G64 Q, collinearity tolerance (mm), 0 when not given */
+    char text[128];    /**< EVENT/IGNORED/NOTE: the words ("T1 M6", "G40") or the note;
+                            END: what ended it ("M2", "M30", "%", "end of text") */
 } ef_gcode_item_t;
 
-/** Reader state. Treat as opaque; the fields are here so it can live on the stack. */
+/** A named parameter: its value and the call level that owns it (-1: global, "_name"). */
 typedef struct {
-    const char *text;              /**< program text (not owned unless buf is set) */
-    size_t len;                    /**< bytes of text */
-    size_t pos;                    /**< offset of the next unread line */
-    char *buf;                     /**< owned copy from ef_gcode_open(), or NULL */
-    char name[128];                /**< program name for messages */
-    uint32_t line;                 /**< number of the last line read */
-    int err;                       /**< sticky error code (0 while healthy) */
-    int ended;                     /**< an end item has been produced */
-    int percent;                   /**< the text opened with a % line */
-    int line_seen;                 /**< a line with words has been read */
-    int units;                     /**< 20 or 21 */
-    int absolute;                  /**< G90 (1) or G91 (0) */
-    int arc_absolute;              /**< G90.1 (1) or G91.1 (0) */
-    int plane;                     /**< 17, 18 or 19 */
-    int motion;                    /**< modal motion: 0 none, 1 G0, 2 G1, 3 G2, 4 G3 */
-    double feed;                   /**< mm/min, 0 until an F word */
-    double cur[3];                 /**< current position (mm) */
-    uint32_t ignored_seen;         /**< bit set of ignored words already reported */
-    double param[EF_GCODE_NPARAM]; /**< numbered parameters */
-    char named_key[EF_GCODE_NNAMED][EF_GCODE_NAME_MAX + 1]; /**< named parameter names */
-    double named_val[EF_GCODE_NNAMED];                      /**< named parameter values */
-    int nnamed;                                             /**< named parameters defined */
-    ef_gcode_item_t queue[16];                              /**< items of the current line */
-    ef_gcode_item_t end_item; /**< the end item, repeated once ended */
-    int qhead, qlen;          /**< queue read position and length */
-    ef_msg_t errmsg;          /**< the sticky error's message */
+    char name[EF_GCODE_NAME_MAX + 1];
+    double v;
+    int level;
+} ef_gcode_named_t;
+
+/** A place in the text: byte offset of a line's start and its 1-based number. */
+typedef struct {
+    size_t pos;
+    uint32_t line;
+} ef_gcode_mark_t;
+
+/** An open control structure (O-word if / while / do / repeat). */
+typedef struct {
+    int kind;                          /**< internal structure kind */
+    char label[EF_GCODE_NAME_MAX + 3]; /**< the O-word label ("100", "<name>") */
+    ef_gcode_mark_t at;                /**< the opening line (loops jump back to it) */
+    ef_gcode_mark_t body;              /**< the line after it (do / repeat bodies) */
+    uint32_t col;                      /**< column of the opening O-word */
+    long count;                        /**< repeat: iterations left; if: branch taken */
+    long iter;                         /**< iterations so far (runaway bound) */
+} ef_gcode_flow_t;
+
+/** A subroutine call in progress. */
+typedef struct {
+    char label[EF_GCODE_NAME_MAX + 3]; /**< the subroutine's label */
+    ef_gcode_mark_t ret;               /**< where the caller goes on */
+    double saved[30];                  /**< the caller's #1..#30 */
+    int nflow;                         /**< the caller's open structures */
+} ef_gcode_frame_t;
+
+/** A known subroutine: where its body starts. */
+typedef struct {
+    char label[EF_GCODE_NAME_MAX + 3];
+    ef_gcode_mark_t body; /**< the line after "oN sub" */
+    ef_gcode_mark_t at;   /**< the "oN sub" line */
+    int searched;         /**< found by a call's search, not met in the flow */
+} ef_gcode_sub_t;
+
+/** A tool table entry (G10 L1 / L10 / L11), offsets in mm. */
+typedef struct {
+    int tool;
+    double off[3];
+    double diameter;
+} ef_gcode_tool_t;
+
+/** Reader state. Treat as opaque; the fields are here so it can be embedded. It is about
+ *  half a megabyte: keep it static or on the heap. */
+typedef struct {
+    const char *text;      /**< program text (not owned unless buf is set) */
+    size_t len;            /**< bytes of text */
+    size_t pos;            /**< offset of the next unread line */
+    char *buf;             /**< owned copy from ef_gcode_open(), or NULL */
+    char name[128];        /**< program name for messages */
+    uint32_t line;         /**< number of the last line read */
+    size_t line_pos;       /**< offset of the last line read */
+    int err;               /**< sticky error code (0 while healthy) */
+    int ended;             /**< an end item has been produced */
+    int percent;           /**< the text opened with a % line */
+    int line_seen;         /**< a line with words has been read */
+    int units;             /**< 20 or 21 */
+    int absolute;          /**< G90 (1) or G91 (0) */
+    int arc_absolute;      /**< G90.1 (1) or G91.1 (0) */
+    int plane;             /**< 17, 18 or 19 */
+    int motion;            /**< modal motion: G code x 10 (0, 10, 20, 30, 810...), -1 none */
+    double feed;           /**< mm/min, 0 until an F word */
+    double max_feed;       /**< feeds above are clamped (mm/min) */
+    double cur[3];         /**< current position, machine coordinates (mm) */
+    uint32_t ignored_seen; /**< bit set of ignored words already reported */
+    double param[EF_GCODE_NPARAM];           /**< numbered parameters (offsets held below, in mm) */
+    ef_gcode_named_t named[EF_GCODE_NNAMED]; /**< named parameters */
+    int nnamed;                              /**< named parameters defined */
+    /* offsets (mm; rotation in degrees) */
+    int cs;                                 /**< coordinate system 1..9 (G54..G59.3) */
+    double g5x[9][3];                       /**< work offsets (#5221...) */
+    double rot[9];                          /**< XY rotation of each system (#5230...) */
+    double g92[3];                          /**< G92 offset in force */
+    double g92_saved[3];                    /**< #5211-5213 */
+    int g92_on;                             /**< #5210 */
+    double g28[3], g30[3];                  /**< #5161-5163, #5181-5183 */
+    double tlo[3];                          /**< tool length offset in force */
+    ef_gcode_tool_t tools[EF_GCODE_NTOOLS]; /**< tool table (in memory) */
+    int ntools;
+    int tool_prep, tool_cur;           /**< T word, tool in the spindle (M6, M61) */
+    int spindle;                       /**< 3, 4 or 5 (M3 M4 M5) */
+    int diameter;                      /**< G7 lathe diameter mode */
+    int inverse_time;                  /**< G93 */
+    int retract_r;                     /**< G99 (1) or G98 (0) */
+    int path_mode;                     /**< in force: ::ef_gcode_path_t */
+    double path_p, path_q;             /**< in force: G64 P Q (mm) */
+    double cyc_r, cyc_z, cyc_q, cyc_p; /**< sticky canned-cycle words (mm, s) */
+    int cyc_have_q, cyc_have_p;        /**< Q and P given since the cycle mode began */
+    double cyc_il;                     /**< initial level: drill-axis program coordinate
+                                            when the cycle mode began (mm) */
+    int cyc_il_flag;                   /**< cyc_il is set */
+    /* O-words */
+    ef_gcode_frame_t frames[EF_GCODE_CALL_DEPTH]; /**< calls in progress */
+    int depth;                                    /**< call depth (0: main program) */
+    ef_gcode_flow_t flow[EF_GCODE_CALL_DEPTH + 1][EF_GCODE_FLOW_DEPTH]; /**< per level */
+    int nflow;                           /**< open structures at this level */
+    ef_gcode_sub_t subs[EF_GCODE_NSUBS]; /**< subroutines known */
+    int nsubs;
+    int skip_def; /**< inside "oN sub" ... "oN endsub" read in the flow */
+    /* items of the current line */
+    ef_gcode_item_t queue0[16]; /**< inline storage */
+    ef_gcode_item_t *queue;     /**< heap array for long expansions, or NULL (queue0) */
+    size_t qcap;                /**< capacity of queue */
+    ef_gcode_item_t end_item;   /**< the end item, repeated once ended */
+    size_t qhead, qlen;         /**< queue read position and length */
+    ef_msg_t errmsg;            /**< the sticky error's message */
 } ef_gcode_t;
 
 /**
@@ -150,7 +260,8 @@ int ef_gcode_init(ef_gcode_t *r, const char *text, size_t len, const char *name)
  */
 int ef_gcode_open(ef_gcode_t *r, const char *path, ef_msg_t *m);
 
-/** @brief Release what ef_gcode_open() allocated (safe on an ef_gcode_init() reader). */
+/** @brief Release what the reader allocated: the text of ef_gcode_open() and the item
+ *  queue of a long expansion (call it for every reader; safe twice). */
 void ef_gcode_free(ef_gcode_t *r);
 
 /**
@@ -163,6 +274,15 @@ void ef_gcode_free(ef_gcode_t *r);
  * @retval EF_ERR_GCODE malformed or unsupported input; the reader stays failed.
  */
 int ef_gcode_next(ef_gcode_t *r, ef_gcode_item_t *it, ef_msg_t *m);
+
+/**
+ * @brief Clamp feeds to a machine's limit instead of ::EF_GCODE_MAX_FEED.
+ * @param r    reader (before the first ef_gcode_next()).
+ * @param feed largest feed (mm/min), > 0.
+ * @retval EF_OK      set.
+ * @retval EF_ERR_ARG r is NULL or feed is not a positive finite number.
+ */
+int ef_gcode_set_max_feed(ef_gcode_t *r, double feed);
 
 /** @brief Short name of an item kind ("rapid", "line", "arc", ...); "?" if unknown. */
 const char *ef_gcode_kind_name(int kind);

@@ -14,7 +14,9 @@
  *   primitive after it get ::EF_PRIM_STOP_BEFORE (exact stops at both ends of a rapid).
  * - G1: a LINE primitive. G2/G3: an ARC primitive about +Z (G17), +Y (G18) or +X (G19)
  *   with the item's centre and signed sweep (full turns included); a helix ends at the
- *   item's end.
+ *   item's end. A spiral (end radius != start radius, LinuxCNC's near-circular arcs) goes
+ *   in as ef_pipe_spiral_pieces() circular arcs, each through its piece's ends and middle
+ *   on the spiral (within ::EF_PIPE_SPIRAL_DEV of it).
  * - G61/G61.1: tol 0 (exact stops) from then on. G64 P Q: tol = P (P absent or 0: the
  *   configured default), qtol = Q (absent or 0: the configured default, and where that is 0,
  *   P itself, LinuxCNC's default). The smoother merges lines, straight runs and gently
@@ -26,7 +28,7 @@
  *   ef_smooth_finish(), every move drained (and interpolated to rest), then on_event, so
  *   moves and events keep their order. The first primitive after an event has
  *   ::EF_PRIM_STOP_BEFORE. The program end is handled the same way.
- * - ZERO_MOVE items, IGNORED notes and lines too short for float32 (refused by the
+ * - ZERO_MOVE items, IGNORED and NOTE items and lines too short for float32 (refused by the
  *   firmware as ::EF_ERR_DEGENERATE) go to on_note with "name:line:col: ..."; nothing is
  *   dropped silently.
  * - A primitive refused by ef_smooth_push() (NaN, inconsistent arc...) or a reader error:
@@ -45,6 +47,11 @@
 #ifdef __cplusplus
 extern "C" {
 #endif
+
+/** Largest distance (mm) between a spiral arc and the circular pieces it is cut into. */
+#define EF_PIPE_SPIRAL_DEV 1e-4
+/** Most pieces of one spiral arc. */
+#define EF_PIPE_SPIRAL_MAX 4096
 
 /** Step-mode bits for ::ef_pipe_cfg_t::interp_modes. */
 #define EF_PIPE_INTERP_UNIFORM   (1u << EF_STEP_UNIFORM)
@@ -167,6 +174,27 @@ void ef_pipe_cfg_default(ef_pipe_cfg_t *cfg);
  */
 int ef_pipe_run(ef_gcode_t *r, const ef_pipe_cfg_t *cfg, const ef_pipe_cb_t *cb,
                 ef_pipe_stats_t *st, ef_msg_t *m);
+
+/**
+ * @brief Number of circular pieces a spiral arc is cut into.
+ * @param sweep the arc's sweep (rad, signed).
+ * @param dr    end radius minus start radius (mm).
+ * @return 1 .. ::EF_PIPE_SPIRAL_MAX: pieces of at most 45 degrees, within
+ *         ::EF_PIPE_SPIRAL_DEV of the spiral.
+ */
+int ef_pipe_spiral_pieces(double sweep, double dr);
+
+/**
+ * @brief Piece k of n of a spiral arc item, as a circular arc item.
+ * @param it  an ::EF_GC_ARC item (radius_end may differ from radius).
+ * @param k   piece, 0 .. n-1; the first starts at it->start, the last ends at it->end.
+ * @param n   pieces (ef_pipe_spiral_pieces()).
+ * @param out the piece: the circle through its ends and middle on the spiral.
+ * @retval EF_OK             out filled.
+ * @retval EF_ERR_ARG        NULL, not an arc, or k / n out of range.
+ * @retval EF_ERR_DEGENERATE the three points are collinear (a piece too short).
+ */
+int ef_pipe_spiral_piece(const ef_gcode_item_t *it, int k, int n, ef_gcode_item_t *out);
 
 /**
  * @brief Convert one path item (RAPID, LINE, ARC) to a primitive; flags, tol, qtol and tag
