@@ -6,7 +6,9 @@
  * feeds that are positive on feed moves. Broken invariants abort (a libFuzzer crash).
  *
  * Built with -DEF_FUZZ_REPLAY_MAIN it is also a plain-C replay driver (gcode_fuzz_replay
- * DIR|FILE...): seeds named "ok-*" must read to the end, "bad-*" must be rejected.
+ * DIR|FILE...): seeds named "ok-*" must read to the end, "bad-*" must be rejected; the
+ * path corpus tests/data/gcode is replayed with it ("bad_*" rejected, the others accepted
+ * or rejected without a crash; gcode_path_* checks their paths).
  */
 #include <math.h>
 #include <stdint.h>
@@ -100,6 +102,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 }
 
 #ifdef EF_FUZZ_REPLAY_MAIN
+#define EF_REPLAY_SUFFIX ".ngc" /* the path corpus keeps its expected paths (.path) beside */
 #include "replay.h"
 
 /* Accepted when the reader reaches the end of the program without an error. */

@@ -3,8 +3,10 @@
  * Plain-C replay driver shared by the fuzz targets: runs every file named on the command
  * line (or found in a named directory, in name order) through a check, so seed corpora
  * and saved reproducers run as ordinary tests under gcc and the sanitizer build, without
- * libFuzzer. Files named "ok-*" must be accepted and "bad-*" rejected. Include it from
- * exactly one translation unit and call ef_replay_main() from main().
+ * libFuzzer. Files named "ok-*" must be accepted and "bad-*" (or "bad_*") rejected; others
+ * only must not crash. A translation unit that defines EF_REPLAY_SUFFIX first replays only
+ * the files of a directory whose names end in it. Include it from exactly one translation
+ * unit and call ef_replay_main() from main().
  */
 #ifndef EF_FUZZ_REPLAY_H
 #define EF_FUZZ_REPLAY_H
@@ -67,7 +69,7 @@ static void ef_replay_file(const char *path, ef_replay_fn fn)
     if (strncmp(base, "ok-", 3) == 0 && rejected) {
         fprintf(stderr, "%s: expected acceptance, got: %s\n", path, why);
         ef_replay_failed++;
-    } else if (strncmp(base, "bad-", 4) == 0 && !rejected) {
+    } else if ((strncmp(base, "bad-", 4) == 0 || strncmp(base, "bad_", 4) == 0) && !rejected) {
         fprintf(stderr, "%s: expected rejection, accepted\n", path);
         ef_replay_failed++;
     }
@@ -95,6 +97,11 @@ static void ef_replay_dir(const char *dir, ef_replay_fn fn)
         return;
     }
     while ((e = readdir(d)) != NULL) {
+#ifdef EF_REPLAY_SUFFIX
+        size_t nl = strlen(e->d_name), sl = strlen(EF_REPLAY_SUFFIX);
+        if (nl < sl || strcmp(e->d_name + nl - sl, EF_REPLAY_SUFFIX) != 0)
+            continue;
+#endif
         if (e->d_name[0] == '.')
             continue;
         if (n == cap) {

@@ -43,11 +43,15 @@ for t in $targets; do n=$((n + 1)); done
 each=$((secs / n))
 [ "$each" -ge 1 ] || each=1
 
-# fuzz BINARY SEEDS CORPUS: one target for $each seconds; returns the fuzzer's status.
+# fuzz BINARY SEEDS CORPUS [MORE_SEEDS]: one target for $each seconds; returns the fuzzer's
+# status. MORE_SEEDS: a directory whose *.ngc files are seeds too (the reader's path corpus).
 fuzz() {
-    bin=$1 seeds=$2 corpus=$3
+    bin=$1 seeds=$2 corpus=$3 more=${4:-}
     mkdir -p "$corpus"
     cp "$seeds"/* "$corpus"/
+    if [ -n "$more" ]; then
+        cp "$more"/*.ngc "$corpus"/
+    fi
     if [ -n "$runs" ]; then
         set -- -runs="$runs"
     else
@@ -85,7 +89,8 @@ status=0
 for t in $targets; do
     case $t in
     table) fuzz fuzz_table_parse "$root/tests/fuzz/corpus" "$build/fuzz-corpus" || status=$? ;;
-    gcode) fuzz fuzz_gcode "$root/tests/fuzz/corpus_gcode" "$build/fuzz-corpus-gcode" || status=$? ;;
+    gcode) fuzz fuzz_gcode "$root/tests/fuzz/corpus_gcode" "$build/fuzz-corpus-gcode" \
+        "$root/tests/data/gcode" || status=$? ;;
     smooth) fuzz fuzz_smooth "$root/tests/fuzz/corpus_smooth" "$build/fuzz-corpus-smooth" || status=$? ;;
     can) fuzz fuzz_canopen "$root/tests/fuzz/corpus_canopen" "$build/fuzz-corpus-canopen" || status=$? ;;
     *) echo "unknown fuzz target '$t' (table, gcode, smooth, can)" >&2; exit 2 ;;

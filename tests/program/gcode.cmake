@@ -30,7 +30,8 @@ set_tests_properties(gcode_cli_error PROPERTIES
 add_executable(gcode_fuzz_replay ${EF_GCODE_DIR}/fuzz/fuzz_gcode.c)
 target_compile_definitions(gcode_fuzz_replay PRIVATE EF_FUZZ_REPLAY_MAIN)
 target_link_libraries(gcode_fuzz_replay PRIVATE ef_host m)
-add_test(NAME gcode_fuzz_replay COMMAND gcode_fuzz_replay ${EF_GCODE_DIR}/fuzz/corpus_gcode)
+add_test(NAME gcode_fuzz_replay COMMAND gcode_fuzz_replay ${EF_GCODE_DIR}/fuzz/corpus_gcode
+                                         ${PROJECT_SOURCE_DIR}/tests/data/gcode)
 
 # libFuzzer target (tests/fuzz/run.sh gcode). The host library is rebuilt from its own
 # sources with coverage and sanitizer instrumentation, as the table fuzzer does for ef_fw.

@@ -471,6 +471,112 @@ static void test_errors(void)
     EF_CHECK_EQ(ef_gcode_init(NULL, "", 0, NULL), EF_ERR_ARG);
 }
 
+/* O-word, canned-cycle and offset errors: line:column of the word at fault, and nothing of
+ * the bad line or after it comes out. */
+static void test_dialect_errors(void)
+{
+    EXPECT_ERR("G0 X1\no100 endsub\nM2\n", "t.ngc:2:1: o100 ENDSUB outside a subroutine call");
+    EXPECT_ERR_AT("G0 X1\no100 sub\nG1 X2 F1\nM2\n", "2:1", "no o100 ENDSUB before the end");
+    EXPECT_ERR("o100 call\nM2\n",
+               "t.ngc:1:1: call of o100: subroutine not defined in this program");
+    EXPECT_ERR_AT("o<nope> call [1]\nM2\n", "1:1", "call of o<nope>: subroutine not defined");
+    EXPECT_ERR_AT("o1 if [1]\nG0 X1\no2 endif\nM2\n", "3:1",
+                  "o2 ENDIF inside o1 (opened on line 1)");
+    EXPECT_ERR_AT("o1 sub\no1 call\no1 endsub\no1 call\nM2\n", "2:1",
+                  "nested deeper than 10 levels");
+    EXPECT_ERR_AT("o1 else\nM2\n", "1:1", "o1 ELSE without o1 if");
+    EXPECT_ERR_AT("o1 endwhile\nM2\n", "1:1", "o1 ENDWHILE without o1 while");
+    EXPECT_ERR_AT("o1 break\nM2\n", "1:1", "o1 BREAK outside a o1 loop");
+    EXPECT_ERR_AT("o1 return\nM2\n", "1:1", "o1 RETURN outside a subroutine call");
+    EXPECT_ERR_AT("o1 bogus\nM2\n", "1:4", "unknown O-word keyword 'BOGUS'");
+    EXPECT_ERR_AT("o1 if\no1 endif\nM2\n", "1:4", "IF needs a bracketed expression");
+    EXPECT_ERR_AT("o1 while [1]\nG0 X1\no1 endwhile\nM2\n", "1:1",
+                  "o1 loop ran 1000000 times: a runaway loop");
+    EXPECT_ERR_AT("o1 do\no1 while [1]\nM2\n", "1:1", "a runaway loop");
+    EXPECT_ERR_AT("o1 repeat [2000000]\no1 endrepeat\nM2\n", "1:1",
+                  "repeat count 2e+06 above 1000000");
+    /* a runaway loop that moves: the moves before the bound came out, none after it */
+    int n = rd("#1=0\no1 while [1]\n#1=[#1+1]\nG0 X[#1/1000]\no1 endwhile\nM2\n");
+    EF_CHECK_EQ(n, EF_ERR_GCODE);
+    EF_CHECK(strstr(M.text, "runaway") != NULL);
+    EF_CHECK_NEAR(R.cur[0], EF_GCODE_MAX_ITER / 1000.0, 1e-9);
+    /* parameters */
+    EXPECT_ERR_AT("#31=[#5999]\nM2\n", "1:6", "parameter number 5999 out of range (#1..#5601)");
+    /* G10 */
+    EXPECT_ERR("G10 L2 P10 X1\nM2\n", "t.ngc:1:8: G10 coordinate system P10: must be a whole "
+                                      "number 0..9");
+    EXPECT_ERR_AT("G10 L2 P-1 X1\nM2\n", "1:8", "G10 coordinate system P-1");
+    EXPECT_ERR_AT("G10 L2 P1.5 X1\nM2\n", "1:8", "G10 coordinate system P1.5");
+    EXPECT_ERR_AT("G10 L2 X1\nM2\n", "1:1", "G10 needs a P word");
+    EXPECT_ERR_AT("G10 L3 P1 X1\nM2\n", "1:5", "G10 L3 not supported");
+    EXPECT_ERR_AT("G10 L1 P0 Z1\nM2\n", "1:8", "G10 tool P0: must be a whole number 1..99999");
+    EXPECT_ERR_AT("G43 H-1\nM2\n", "1:5", "G43 tool H-1");
+    EXPECT_ERR_AT("G92\nM2\n", "1:1", "G92 needs at least one axis word");
+    EXPECT_ERR_AT("G28 X[1/0]\nM2\n", "1:8", "division by zero");
+    /* canned cycles */
+    EXPECT_ERR_AT("G81 Z-1 F100\nM2\n", "1:1", "G81 needs an R word (retract plane)");
+    EXPECT_ERR_AT("G81 X1 Z-1 R1\nM2\n", "1:1", "G81 canned cycle with no feed rate");
+    EXPECT_ERR_AT("G83 X1 Z-1 R1 F100\nM2\n", "1:1", "G83 needs a Q word (peck depth)");
+    EXPECT_ERR_AT("G83 X1 Z-1 R1 Q-1 F100\nM2\n", "1:15", "G83 Q (peck depth) must be > 0");
+    EXPECT_ERR_AT("G81 X1 Z2 R1 F100\nM2\n", "1:1", "G81 R 1.0000 below the bottom Z 2.0000");
+    EXPECT_ERR_AT("G81 X1 Z-1 R1 L0 F100\nM2\n", "1:15", "G81 L (repeats) must be a whole number");
+    EXPECT_ERR_AT("G91 G81 X1 Z-1 R1 L1.5 F100\nM2\n", "1:19", "L (repeats)");
+    /* a bad line in a cycle program: the holes before it were drilled, none after */
+    n = rd("G0 Z5\nG81 X1 Z-1 R1 F100\nX2\nX3 Q-1 G83\nX4\nM2\n");
+    EF_CHECK_EQ(n, EF_ERR_GCODE);
+    EF_CHECK_NEAR(R.cur[0], 2, 0);
+}
+
+/* Canned cycles, offsets and spirals, item by item (the corpus in tests/data/gcode checks
+ * whole programs against LinuxCNC; these pin the details). */
+static void test_dialect(void)
+{
+    /* G81 G98 from Z5 with R1: rapid XY, rapid to R, feed to Z, rapid back to the initial Z */
+    int n = rd("G0 Z5\nG98 G81 X1 Y2 Z-1 R1 F100\nM2\n");
+    EF_CHECK(n >= 5);
+    int k = 1;
+    while (k < n && I[k].kind != EF_GC_RAPID)
+        k++;
+    EF_CHECK(k + 3 < n);
+    if (k + 3 < n) {
+        EF_CHECK_NEAR(I[k].end[0], 1, 0);
+        EF_CHECK_NEAR(I[k].end[1], 2, 0);
+        EF_CHECK_NEAR(I[k].end[2], 5, 0);
+        EF_CHECK_EQ(I[k + 1].kind, EF_GC_RAPID);
+        EF_CHECK_NEAR(I[k + 1].end[2], 1, 0);
+        EF_CHECK_EQ(I[k + 2].kind, EF_GC_LINE);
+        EF_CHECK_NEAR(I[k + 2].end[2], -1, 0);
+        EF_CHECK_NEAR(I[k + 2].feed, 100, 0);
+        EF_CHECK_EQ(I[k + 3].kind, EF_GC_RAPID);
+        EF_CHECK_NEAR(I[k + 3].end[2], 5, 0);
+    }
+    /* G92 in a rotated G54 lives before the rotation: X0 reads where the tool is */
+    n = rd("G10 L2 P1 X10 Y5 R90\nG0 X1 Y0\nG92 X0 Y0\nG0 X0 Y1\nM2\n");
+    EF_CHECK(n >= 3);
+    EF_CHECK_NEAR(R.cur[0], 10 - 1, 1e-12);
+    EF_CHECK_NEAR(R.cur[1], 5 + 1, 1e-12);
+    /* G10 L20 X alone in a rotated system moves both X and Y of the offset */
+    rd("G10 L2 P1 X10 Y5 R30\nG0 X3 Y4\nG10 L20 P1 X1\nM2\n");
+    EF_CHECK_NEAR(R.g5x[0][0], 11.732050807568877, 1e-9);
+    EF_CHECK_NEAR(R.g5x[0][1], 6.0, 1e-9);
+    /* tool length: G43 H applies the G10 L1 entry to Z; G49 removes it */
+    n = rd("G10 L1 P3 Z2.5\nT3 M6\nG43 H3\nG0 Z0\nG49\nG0 Z0\nM2\n");
+    EF_CHECK_NEAR(R.cur[2], 0, 0);
+    EF_CHECK_NEAR(R.tlo[2], 0, 0);
+    /* a spiral: the end radius is kept, not snapped to the start radius */
+    n = rd("G1 X10 F100\nG2 X20 Y0.02 I5\nM2\n");
+    EF_CHECK(n >= 2 && I[1].kind == EF_GC_ARC);
+    if (n >= 2) {
+        EF_CHECK_NEAR(I[1].radius, 5, 1e-12);
+        EF_CHECK_NEAR(I[1].radius_end, hypot(5, 0.02), 1e-12);
+        EF_CHECK_NEAR(I[1].end[1], 0.02, 0);
+    }
+    /* sender lines: each kind reported once */
+    n = rd("$H\n$X\nN10\nN20\nG0 X1\nM2\n");
+    EF_CHECK_EQ(n, 4);
+    EF_CHECK(n == 4 && I[0].kind == EF_GC_IGNORED && I[1].kind == EF_GC_IGNORED);
+}
+
 /* Errors that come with a name and the file loader. */
 static void test_file(void)
 {
@@ -526,6 +632,8 @@ int main(int argc, char **argv)
         {"expressions", test_expressions},
         {"events", test_events},
         {"errors", test_errors},
+        {"dialect_errors", test_dialect_errors},
+        {"dialect", test_dialect},
         {"file", test_file},
     };
     return EF_TEST_RUN(argc, argv, 1, parts);

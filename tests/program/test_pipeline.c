@@ -389,6 +389,13 @@ static void test_notes(void)
     EF_CHECK(joined(ef_v3(0, 0, 0), 1e-5));
     /* Notes come in program order with the moves around them. */
     EF_CHECK(RUN.nlog >= 4 && RUN.log[0] == 'n');
+    /* A feed no direction of the machine reaches: clamped to the axes' limits together, with
+     * a note naming the line and the F word (LinuxCNC clamps to its machine's limit). */
+    EF_CHECK_EQ(run("G1 X10 F100\nG1 X20 F1000000\nM2\n"), EF_OK);
+    EF_CHECK_EQ(RUN.nnotes, 1);
+    EF_CHECK(RUN.nnotes >= 1 && !strncmp(RUN.notes[0], "t.ngc:2:8: feed 1e+06", 21) &&
+             strstr(RUN.notes[0], "clamped") != NULL);
+    EF_CHECK_NEAR(ST.end[0], 20, 1e-6);
 }
 
 /* Refused primitives: controlled stop after what was accepted, "name:line: error". */
@@ -844,6 +851,79 @@ static void rapid_corners(double P)
            P, blends, c2p, blended, ST.cycle_time);
 }
 
+/* Spiral arcs (LinuxCNC's near-circular arcs, radius linear in the angle): the circular pieces
+ * join end to end, end exactly where the arc does, stay within EF_PIPE_SPIRAL_DEV of the
+ * spiral, and the whole program runs to its end through the smoother. */
+static void spiral_check(int plane, double r0, double r1, double sweep, double dz)
+{
+    ef_gcode_item_t it, pc;
+    memset(&it, 0, sizeof it);
+    int a = plane == 18 ? 2 : plane == 19 ? 1 : 0, b = plane == 18 ? 0 : plane == 19 ? 2 : 1;
+    int c = 3 - a - b;
+    it.kind = EF_GC_ARC;
+    it.plane = plane;
+    it.radius = r0;
+    it.radius_end = r1;
+    it.sweep = sweep;
+    it.turns = 1;
+    it.feed = 300;
+    it.centre[a] = 1;
+    it.centre[b] = -2;
+    it.start[a] = 1 + r0;
+    it.start[b] = -2;
+    it.end[a] = 1 + r1 * cos(sweep);
+    it.end[b] = -2 + r1 * sin(sweep);
+    it.end[c] = dz;
+    int n = ef_pipe_spiral_pieces(sweep, r1 - r0);
+    EF_CHECK(n >= 1 && n <= EF_PIPE_SPIRAL_MAX);
+    EF_CHECK(n >= (int)ceil(fabs(sweep) / (M_PI / 4) - 1e-9));
+    double prev[3], worst = 0;
+    memcpy(prev, it.start, sizeof prev);
+    for (int k = 0; k < n; k++) {
+        EF_CHECK_EQ(ef_pipe_spiral_piece(&it, k, n, &pc), EF_OK);
+        for (int q = 0; q < 3; q++)
+            EF_CHECK_NEAR(pc.start[q], prev[q], 1e-12);
+        EF_CHECK_NEAR(pc.radius, pc.radius_end, 0);
+        EF_CHECK(pc.sweep * sweep > 0);
+        /* sample the piece; compare with the spiral at the same angle about its centre */
+        double s0 = atan2(pc.start[b] - pc.centre[b], pc.start[a] - pc.centre[a]);
+        for (int j = 0; j <= 16; j++) {
+            double u = s0 + pc.sweep * j / 16, x = pc.centre[a] + pc.radius * cos(u),
+                   y = pc.centre[b] + pc.radius * sin(u);
+            double ang = atan2(y + 2, x - 1), f = (ang - 0) / sweep;
+            /* unwrap the angle into the piece's share of the sweep */
+            double f0 = (double)k / n;
+            while (f < f0 - 0.5 / n)
+                f += 2 * M_PI / fabs(sweep);
+            while (f > f0 + 1.5 / n)
+                f -= 2 * M_PI / fabs(sweep);
+            double rho = r0 + f * (r1 - r0);
+            worst = fmax(worst, fabs(hypot(x - 1, y + 2) - rho));
+        }
+        memcpy(prev, pc.end, sizeof prev);
+    }
+    for (int q = 0; q < 3; q++)
+        EF_CHECK_NEAR(prev[q], it.end[q], 0);
+    EF_CHECK(worst <= EF_PIPE_SPIRAL_DEV * 1.05);
+    printf("spiral G%d r %.4f -> %.4f over %.0f deg: %d pieces, worst %.2e mm\n", plane, r0, r1,
+           sweep * 180 / M_PI, n, worst);
+}
+
+static void test_spiral(void)
+{
+    spiral_check(17, 10, 10.02, 1.5 * M_PI, 0);
+    spiral_check(17, 5, 4.99, -0.7 * M_PI, -1);
+    spiral_check(18, 20, 20.5, -1.9 * M_PI, 0); /* up to 100 x the tolerance, 0.1 % rule met */
+    spiral_check(19, 2, 2.028, 0.25 * M_PI, 3);
+    EF_CHECK_EQ(ef_pipe_spiral_pieces(2 * M_PI, 0), 8);
+    EF_CHECK_EQ(ef_pipe_spiral_piece(NULL, 0, 1, NULL), EF_ERR_ARG);
+    /* through the pipeline: a spiral G2 ends where it says, within P everywhere */
+    EF_CHECK_EQ(run("G1 X10 F600\nG2 X20 Y0.02 I5\nG1 X30\nM2\n"), EF_OK);
+    EF_CHECK_NEAR(ST.end[0], 30, 1e-6);
+    EF_CHECK_EQ(ST.dev_over, 0);
+    EF_CHECK(joined(ef_v3(0, 0, 0), 1e-5));
+}
+
 static void test_rapid_corners(void)
 {
     rapid_corners(0.05);
@@ -875,6 +955,7 @@ int main(int argc, char **argv)
         {"quantized_circle", test_quantized_circle},
         {"collinear_run", test_collinear_run},
         {"rapid_corners", test_rapid_corners},
+        {"spiral", test_spiral},
         {"bracket", test_bracket_5},
         {"bracket", test_bracket_3},
     };

@@ -234,7 +234,7 @@ static int fl_push(ef_gcode_t *r, int kind, const fl_head_t *h)
 /* One more iteration of loop f: bounded. */
 static int fl_iter(ef_gcode_t *r, ef_gcode_flow_t *f)
 {
-    if (++f->iter > EF_GCODE_MAX_ITER) {
+    if (++f->iter >= EF_GCODE_MAX_ITER) { /* the first pass is not a jump back */
         char nb[48];
         r->line = f->at.line;
         return ef_gc_err(r, f->col, "%s loop ran %d times: a runaway loop, stopped",

@@ -585,6 +585,13 @@ int ef_pipe_run(ef_gcode_t *r, const ef_pipe_cfg_t *cfg, const ef_pipe_cb_t *cb,
     if (cb)
         P->cb = *cb;
     P->r = r;
+    /* The machine's limit for the reader's feed clamp (a note on each line that asks more):
+     * no direction is faster than all axes at their limits together. */
+    double vm = 0;
+    for (int k = 0; k < 3; k++)
+        vm += (double)cfg->lim.v_axis[k] * cfg->lim.v_axis[k];
+    if (vm > 0 && sqrt(vm) * 60 < r->max_feed)
+        ef_gcode_set_max_feed(r, sqrt(vm) * 60);
     P->tol = cfg->tol_default;
     P->qtol = pipe_qtol(cfg, P->tol, 0.0);
     P->stop_next = 1;
