@@ -195,7 +195,6 @@ class Program:
         if r.returncode != 0:
             raise Broken("evenfeed gcode %s: %s" % (path, r.stderr.strip()))
         self.prims = []
-        self.g53_lines = set()
         # evenfeed starts in G64 at --tol (0.02 mm), its P for a G64 without P as well;
         # every corpus program sets its own
         default_tol = 0.02
@@ -211,8 +210,6 @@ class Program:
                 self.prims.append(Line(it["start"], it["end"], it["feed"], False, tol, it["line"]))
             elif kind == "arc":
                 self.prims.append(Arc(it, tol))
-            elif kind == "event" and it["text"].upper().startswith("G53"):
-                self.g53_lines.add(it["line"])
         if not self.prims:
             raise Broken("%s: no motion" % path)
         self.section, self.section_name = section_lines(path)
@@ -249,7 +246,7 @@ class Program:
         worst, worst_rel, over = 0.0, 0.0, 0
         prev = None
         for k, p in enumerate(traj.pos):
-            if p == prev or traj.on_lines(k, self.g53_lines):
+            if p == prev:
                 continue
             prev = p
             hint = self.by_line.get(traj.lines[k], idx)
@@ -346,14 +343,12 @@ def load_lcnc(tsv_lines):
     return Traj(pos, lines, 0.5e-6)  # doubles written by halsampler with 6 decimals
 
 
-def motion_stats(traj, skip_lines):
-    """Cycle time (first to last period in which the position changed; periods on G53
-    lines, which evenfeed passes on as events, are not motion), end point, peak per-axis
+def motion_stats(traj):
+    """Cycle time (first to last period in which the position changed), end point, peak per-axis
     acceleration (1 ms second differences) and jerk (1 ms and JERK_BASE ms third
     differences) over that span."""
     pos = traj.pos
-    moving = [k for k in range(1, len(pos))
-              if pos[k] != pos[k - 1] and not traj.on_lines(k, skip_lines)]
+    moving = [k for k in range(1, len(pos)) if pos[k] != pos[k - 1]]
     if not moving:
         raise Broken("no motion in the samples")
     i0, i1 = moving[0], moving[-1]
@@ -471,7 +466,7 @@ def compare(args, prog, cache_dir):
            "units": "inch" if ef["inch"] else "mm", "primitives": len(program.prims)}
     row["bound"] = program.bound()
     for key, traj in (("ef", ef_traj), ("lc", lc_traj)):
-        st = motion_stats(traj, program.g53_lines)
+        st = motion_stats(traj)
         dev, dev_rel, over = program.deviation(traj)
         row[key] = dict(st, geo_dev=dev, geo_dev_rel=dev_rel, geo_over=over,
                         floor=sampling_floor(traj.e))

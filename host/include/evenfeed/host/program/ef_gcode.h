@@ -1,28 +1,35 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /**
  * @file ef_gcode.h
- * @brief Streaming reader for the RS274NGC subset that CAM post-processors emit.
+ * @brief Streaming reader for part programs in LinuxCNC's RS274NGC dialect.
  *
  * The reader turns a part program into a stream of items, one per ef_gcode_next() call:
- * path primitives (rapid, line, arc), pass-through events (tool change, spindle, coolant,
- * dwell, work offset...), notes about words that are accepted but ignored (each reported
- * once), tolerance changes (G61, G64 P Q) and a final end item. docs/gcode.md lists the
- * subset; the rules that matter to callers:
+ * path primitives (rapid, line, arc, spiral), pass-through events (tool change, spindle,
+ * coolant, dwell...), notes (feeds clamped, words ignored, each ignored kind once),
+ * tolerance changes (G61, G64 P Q) and a final end item. It follows O-word subroutines and
+ * control flow, expands canned cycles and applies work, G92 and tool offsets, with
+ * LinuxCNC's meaning; docs/gcode.md has the table of what is supported, refused and
+ * ignored. The rules that matter to callers:
  *
- * - Positions are in millimetres in program coordinates; G20 input is converted (x 25.4)
- *   and every item records the units the program was in (::ef_gcode_item_t::units) so
- *   output can be given back in them. Feeds are in mm/min (G94 only).
- * - The program starts at the origin (0, 0, 0) with G21 G90 G91.1 G17, no motion mode and
- *   no feed: axis words before the first G0/G1/G2/G3 are an error, as is a feed move
- *   before the first positive F.
+ * - Positions are machine coordinates in millimetres: machine = rot_xy(program + G92) +
+ *   G5x + tool length offset, as LinuxCNC's canon maps them. G20 input is converted
+ *   (x 25.4) and every item records the units the program was in
+ *   (::ef_gcode_item_t::units). Feeds are in mm/min (G93 converted), clamped to
+ *   ::EF_GCODE_MAX_FEED or ef_gcode_set_max_feed()'s limit with a note.
+ * - The program starts at machine (0, 0, 0) with G21 G90 G91.1 G17 G94 G99 G64, zero
+ *   offsets, no motion mode and no feed: axis words before the first motion code are an
+ *   error, as is a feed move before the first positive F.
  * - A G0/G1 whose end equals its start (within ::EF_GCODE_ZERO_LEN) is reported as a
  *   ::EF_GC_ZERO_MOVE item, never dropped silently. An IJK arc whose end equals its start
  *   is a full circle (times the P word, default 1).
- * - Arc radius rule (LinuxCNC's): the end radius may differ from the start radius by at
- *   most max(::EF_GCODE_ARC_ABS_TOL, ::EF_GCODE_ARC_REL_TOL x start radius); beyond that the
- *   arc is an error. Within it the arc is emitted as given (centre, start, end).
+ * - Arc radius rule (LinuxCNC 2.9's): an arc whose end radius differs from its start
+ *   radius within the rule of ::EF_GCODE_ARC_ABS_TOL_MM is a spiral (radius_end differs
+ *   from radius, linear in the angle); beyond it the arc is an error.
+ * - Loops, recursion and expansions are bounded (::EF_GCODE_MAX_ITER,
+ *   ::EF_GCODE_CALL_DEPTH, ::EF_GCODE_LINE_ITEMS_MAX): a runaway program ends in an error.
  * - Errors are ::EF_ERR_GCODE with the message "name:line:col: text" (1-based, col counts
- *   bytes); after an error, every further call returns the same error.
+ *   bytes); nothing of the bad line or after it comes out, and every further call returns
+ *   the same error.
  */
 #ifndef EF_GCODE_H
 #define EF_GCODE_H
@@ -271,7 +278,8 @@ void ef_gcode_free(ef_gcode_t *r);
  * @param m  message on failure, "name:line:col: text" (may be NULL).
  * @retval EF_OK        it holds the next item; after ::EF_GC_END every call gives END again.
  * @retval EF_ERR_ARG   r or it is NULL.
- * @retval EF_ERR_GCODE malformed or unsupported input; the reader stays failed.
+ * @retval EF_ERR_GCODE malformed or unsupported input, a runaway loop or recursion, or no
+ *                      memory for a long expansion; the reader stays failed.
  */
 int ef_gcode_next(ef_gcode_t *r, ef_gcode_item_t *it, ef_msg_t *m);
 
