@@ -409,7 +409,10 @@ static void test_errors(void)
     EXPECT_ERR_AT("G0 X#<nope>\n", "1:5", "#<NOPE> is not defined");
     EXPECT_ERR_AT("#1 X2\n", "1:4", "expected '='");
     EXPECT_ERR_AT("G84 X1 Y1 Z-1 R1 F100\n", "1:1", "unsupported G84 (rigid tapping");
-    EXPECT_ERR_AT("G87 X1 Y1 Z-1 R1 F100\n", "1:1", "unsupported G87 (back boring");
+    EXPECT_ERR_AT("G87 X1 Y1 Z-1 R1 I1 J0 K0 F100\n", "1:1", "G87 with the spindle not turning");
+    EXPECT_ERR_AT("S100 M3\nG87 X1 Y1 Z-1 R1 J0 K0 F100\n", "2:1", "G87 needs I (offset");
+    EXPECT_ERR_AT("S100 M3\nG87 X1 Y1 Z-1 R1 I1 J0 F100\n", "2:1", "G87 needs K (middle level)");
+    EXPECT_ERR_AT("G81 X1 Z-1 R1 I1 F100\n", "1:15", "I word with no G2/G3 arc or G87");
     EXPECT_ERR_AT("G0 X1\nG41 D1 X2\n", "2:1", "unsupported G41 (cutter radius compensation");
     EXPECT_ERR_AT("G33 Z-1 K1\n", "1:1", "unsupported G33 (threading");
     EXPECT_ERR_AT("G38.2 Z-10 F10\n", "1:1", "unsupported G38.2 (probing)");
@@ -549,6 +552,25 @@ static void test_dialect(void)
         EF_CHECK_NEAR(I[k + 2].feed, 100, 0);
         EF_CHECK_EQ(I[k + 3].kind, EF_GC_RAPID);
         EF_CHECK_NEAR(I[k + 3].end[2], 5, 0);
+    }
+    /* G87 back boring: the spindle stops oriented before the bar goes down off centre and
+     * again before it comes out; it turns again at the bottom and at the end */
+    n = rd("G0 Z10\nS500 M4\nG98 G87 X5 Y5 Z-10 R2 I1 J0.5 K-4 F100\nM2\n");
+    {
+        static const char *want[] = {"rapid", "event", "tolerance", "rapid", "rapid",
+                                     "rapid", "event", "rapid",     "rapid", "event",
+                                     "line",  "line",  "event",     "rapid", "rapid",
+                                     "rapid", "event", "tolerance", "end"};
+        int nw = (int)(sizeof want / sizeof want[0]);
+        EF_CHECK_EQ(n, nw);
+        for (int j = 0; j < n && j < nw; j++)
+            if (strcmp(ef_gcode_kind_name(I[j].kind), want[j])) {
+                ef_t_fail++;
+                fprintf(stderr, "%s:%d: G87 item %d is %s, want %s\n", __FILE__, __LINE__, j,
+                        ef_gcode_kind_name(I[j].kind), want[j]);
+            }
+        EF_CHECK(n == nw && !strncmp(I[6].text, "M5 M19", 6) && !strncmp(I[9].text, "M4 ", 3));
+        EF_CHECK(n == nw && I[10].end[2] == -4 && I[11].end[2] == -10 && I[14].end[2] == 10);
     }
     /* G92 in a rotated G54 lives before the rotation: X0 reads where the tool is */
     n = rd("G10 L2 P1 X10 Y5 R90\nG0 X1 Y0\nG92 X0 Y0\nG0 X0 Y1\nM2\n");

@@ -688,6 +688,7 @@ static void gc_gclass(int code, int *group, int *action)
     case 830:
     case 850:
     case 860:
+    case 870:
     case 880:
     case 890:
     case 800:
@@ -777,8 +778,6 @@ static const char *gc_why(int code)
 {
     if (code == 840 || code == 740 || code == 331)
         return "rigid tapping is spindle-synchronized motion";
-    if (code == 870)
-        return "back boring needs spindle orientation";
     if (code >= 730 && code <= 890)
         return "canned cycle";
     if (code == 410 || code == 420 || code == 411 || code == 421)
@@ -1388,11 +1387,14 @@ static int gc_execute(ef_gcode_t *r, ef_gc_line_t *L)
     static const char arc_letters[] = "IJKR";
     for (int k = 0; k < 4; k++) {
         const ef_gc_word_t *w = ef_gc_get(L, arc_letters[k]);
-        if (w && !arc && !cycle && !(g10 && arc_letters[k] == 'R')) {
+        int is_r = arc_letters[k] == 'R';
+        if (w && !arc && !(cycle && (is_r || motion == 870)) && !(g10 && is_r)) {
             if (arcmode && !first_axis)
                 return ef_gc_err(r, w->col, "%s with no X, Y or Z word",
                                  motion == 20 ? "G2" : "G3");
-            return ef_gc_err(r, w->col, "%c word with no G2/G3 arc, canned cycle or G10",
+            return ef_gc_err(r, w->col,
+                             is_r ? "R word with no G2/G3 arc, canned cycle or G10"
+                                  : "%c word with no G2/G3 arc or G87 back boring cycle",
                              arc_letters[k]);
         }
     }
@@ -1550,6 +1552,7 @@ static int gc_execute(ef_gcode_t *r, ef_gc_line_t *L)
     if (!is_cycle || (grp[GR_MOTION] && motion != r->motion)) {
         r->cyc_il_flag = 0; /* a new cycle mode (or none) forgets the initial level */
         r->cyc_have_q = r->cyc_have_p = 0;
+        memset(r->cyc_have_ijk, 0, sizeof r->cyc_have_ijk);
     }
     int same_cycle = is_cycle && motion == r->motion;
     r->motion = motion;

@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* Canned cycles of the G-code reader (docs/gcode.md "Canned cycles"): G73, G81, G82, G83,
- * G85, G86, G88 and G89 expanded into rapids, feeds, dwells and spindle events as LinuxCNC
+ * G85, G86, G87, G88 and G89 expanded into rapids, feeds, dwells and spindle events as LinuxCNC
  * expands them, in G17 (drilling along Z), G18 (along Y) and G19 (along X), with G98/G99
  * retract, sticky R/Z/Q/P, and L repeats (with G91 steps). The expansion runs in exact-stop
  * mode: a tolerance item "exact" before it and the mode in force restored after it.
@@ -15,6 +15,11 @@
  *   G86  feed z, dwell P, spindle stop, rapid clear, spindle on again
  *   G88  feed z, dwell P, spindle stop, program stop (M0), spindle on again; no retract:
  *        LinuxCNC leaves it to the operator, and the next move starts at the bottom
+ *   G87  (back boring; the spindle must turn) rapid to the offset point (hole + the plane
+ *        offsets, I J in G17), spindle stop oriented, rapid down to z at the offset,
+ *        rapid to the hole, spindle on, feed up to the middle level k (the drill axis'
+ *        offset letter, K in G17; in G91 relative to z), feed back to z, spindle stop
+ *        oriented, rapid to the offset, rapid up to clear, rapid to the hole, spindle on
  * Before the first hole, a tool below r rises to r first. */
 #include <math.h>
 #include <stdio.h>
@@ -104,6 +109,27 @@ int ef_gc_cycle(ef_gcode_t *r, const ef_gc_line_t *L, int motion, int same,
     }
     if ((motion == 730 || motion == 830) && !r->cyc_have_q)
         return ef_gc_err(r, col, "%s needs a Q word (peck depth)", g);
+    /* G87: offsets in the plane (the letters of its axes) and the middle level (the letter
+     * of the drill axis), sticky within the cycle mode */
+    static const char off_letter[3] = {'I', 'J', 'K'};
+    int ia = x.a, ib = x.b, ic = x.c; /* X->I, Y->J, Z->K */
+    if (motion == 870) {
+        if (r->spindle != 3 && r->spindle != 4)
+            return ef_gc_err(r, col, "G87 with the spindle not turning (M3 or M4 first)");
+        for (int k = 0; k < 3; k++) {
+            const ef_gc_word_t *w = ef_gc_get(L, off_letter[k]);
+            if (w) {
+                r->cyc_ijk[k] = w->v * scale;
+                r->cyc_have_ijk[k] = 1;
+            }
+        }
+        for (int k = 0; k < 3; k++) {
+            int idx = k == 0 ? ia : k == 1 ? ib : ic;
+            if (!r->cyc_have_ijk[idx])
+                return ef_gc_err(r, col, "G87 needs %c %s", off_letter[idx],
+                                 k < 2 ? "(offset of the back boring bar)" : "(middle level)");
+        }
+    }
     if (wl) {
         if (wl->v != floor(wl->v) || wl->v < 1 || wl->v > 10000)
             return ef_gc_err(r, wl->col, "%s L (repeats) must be a whole number 1..10000", g);
@@ -184,13 +210,38 @@ int ef_gc_cycle(ef_gcode_t *r, const ef_gc_line_t *L, int motion, int same,
             if (!rc && (motion == 850 || motion == 890))
                 rc = cy_move(r, &x, 0, aa, bb, rr, col);
             break;
+        case 870: {
+            double oa = aa + r->cyc_ijk[ia], ob = bb + r->cyc_ijk[ib];
+            double mid = r->absolute ? r->cyc_ijk[ic] : zz + r->cyc_ijk[ic];
+            static const char *orient = "M5 M19 (G87: spindle stop, oriented)";
+            rc = cy_move(r, &x, 1, oa, ob, rr, col);
+            if (!rc)
+                rc = ef_gc_emit_event(r, orient, col);
+            if (!rc)
+                rc = cy_move(r, &x, 1, oa, ob, zz, col);
+            if (!rc)
+                rc = cy_move(r, &x, 1, aa, bb, zz, col);
+            if (!rc)
+                rc = cy_spindle_on(r, col);
+            if (!rc)
+                rc = cy_move(r, &x, 0, aa, bb, mid, col);
+            if (!rc)
+                rc = cy_move(r, &x, 0, aa, bb, zz, col);
+            if (!rc)
+                rc = ef_gc_emit_event(r, orient, col);
+            if (!rc)
+                rc = cy_move(r, &x, 1, oa, ob, zz, col);
+            if (!rc)
+                rc = cy_move(r, &x, 1, oa, ob, clear, col);
+            break;
+        }
         default:
             rc = ef_gc_err(r, col, "unsupported canned cycle %s", g);
             break;
         }
         if (!rc && motion != 880) /* G88: the operator retracts by hand after the stop */
             rc = cy_move(r, &x, 1, aa, bb, clear, col);
-        if (!rc && (motion == 860 || motion == 880))
+        if (!rc && (motion == 860 || motion == 870 || motion == 880))
             rc = cy_spindle_on(r, col);
         if (rc)
             return rc;

@@ -224,6 +224,8 @@ typedef struct {
     double path_p, path_q;             /**< in force: G64 P Q (mm) */
     double cyc_r, cyc_z, cyc_q, cyc_p; /**< sticky canned-cycle words (mm, s) */
     int cyc_have_q, cyc_have_p;        /**< Q and P given since the cycle mode began */
+    double cyc_ijk[3];                 /**< G87 I J K (mm), sticky within the cycle mode */
+    int cyc_have_ijk[3];               /**< I, J, K given since the cycle mode began */
     double cyc_il;                     /**< initial level: drill-axis program coordinate
                                             when the cycle mode began (mm) */
     int cyc_il_flag;                   /**< cyc_il is set */
