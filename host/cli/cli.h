@@ -161,11 +161,35 @@ enum {
  *          smoothing option ("CMD: unknown option 'OPT'"); printed. */
 int cli_pipe_opt(const cli_getopt_t *g, int key, ef_pipe_cfg_t *cfg);
 
+/** The machine's files a program starts from (--params, --tool-table; docs/gcode.md). */
+typedef struct {
+    const char *params; /**< LinuxCNC parameter file, or NULL */
+    const char *tools;  /**< LinuxCNC tool table, or NULL */
+} cli_machine_t;
+
+/** Keys of the machine-file options in CLI_MACHINE_OPTIONS. */
+enum { CLI_MACH_PARAMS = 0x340, CLI_MACH_TOOLS };
+/* clang-format off */
+/** The machine-file options' longopts entries (gcode, smooth and stream list them). */
+#define CLI_MACHINE_OPTIONS                                                                        \
+    {"params", required_argument, NULL, CLI_MACH_PARAMS},                                          \
+    {"tool-table", required_argument, NULL, CLI_MACH_TOOLS}
+/* clang-format on */
+
+/** Take a machine-file option key: 1 when key was one (stored in mc), 0 when not. */
+int cli_machine_opt(const cli_getopt_t *g, int key, cli_machine_t *mc);
+
+/** Open a program and load the machine's files into its reader (mc may be NULL).
+ *  @retval EF_OK ready; otherwise ef_gcode_open()'s, ef_gcode_load_params()'s or
+ *          ef_gcode_load_tools()'s error, printed (the reader is then freed). */
+int cli_gcode_open(ef_gcode_t *r, const char *path, const cli_machine_t *mc);
+
 /** evenfeed smooth's options (shared with the demo). */
 typedef struct {
     const char *out; /**< -o: .json (moves) or .csv (setpoints); NULL: none */
     const char *svg; /**< --svg: XY plot; NULL: none */
     ef_pipe_cfg_t cfg;
+    cli_machine_t mach; /**< --params, --tool-table */
 } cli_smooth_opts_t;
 
 /** Defaults: ef_pipe_cfg_default(), built-in tables, both step modes interpolated. */

@@ -270,3 +270,29 @@ int cli_pipe_opt(const cli_getopt_t *g, int key, ef_pipe_cfg_t *cfg)
     }
     return rc;
 }
+
+int cli_machine_opt(const cli_getopt_t *g, int key, cli_machine_t *mc)
+{
+    if (key == CLI_MACH_PARAMS)
+        mc->params = g->val;
+    else if (key == CLI_MACH_TOOLS)
+        mc->tools = g->val;
+    else
+        return 0;
+    return 1;
+}
+
+int cli_gcode_open(ef_gcode_t *r, const char *path, const cli_machine_t *mc)
+{
+    ef_msg_t m = {{0}};
+    int rc = ef_gcode_open(r, path, &m);
+    if (rc == EF_OK && mc && mc->params)
+        rc = ef_gcode_load_params(r, mc->params, &m);
+    if (rc == EF_OK && mc && mc->tools)
+        rc = ef_gcode_load_tools(r, mc->tools, &m);
+    if (rc != EF_OK) {
+        ef_gcode_free(r);
+        return cli_error(rc, "%s", m.text);
+    }
+    return EF_OK;
+}

@@ -5,11 +5,13 @@
 #include "evenfeed/host/program/ef_gcode.h"
 
 static const char usage[] =
-    "usage: evenfeed gcode FILE [--json]\n"
+    "usage: evenfeed gcode FILE [--json] [--params FILE.var] [--tool-table FILE.tbl]\n"
     "\n"
-    "Reads FILE (the RS274NGC subset in docs/gcode.md) and prints one line per item:\n"
-    "rapid, line, arc, zero (zero-length move), event, ignored, tolerance, end. Positions\n"
-    "are in mm, feeds in mm/min. --json prints one JSON object per line instead.\n";
+    "Reads FILE (LinuxCNC's dialect, docs/gcode.md) and prints one line per item: rapid,\n"
+    "line, arc, zero (zero-length move), event, ignored, tolerance, note, end. Positions\n"
+    "are machine coordinates in mm, feeds in mm/min. --json prints one JSON object per\n"
+    "line instead. --params and --tool-table start from a machine's LinuxCNC parameter\n"
+    "file (work offsets, G28/G30 positions) and tool table (lengths in mm).\n";
 
 /* Print a 3-vector as a JSON array. */
 static void cgc_json_vec(FILE *f, const char *key, const double *v)
@@ -114,7 +116,8 @@ enum { O_JSON = CLI_LONG };
 int cli_cmd_gcode(int argc, char **argv)
 {
     static const struct option opts[] = {
-        {"json", no_argument, NULL, O_JSON}, CLI_OPT_HELP, CLI_OPT_END};
+        {"json", no_argument, NULL, O_JSON}, CLI_MACHINE_OPTIONS, CLI_OPT_HELP, CLI_OPT_END};
+    cli_machine_t mc = {0};
     const char *path = NULL;
     int json = 0, c;
     cli_getopt_t g;
@@ -124,6 +127,8 @@ int cli_cmd_gcode(int argc, char **argv)
             return EF_OK;
         if (c == O_JSON)
             json = 1;
+        else if (cli_machine_opt(&g, c, &mc))
+            continue;
         else if (c == CLI_ARG && !path)
             path = g.val;
         else
@@ -135,9 +140,9 @@ int cli_cmd_gcode(int argc, char **argv)
         return cli_error(EF_ERR_ARG, "usage: evenfeed gcode FILE [--json]");
     static ef_gcode_t r; /* about 50 kB of parameters: not on the stack */
     ef_msg_t m = {{0}};
-    int rc = ef_gcode_open(&r, path, &m);
+    int rc = cli_gcode_open(&r, path, &mc);
     if (rc != EF_OK)
-        return cli_error(rc, "%s", m.text);
+        return rc;
     ef_gcode_item_t it;
     do {
         rc = ef_gcode_next(&r, &it, &m);

@@ -8,6 +8,7 @@ static const char usage[] =
     "usage: evenfeed smooth IN.ngc [-o OUT.json|OUT.csv] [--svg PLOT.svg] [--tol P]\n"
     "                       [--vmax V] [--amax A] [--jerk J] [--period-us N]\n"
     "                       [--step uniform|corrected] [--micro-len L] [--g1] [--keep-blends]\n"
+    "                       [--params FILE.var] [--tool-table FILE.tbl]\n"
     "\n"
     "Smooths a part program (docs/gcode.md) into G2 Bezier moves, plans the feed, runs the\n"
     "interpolator in both step modes and prints a summary (docs/smoothing-cli.md).\n"
@@ -22,14 +23,20 @@ static const char usage[] =
     "  --micro-len L    longest CAM micro-segment, mm, 0 = no smooth sections (default 1)\n"
     "  --g1             G1 cubic smooth sections instead of G2 quintic\n"
     "  --keep-blends    blend every corner that fits, also where stopping there is faster\n"
-    "                   (slow corners, docs/smoothing.md)\n";
+    "                   (slow corners, docs/smoothing.md)\n"
+    "  --params FILE    the machine's LinuxCNC parameter file: work offsets, G28/G30\n"
+    "                   positions, coordinate system at start (mm; docs/gcode.md)\n"
+    "  --tool-table FILE  the machine's LinuxCNC tool table (G43 H lengths, mm)\n";
 
 enum { O_SVG = CLI_LONG };
 
 int cli_cmd_smooth(int argc, char **argv)
 {
-    static const struct option opts[] = {
-        {"svg", required_argument, NULL, O_SVG}, CLI_PIPE_OPTIONS, CLI_OPT_HELP, CLI_OPT_END};
+    static const struct option opts[] = {{"svg", required_argument, NULL, O_SVG},
+                                         CLI_PIPE_OPTIONS,
+                                         CLI_MACHINE_OPTIONS,
+                                         CLI_OPT_HELP,
+                                         CLI_OPT_END};
     const char *path = NULL;
     cli_smooth_opts_t o;
     cli_smooth_opts_default(&o);
@@ -53,7 +60,8 @@ int cli_cmd_smooth(int argc, char **argv)
             path = g.val;
             break;
         default:
-            rc = cli_pipe_opt(&g, c, &o.cfg);
+            if (!cli_machine_opt(&g, c, &o.mach))
+                rc = cli_pipe_opt(&g, c, &o.cfg);
             break;
         }
         if (rc != EF_OK)
@@ -66,10 +74,9 @@ int cli_cmd_smooth(int argc, char **argv)
         return cli_error(EF_ERR_ARG, "smooth: no input file");
     }
     static ef_gcode_t r; /* about 50 kB of parameters: not on the stack */
-    ef_msg_t m = {{0}};
-    int rc = ef_gcode_open(&r, path, &m);
+    int rc = cli_gcode_open(&r, path, &o.mach);
     if (rc != EF_OK)
-        return cli_error(rc, "%s", m.text);
+        return rc;
     rc = cli_smooth_run(&r, path, &o);
     ef_gcode_free(&r);
     return rc;

@@ -36,6 +36,8 @@ static const char usage[] =
     "  --trace FILE      CSV: SYNC times, actual positions, targets, segments\n"
     "both:\n"
     "  --fault-reset     reset faulted drives first (default: refuse to enable them)\n"
+    "  --params FILE     the machine's LinuxCNC parameter file (work offsets, G28/G30)\n"
+    "  --tool-table FILE the machine's LinuxCNC tool table (G43 H lengths, mm)\n"
     "  -v                progress on stderr\n"
     "  smoothing: --tol MM --vmax MM/S --amax MM/S2 --jerk MM/S3 --micro-len MM --g1\n"
     "             --keep-blends\n"
@@ -72,13 +74,13 @@ static int cstrm_nodes(const char *v, ef_can_stream_cfg_t *cc)
 }
 
 /* Stream over CAN with the parsed options; print the summary. */
-static int cstrm_run_can(const ef_can_stream_cfg_t *cc, const char *path)
+static int cstrm_run_can(const ef_can_stream_cfg_t *cc, const char *path, const cli_machine_t *mc)
 {
     static ef_gcode_t r; /* about 50 kB: not on the stack */
     ef_msg_t m = {{0}};
-    int rc = ef_gcode_open(&r, path, &m);
+    int rc = cli_gcode_open(&r, path, mc);
     if (rc != EF_OK)
-        return cli_error(rc, "%s", m.text);
+        return rc;
     ef_can_stream_result_t res;
     rc = ef_can_stream(&r, cc, &res, &m);
     ef_gcode_free(&r);
@@ -150,6 +152,7 @@ int cli_cmd_stream(int argc, char **argv)
                                          {"watchdog", required_argument, NULL, O_WATCHDOG},
                                          {"fault-reset", no_argument, NULL, O_FAULT_RESET},
                                          CLI_PIPE_OPTIONS,
+                                         CLI_MACHINE_OPTIONS,
                                          CLI_OPT_HELP,
                                          CLI_OPT_END};
     ef_mb_stream_cfg_t c;
@@ -160,6 +163,7 @@ int cli_cmd_stream(int argc, char **argv)
     const char *path = NULL, *addr = NULL, *iface = NULL, *mode = NULL;
     char mb_only[48] = "", can_only[48] = ""; /* an option of one transport, given */
     ef_msg_t m = {{0}};
+    cli_machine_t mc = {0};
     cli_getopt_t g;
     cli_getopt_init(&g, "stream", usage, argc, argv, "v", opts);
     int k;
@@ -236,7 +240,8 @@ int cli_cmd_stream(int argc, char **argv)
             path = g.val;
             break;
         default:
-            rc = cli_pipe_opt(&g, k, &c.pipe);
+            if (!cli_machine_opt(&g, k, &mc))
+                rc = cli_pipe_opt(&g, k, &c.pipe);
             break;
         }
         if (rc != EF_OK)
@@ -273,14 +278,14 @@ int cli_cmd_stream(int argc, char **argv)
         cc.mode = mode && !strcmp(mode, "csp") ? EF_COM_MODE_CSP : EF_COM_MODE_SEGMENT;
         cc.fault_reset = (uint8_t)c.fault_reset;
         cc.verbose = (uint8_t)c.verbose;
-        return cstrm_run_can(&cc, path);
+        return cstrm_run_can(&cc, path, &mc);
     }
     if (mode)
         c.mode = !strcmp(mode, "direct") ? EF_MB_MODE_DIRECT : EF_MB_MODE_SEGMENT;
     static ef_gcode_t r; /* about 50 kB: not on the stack */
-    int rc = ef_gcode_open(&r, path, &m);
+    int rc = cli_gcode_open(&r, path, &mc);
     if (rc != EF_OK)
-        return cli_error(rc, "%s", m.text);
+        return rc;
     ef_mb_stream_result_t res;
     rc = ef_mb_stream(&r, &c, &res, &m);
     ef_gcode_free(&r);

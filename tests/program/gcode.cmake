@@ -16,6 +16,24 @@ add_test(NAME gcode_cli_sample_json
 set_tests_properties(gcode_cli_sample PROPERTIES PASS_REGULAR_EXPRESSION "61:6 end +M30")
 set_tests_properties(gcode_cli_sample_json PROPERTIES
                      PASS_REGULAR_EXPRESSION "\"kind\": \"end\", \"line\": 61, .*\"text\": \"M30\"")
+# The machine's files: G54 X100 Y50 Z-80 from the parameter file moves the first rapid; a bad
+# line is refused with file:line before anything is read.
+set(EF_MACHINE_DIR ${PROJECT_SOURCE_DIR}/tests/data/machine)
+add_test(NAME gcode_cli_machine
+         COMMAND evenfeed gcode ${PROJECT_SOURCE_DIR}/samples/bracket.ngc
+                 --params ${EF_MACHINE_DIR}/mill.var --tool-table ${EF_MACHINE_DIR}/mill.tbl)
+set_tests_properties(gcode_cli_machine PROPERTIES PASS_REGULAR_EXPRESSION
+                     "18:5 rapid +0.0000 0.0000 -75.0000 -> 115.0000 60.0000 -75.0000")
+add_test(NAME gcode_cli_machine_bad
+         COMMAND sh -c "$<TARGET_FILE:evenfeed> gcode \"$1\" --params \"$2\"; echo \"exit $?\"" sh
+                 ${PROJECT_SOURCE_DIR}/samples/bracket.ngc ${EF_MACHINE_DIR}/bad.var)
+set_tests_properties(gcode_cli_machine_bad PROPERTIES PASS_REGULAR_EXPRESSION
+                     "bad.var:2: value 'fifty' of #5222 not a number.*exit 1")
+add_test(NAME smooth_cli_machine
+         COMMAND evenfeed smooth ${PROJECT_SOURCE_DIR}/samples/bracket.ngc
+                 --params ${EF_MACHINE_DIR}/mill.var --tool-table ${EF_MACHINE_DIR}/mill.tbl)
+set_tests_properties(smooth_cli_machine PROPERTIES PASS_REGULAR_EXPRESSION
+                     "end position +175.0000 90.0000 -55.0000 mm")
 add_test(NAME gcode_cli_missing COMMAND evenfeed gcode ${CMAKE_CURRENT_BINARY_DIR}/no-such.ngc)
 set_tests_properties(gcode_cli_missing PROPERTIES WILL_FAIL TRUE)
 # A bad program: the message names file, line and column; exit status 11 (EF_ERR_GCODE).
@@ -41,7 +59,8 @@ if(EF_FUZZ)
   get_target_property(EF_GCODE_HOST_DIR ef_host SOURCE_DIR)
   add_executable(fuzz_gcode ${EF_GCODE_DIR}/fuzz/fuzz_gcode.c
                             ${EF_GCODE_HOST_DIR}/lib/program/ef_gcode.c ${EF_GCODE_HOST_DIR}/lib/program/ef_gcode_cycle.c
-                            ${EF_GCODE_HOST_DIR}/lib/program/ef_gcode_flow.c ${EF_GCODE_HOST_DIR}/lib/core/ef_host.c)
+                            ${EF_GCODE_HOST_DIR}/lib/program/ef_gcode_flow.c ${EF_GCODE_HOST_DIR}/lib/program/ef_gcode_machine.c
+                            ${EF_GCODE_HOST_DIR}/lib/core/ef_host.c)
   target_include_directories(fuzz_gcode PRIVATE ${EF_GCODE_HOST_DIR}/include
                              ${PROJECT_SOURCE_DIR}/firmware/include)
   target_compile_definitions(fuzz_gcode PRIVATE _DEFAULT_SOURCE _GNU_SOURCE)

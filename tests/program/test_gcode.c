@@ -1,6 +1,7 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* Tests of the G-code reader (host/lib/program/ef_gcode.c, docs/gcode.md). */
 #include <string.h>
+#include <unistd.h>
 #include "ef_test.h"
 #include "evenfeed/host/program/ef_gcode.h"
 
@@ -599,6 +600,127 @@ static void test_dialect(void)
     EF_CHECK(n == 4 && I[0].kind == EF_GC_IGNORED && I[1].kind == EF_GC_IGNORED);
 }
 
+/* Write text to a fresh temporary file; its path in buf. */
+static void tmpfile_with(char *buf, size_t n, const char *text)
+{
+    snprintf(buf, n, "/tmp/ef_gcode_machine_XXXXXX");
+    int fd = mkstemp(buf);
+    if (fd < 0) {
+        perror("mkstemp");
+        buf[0] = 0;
+        return;
+    }
+    FILE *f = fdopen(fd, "w");
+    fputs(text, f);
+    fclose(f);
+}
+
+/* Load a parameter and a tool table file into a reader of src, then read it; the items in
+ * I, the count (or the error) returned; lrc the loaders' status. */
+static int rd_machine(const char *src, const char *params, const char *tools, int *lrc)
+{
+    char pp[64] = "", tp[64] = "";
+    if (params)
+        tmpfile_with(pp, sizeof pp, params);
+    if (tools)
+        tmpfile_with(tp, sizeof tp, tools);
+    memset(&M, 0, sizeof M);
+    ef_gcode_free(&R);
+    ef_gcode_init(&R, src, strlen(src), "t.ngc");
+    *lrc = EF_OK;
+    if (params)
+        *lrc = ef_gcode_load_params(&R, pp, &M);
+    if (*lrc == EF_OK && tools)
+        *lrc = ef_gcode_load_tools(&R, tp, &M);
+    if (pp[0])
+        unlink(pp);
+    if (tp[0])
+        unlink(tp);
+    if (*lrc != EF_OK)
+        return *lrc;
+    int n = 0;
+    ef_gcode_item_t it;
+    for (;;) {
+        int rc = ef_gcode_next(&R, &it, &M);
+        if (rc)
+            return rc;
+        if (n < MAXI)
+            I[n++] = it;
+        if (it.kind == EF_GC_END)
+            return n;
+    }
+}
+
+/* The machine's files: a LinuxCNC parameter file (offsets, G28 position, coordinate system)
+ * and tool table give the start state; bad lines are refused with file:line, nothing applied. */
+static void test_machine_files(void)
+{
+    int lrc;
+    /* G55 active at start (#5220 = 2) with X10 Y20 Z-50; G28 at machine Z-1 */
+    int n = rd_machine("G0 X1 Y2 Z3\nG28\nM2\n",
+                       "5161 0\n5162 0\n5163 -1\n; comment line\n\n5220 2\n5241 10\n5242 20\n"
+                       "5243 -50\n",
+                       NULL, &lrc);
+    EF_CHECK_EQ(lrc, EF_OK);
+    EF_CHECK_EQ(n, 3);
+    EF_CHECK(n == 3 && I[0].end[0] == 11 && I[0].end[1] == 22 && I[0].end[2] == -47);
+    EF_CHECK(n == 3 && I[1].kind == EF_GC_RAPID && I[1].end[2] == -1 && I[1].end[0] == 0);
+    /* a tool table: G43 H3 applies tool 3's Z; T4 M6 G43 the tool in the spindle */
+    n = rd_machine("G43 H3\nG0 Z0\nT4 M6\nG43\nG0 Z0\nM2\n", NULL,
+                   "T3 P3 Z25.4 D6 ;end mill\nT4 P1 X0 Z-2.5 D3.175 I0 J0 Q0\n\n", &lrc);
+    EF_CHECK_EQ(lrc, EF_OK);
+    EF_CHECK_NEAR(R.tools[0].off[2], 25.4, 0);
+    EF_CHECK_NEAR(R.tlo[2], -2.5, 0);
+    EF_CHECK_NEAR(R.cur[2], -2.5, 0);
+    /* bad files: an error naming the line; the reader keeps its start state */
+    struct {
+        const char *params, *tools, *want;
+    } bad[] = {
+        {"5221 1\n5222\n", NULL, ":2: expected 'NUMBER VALUE'"},
+        {"5221 1 2\n", NULL, ":1: expected 'NUMBER VALUE'"},
+        {"0 1\n", NULL, ":1: parameter number '0' not a whole number 1..5601"},
+        {"5602 1\n", NULL, "not a whole number 1..5601"},
+        {"52.5 1\n", NULL, "not a whole number"},
+        {"5221 nan\n", NULL, ":1: value 'nan' of #5221 not a number"},
+        {"5221 2e7\n", NULL, "not a number within"},
+        {"5220 10\n", NULL, ":1: #5220 (coordinate system) 10 not 1..9"},
+        {NULL, "T1 P1 Z1\nT1 P2 Z2\n", ":2: tool 1 listed twice"},
+        {NULL, "P1 Z1\n", ":1: no T word"},
+        {NULL, "T1 R5\n", ":1: 'R5' is not a tool table word"},
+        {NULL, "T1 Zabc\n", "'Zabc' is not a tool table word"},
+        {NULL, "T1 A5\n", "offsets of axes other than X Y Z"},
+        {NULL, "T-1 Z1\n", "tool number -1 not 0..99999"},
+    };
+    for (size_t k = 0; k < sizeof bad / sizeof bad[0]; k++) {
+        n = rd_machine("G0 X1\nM2\n", bad[k].params, bad[k].tools, &lrc);
+        EF_CHECK_EQ(lrc, EF_ERR_ARG);
+        if (!strstr(M.text, bad[k].want) || strncmp(M.text, "/tmp/ef_gcode_machine_", 22)) {
+            ef_t_fail++;
+            fprintf(stderr, "%s:%d: case %zu: message '%s', want ...%s\n", __FILE__, __LINE__, k,
+                    M.text, bad[k].want);
+        } else {
+            ef_t_pass++;
+        }
+        EF_CHECK_EQ(R.cs, 1);
+        EF_CHECK_EQ(R.ntools, 0);
+    }
+    /* nothing of a bad parameter file is applied, not even its good lines */
+    n = rd_machine("G0 X1\nM2\n", "5221 7\n5222 x\n", NULL, &lrc);
+    EF_CHECK_EQ(lrc, EF_ERR_ARG);
+    EF_CHECK_NEAR(R.g5x[0][0], 0, 0);
+    /* a missing file, and loading after the program started */
+    ef_gcode_free(&R);
+    ef_gcode_init(&R, "G0 X1\nM2\n", 9, "t.ngc");
+    EF_CHECK_EQ(ef_gcode_load_params(&R, "/nonexistent/x.var", &M), EF_ERR_IO);
+    EF_CHECK(strstr(M.text, "/nonexistent/x.var") != NULL);
+    EF_CHECK_EQ(ef_gcode_load_tools(&R, "/nonexistent/x.tbl", &M), EF_ERR_IO);
+    ef_gcode_item_t it;
+    EF_CHECK_EQ(ef_gcode_next(&R, &it, &M), EF_OK);
+    EF_CHECK_EQ(ef_gcode_load_params(&R, "/dev/null", &M), EF_ERR_ARG);
+    EF_CHECK_EQ(ef_gcode_load_tools(NULL, "/dev/null", &M), EF_ERR_ARG);
+    ef_gcode_free(&R);
+}
+
 /* Errors that come with a name and the file loader. */
 static void test_file(void)
 {
@@ -656,6 +778,7 @@ int main(int argc, char **argv)
         {"errors", test_errors},
         {"dialect_errors", test_dialect_errors},
         {"dialect", test_dialect},
+        {"machine_files", test_machine_files},
         {"file", test_file},
     };
     return EF_TEST_RUN(argc, argv, 1, parts);

@@ -1100,7 +1100,7 @@ static int gc_arc(ef_gcode_t *r, const ef_gc_line_t *L, const double sp[3], cons
 }
 
 /* The tool table entry of a tool, or NULL. */
-static ef_gcode_tool_t *gc_tool(ef_gcode_t *r, int tool, int create)
+ef_gcode_tool_t *ef_gc_tool(ef_gcode_t *r, int tool, int create)
 {
     for (int k = 0; k < r->ntools; k++)
         if (r->tools[k].tool == tool)
@@ -1172,7 +1172,7 @@ static int gc_g10(ef_gcode_t *r, const ef_gc_line_t *L, const ef_gc_word_t *g,
     if (l == 1 || l == 10 || l == 11) {
         if ((rc = gc_int_word(r, wp, 1, 99999, "G10 tool", &p)) != 0)
             return rc;
-        ef_gcode_tool_t *t = gc_tool(r, p, 1);
+        ef_gcode_tool_t *t = ef_gc_tool(r, p, 1);
         if (!t)
             return ef_gc_err(r, wp->col, "tool table full (%d tools)", EF_GCODE_NTOOLS);
         /* L10: the offset that makes the current point read the given values with the active
@@ -1493,7 +1493,7 @@ static int gc_execute(ef_gcode_t *r, ef_gc_line_t *L)
             int tool = r->tool_cur;
             if (wh && (rc = gc_int_word(r, wh, 0, 99999, "G43 tool", &tool)) != 0)
                 return rc;
-            ef_gcode_tool_t *t = gc_tool(r, tool, 0);
+            ef_gcode_tool_t *t = ef_gc_tool(r, tool, 0);
             if (t) {
                 memcpy(r->tlo, t->off, sizeof r->tlo);
             } else {

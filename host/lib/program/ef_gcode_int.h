@@ -109,4 +109,8 @@ int ef_gc_cycle(ef_gcode_t *r, const ef_gc_line_t *L, int motion, int same,
 /* The word for a letter, or NULL. */
 const ef_gc_word_t *ef_gc_get(const ef_gc_line_t *L, char letter);
 
+/* Tool table entry of a tool number; with create, a new zeroed one when there is none
+ * (NULL when the table is full). */
+ef_gcode_tool_t *ef_gc_tool(ef_gcode_t *r, int tool, int create);
+
 #endif /* EF_GCODE_INT_H */

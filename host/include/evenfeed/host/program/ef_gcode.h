@@ -294,6 +294,42 @@ int ef_gcode_next(ef_gcode_t *r, ef_gcode_item_t *it, ef_msg_t *m);
  */
 int ef_gcode_set_max_feed(ef_gcode_t *r, double feed);
 
+/**
+ * @brief Start from a machine's saved parameters: a LinuxCNC parameter file (one
+ *        "NUMBER VALUE" per line; blank lines and ';' comments allowed), lengths in mm.
+ *        Work offsets (5221-5390, rotations included), G28/G30 positions (5161-5163,
+ *        5181-5183), G92 (5210-5213) and the active coordinate system (5220) take effect;
+ *        other numbers are set as parameters. Call after ef_gcode_init()/ef_gcode_open()
+ *        and before the first ef_gcode_next(). Nothing is applied when a line is bad.
+ * @param r    reader.
+ * @param path the file.
+ * @param m    message on failure, "path:line: text" for a bad line (may be NULL).
+ * @retval EF_OK        applied.
+ * @retval EF_ERR_ARG   r or path is NULL, the program is already being read, or a line is
+ *                      malformed (number not 1..5601, value not finite or beyond 1e6, #5220
+ *                      not 1..9, more than two fields).
+ * @retval EF_ERR_IO    the file cannot be read.
+ * @retval EF_ERR_NOMEM out of memory.
+ */
+int ef_gcode_load_params(ef_gcode_t *r, const char *path, ef_msg_t *m);
+
+/**
+ * @brief Start with a machine's tool table: a LinuxCNC tool table file, one tool per line
+ *        ("T1 P1 Z25.4 D6 ;comment"; X Y Z offsets and D diameter in mm; P, I, J, Q are
+ *        accepted and not used). G43 H<n> then applies tool n's offsets. Call before the
+ *        first ef_gcode_next(). Nothing is applied when a line is bad.
+ * @param r    reader.
+ * @param path the file.
+ * @param m    message on failure, "path:line: text" for a bad line (may be NULL).
+ * @retval EF_OK        applied.
+ * @retval EF_ERR_ARG   r or path is NULL, the program is already being read, or a line is
+ *                      malformed (an unknown word, no T, a tool listed twice, a nonzero
+ *                      offset of an axis other than X Y Z, more than ::EF_GCODE_NTOOLS tools).
+ * @retval EF_ERR_IO    the file cannot be read.
+ * @retval EF_ERR_NOMEM out of memory.
+ */
+int ef_gcode_load_tools(ef_gcode_t *r, const char *path, ef_msg_t *m);
+
 /** @brief Short name of an item kind ("rapid", "line", "arc", ...); "?" if unknown. */
 const char *ef_gcode_kind_name(int kind);
 
