@@ -1,5 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* evenfeed gcode: read a part program and print its item stream. */
+#include <math.h>
 #include <string.h>
 #include "cli.h"
 #include "evenfeed/host/program/ef_gcode.h"
@@ -93,7 +94,7 @@ static void cgc_print_text(const ef_gcode_item_t *it)
                it->start[0], it->start[1], it->start[2], it->end[0], it->end[1], it->end[2],
                it->centre[0], it->centre[1], it->centre[2], it->dir > 0 ? "ccw" : "cw", it->plane,
                it->radius, it->sweep * 57.29577951308232, it->turns, it->feed);
-        if (it->radius_end != it->radius)
+        if (fabs(it->radius_end - it->radius) >= 5e-5) /* visible in 4 decimals */
             printf(" spiral to r %.4f", it->radius_end);
         break;
     case EF_GC_TOLERANCE:

@@ -83,8 +83,8 @@ static int ef_fuzz_read1(ef_gcode_t *rp, const uint8_t *data, size_t size)
             ef_fuzz_fail("feed", it.kind);
         if (it.kind == EF_GC_ARC &&
             (!(it.radius > 0) || !(it.radius_end > 0) || !isfinite(it.radius_end) ||
-             fabs(it.radius_end - it.radius) > 3.0 || !isfinite(it.sweep) || it.sweep == 0 ||
-             it.turns < 1 || it.dir * it.sweep < 0))
+             fabs(it.radius_end - it.radius) > 100.0001 * EF_GCODE_ARC_ABS_TOL_IN ||
+             !isfinite(it.sweep) || it.sweep == 0 || it.turns < 1 || it.dir * it.sweep < 0))
             ef_fuzz_fail("arc", it.turns);
         if (it.kind == EF_GC_END) {
             ef_gcode_item_t again;

@@ -63,7 +63,8 @@ if(EF_FUZZ)
                             ${EF_GCODE_HOST_DIR}/lib/core/ef_host.c)
   target_include_directories(fuzz_gcode PRIVATE ${EF_GCODE_HOST_DIR}/include
                              ${PROJECT_SOURCE_DIR}/firmware/include)
-  target_compile_definitions(fuzz_gcode PRIVATE _DEFAULT_SOURCE _GNU_SOURCE)
+  target_compile_definitions(fuzz_gcode PRIVATE _DEFAULT_SOURCE _GNU_SOURCE
+                             EF_GCODE_MAX_ITER=20000)
   target_compile_options(fuzz_gcode PRIVATE -fsanitize=fuzzer ${EF_GCODE_FUZZ_SAN})
   target_link_options(fuzz_gcode PRIVATE -fsanitize=fuzzer ${EF_GCODE_FUZZ_SAN})
   target_link_libraries(fuzz_gcode PRIVATE m)

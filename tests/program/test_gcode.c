@@ -504,6 +504,13 @@ static void test_dialect_errors(void)
     EF_CHECK_EQ(n, EF_ERR_GCODE);
     EF_CHECK(strstr(M.text, "runaway") != NULL);
     EF_CHECK_NEAR(R.cur[0], EF_GCODE_MAX_ITER / 1000.0, 1e-9);
+    /* a full circle in the modal arc mode, centre words only: placed at the first of them
+     * (a fuzz find: the reader looked for a G or axis word there) */
+    EXPECT_ERR_AT("G1 X1 F10\nG18 G2 X2 I.5\n I1 J1\nM2\n", "3:5", "J word on a G18-plane arc");
+    EXPECT_ERR_AT("G1 X1 F10\nG93 G2 X2 I.5 F1\n I1\nM2\n", "3:2", "G93 inverse-time feed");
+    n = rd("G1 X1 F10\nG2 X2 I.5\n I1\nM2\n");
+    EF_CHECK_EQ(n, 4);
+    EF_CHECK(n == 4 && I[2].kind == EF_GC_ARC && I[2].col == 2 && I[2].end[0] == 2);
     /* parameters */
     EXPECT_ERR_AT("#31=[#5999]\nM2\n", "1:6", "parameter number 5999 out of range (#1..#5601)");
     /* G10 */

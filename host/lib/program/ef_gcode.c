@@ -1378,6 +1378,12 @@ static int gc_execute(ef_gcode_t *r, ef_gc_line_t *L)
     int arc = arcmode && moves && !g53;
     int cycle = is_cycle && moves;
     int g64 = grp[GR_PATH] && grp[GR_PATH]->code == 640;
+    /* the motion's column: its G word, else the first axis word, else (a full circle in the
+     * modal arc mode, " I1") the first centre word */
+    const ef_gc_word_t *mw = grp[GR_MOTION] ? grp[GR_MOTION] : first_axis;
+    for (int k = 0; !mw && k < 3; k++)
+        mw = ef_gc_get(L, "IJK"[k]);
+    uint32_t mcol = mw ? mw->col : 1;
     if (first_axis && !axis_owner && motion < 0)
         return ef_gc_err(r, first_axis->col, "axis word with no motion mode (G0, G1, G2 or G3)");
     if (g53 && motion != 0 && motion != 10)
@@ -1410,8 +1416,7 @@ static int gc_execute(ef_gcode_t *r, ef_gc_line_t *L)
     if (g4 && (!wp || !(wp->v >= 0)))
         return ef_gc_err(r, g0->col, "G4 needs a dwell time P >= 0");
     if (r->inverse_time && (motion == 10 || arcmode) && moves && !g53 && !wf)
-        return ef_gc_err(r, grp[GR_MOTION] ? grp[GR_MOTION]->col : first_axis->col,
-                         "G93 inverse-time feed: each G1/G2/G3 needs its F word");
+        return ef_gc_err(r, mcol, "G93 inverse-time feed: each G1/G2/G3 needs its F word");
 
     /* Pass-through words, in source order: before the motion, except the stops after it. */
     for (int k = 0; k < L->nw; k++) {
@@ -1557,12 +1562,12 @@ static int gc_execute(ef_gcode_t *r, ef_gc_line_t *L)
     int same_cycle = is_cycle && motion == r->motion;
     r->motion = motion;
     if (cycle) {
-        uint32_t col = grp[GR_MOTION] ? grp[GR_MOTION]->col : first_axis->col;
+        uint32_t col = mcol;
         if ((rc = ef_gc_cycle(r, L, motion, same_cycle, axis, scale, col)) != 0)
             return rc;
     } else if (moves) {
         double cp[3], ep[3], em[3];
-        uint32_t col = grp[GR_MOTION] ? grp[GR_MOTION]->col : first_axis->col;
+        uint32_t col = mcol;
         ef_gc_to_prog(r, r->cur, cp);
         for (int k = 0; k < 3; k++) {
             ep[k] = cp[k];

@@ -77,8 +77,11 @@ extern "C" {
 #define EF_GCODE_FLOW_DEPTH 32
 /** Subroutines a program may define. */
 #define EF_GCODE_NSUBS 256
-/** Iterations of one loop before it is called a runaway (an error, not a hang). */
+/** Iterations of one loop before it is called a runaway (an error, not a hang); the fuzz
+ *  target builds with a smaller bound so that runaway inputs stay fast. */
+#ifndef EF_GCODE_MAX_ITER
 #define EF_GCODE_MAX_ITER 1000000
+#endif
 /** Items one source line may expand into (canned cycles with L repeats and pecks). */
 #define EF_GCODE_LINE_ITEMS_MAX 100000
 /** Tool table entries (G10 L1 / L10 / L11). */
