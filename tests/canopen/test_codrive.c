@@ -1933,6 +1933,34 @@ static void test_watchdog(void)
     EF_CHECK_NEAR(g_d.drv.cmd.x - x0, v0 * v0 / (2 * A_STOP), fabs(v0) * 1e-3 + 1e-3);
     EF_CHECK_EQ(log_count(EMCY_ID), 1);
     EF_CHECK_EQ(g_d.drv.fault, EF_DRV_FAULT_WATCHDOG);
+
+    /* Leaving OPERATIONAL while moving (abort connection): NMT stop, pre-operational or
+     * reset communication fault the drive at once, and the fault reaction runs to rest on
+     * the wall clock with no SYNC (PDOs, the quick stop among them, no longer reach it). */
+    static const uint8_t leave[] = {EF_CO_NMT_STOP, EF_CO_NMT_PREOP, EF_CO_NMT_RESET_COMM};
+    for (int j = 0; j < 3; j++) {
+        drive_up(NULL);
+        to_op_enabled(1000, EF_CO_MODE_CSP);
+        log_clear();
+        wd_run(300, 1, EF_CO_CW_ENABLE_OP, 40.0);
+        v0 = g_d.drv.cmd_vel.x;
+        EF_CHECK(v0 > 30);
+        nmt(leave[j], 0);
+        EF_CHECK_EQ(g_d.drv.fault, EF_DRV_FAULT_WATCHDOG);
+        EF_CHECK_EQ(g_d.power, EF_CO_PS_FAULT_REACTION);
+        EF_CHECK(g_d.sync_lost);
+        /* the EMCY goes out before the new NMT state (STOPPED would silence it) */
+        EF_CHECK_EQ(log_count(EMCY_ID), 1);
+        wd_watch_stop(v0);
+        EF_CHECK_EQ(g_d.power, EF_CO_PS_FAULT);
+    }
+    /* at rest in OPERATION ENABLED: leaving OPERATIONAL is no fault (nothing moves) */
+    drive_up(NULL);
+    to_op_enabled(1000, EF_CO_MODE_CSP);
+    wd_run(50, 1, EF_CO_CW_ENABLE_OP, 0);
+    nmt(EF_CO_NMT_PREOP, 0);
+    EF_CHECK_EQ(g_d.drv.fault, EF_DRV_FAULT_NONE);
+    EF_CHECK_EQ(g_d.power, EF_CO_PS_OP_ENABLED);
 }
 
 int main(int argc, char **argv)

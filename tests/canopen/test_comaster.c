@@ -1328,6 +1328,8 @@ static void t_emcy(void)
     EF_CHECK(B.bus.now_us < 3000000u + 3000000u);
 }
 
+static void sim_all_stopped_by_master(const char *what);
+
 static void t_heartbeat(void)
 {
     ef_com_cfg_t c = sim_cfg(EF_COM_MODE_CSP);
@@ -1355,8 +1357,116 @@ static void t_heartbeat(void)
     EF_CHECK_EQ(e->what, EF_COM_WHAT_HEARTBEAT);
     EF_CHECK_EQ(e->node, 3);
     EF_CHECK(t0 > 0);
+    /* node 3 only stopped sending heartbeats: it is reachable and must be stopped by the
+     * master like the others, not left to its SYNC-loss watchdog when SYNC ends */
+    sim_all_stopped_by_master("heartbeat");
+}
+
+/* Every drive stopped under the master's control: at rest and out of OPERATION ENABLED
+ * while SYNC still ran (not by its own SYNC-loss watchdog). */
+static void sim_all_stopped_by_master(const char *what)
+{
+    for (int k = 0; k < 3; k++) {
+        if (D[k].power == EF_CO_PS_OP_ENABLED || D[k].drv.state == EF_DRV_RUNNING ||
+            D[k].drv.state == EF_DRV_STOPPING || D[k].last_fault == EF_DRV_FAULT_WATCHDOG) {
+            ef_t_fail++;
+            fprintf(stderr, "%s: node %d left in power state %d, drive state %d, fault %d\n", what,
+                    k + 1, D[k].power, D[k].drv.state, D[k].last_fault);
+        } else {
+            ef_t_pass++;
+        }
+        EF_CHECK_NEAR(D[k].drv.cmd_vel.x, 0.0, 1e-3); /* commanded to rest */
+    }
+}
+
+/* Push CSP targets while running and step the rig by step_us for us. */
+static void sim_csp_run(uint32_t us, uint32_t step_us, int *i)
+{
+    for (uint32_t t = 0; t < us; t += step_us) {
+        while (ef_comaster_state(&M) == EF_COM_RUN && ef_comaster_space(&M) > 0) {
+            float p[3];
+            csp_ref((*i)++ * 1e-3, p);
+            ef_comaster_push_target(&M, p);
+        }
+        ef_canrig_step(&B, step_us);
+    }
+}
+
+/* A starved master (its process not scheduled for 300 ms, as on a loaded host): the drives'
+ * heartbeats queue at its port. Read after the gap they prove the nodes alive; only a node
+ * that sent none in the gap is lost. */
+static void t_starved(void)
+{
+    ef_com_cfg_t c = sim_cfg(EF_COM_MODE_CSP);
+    sim_setup(&c);
+    EF_CHECK_EQ(ef_canrig_run_until(&B, EF_COM_RUN, 3000000, 100), EF_COM_RUN);
+    int i = 0;
+    sim_csp_run(200000, 100, &i);
+    B.hold_master = 1;
+    ef_canrig_run(&B, 300000, 100);
+    B.hold_master = 0;
+    sim_csp_run(100000, 100, &i);
+    EF_CHECK_EQ(ef_comaster_state(&M), EF_COM_RUN);
+    EF_CHECK_EQ(ef_comaster_error(&M)->code, 0);
+    /* the same gap with node 2 silent in it: lost, and every drive stopped */
+    B.hold_master = 1;
+    ef_codrive_heartbeat_off(&D[1], 1);
+    ef_canrig_run(&B, 300000, 100);
+    B.hold_master = 0;
+    ef_canrig_step(&B, 100);
+    const ef_com_error_t *e = ef_comaster_error(&M);
+    EF_CHECK_EQ(e->code, EF_ERR_HEARTBEAT);
+    EF_CHECK_EQ(e->node, 2);
+    EF_CHECK_EQ(ef_canrig_run_until(&B, EF_COM_ERROR, 6000000, 100), EF_COM_ERROR);
+    sim_all_stopped_by_master("starved");
+}
+
+/* Every heartbeat stops at once while the nodes are alive (their producers broken, or the
+ * heartbeats lost on the way): all are lost together, and the master must still stop them
+ * all while SYNC runs, since it cannot know they are gone. */
+static void t_heartbeat_all(void)
+{
+    ef_com_cfg_t c = sim_cfg(EF_COM_MODE_CSP);
+    sim_setup(&c);
+    EF_CHECK_EQ(ef_canrig_run_until(&B, EF_COM_RUN, 3000000, 100), EF_COM_RUN);
+    int i = 0;
+    sim_csp_run(300000, 100, &i);
     for (int k = 0; k < 3; k++)
-        EF_CHECK(D[k].power != EF_CO_PS_OP_ENABLED);
+        ef_codrive_heartbeat_off(&D[k], 1);
+    for (int s = 0; s < 100000 && ef_comaster_state(&M) == EF_COM_RUN; s++)
+        sim_csp_run(100, 100, &i);
+    EF_CHECK_EQ(ef_comaster_error(&M)->code, EF_ERR_HEARTBEAT);
+    EF_CHECK_EQ(ef_canrig_run_until(&B, EF_COM_ERROR, 6000000, 100), EF_COM_ERROR);
+    sim_all_stopped_by_master("heartbeat_all");
+}
+
+/* A node that dies mid-path (no frame at all from then on): lost after hb_timeout_ms, the
+ * others stopped by the master, which does not wait for the dead one beyond a few SYNCs. */
+static void t_node_dead(void)
+{
+    ef_com_cfg_t c = sim_cfg(EF_COM_MODE_CSP);
+    sim_setup(&c);
+    EF_CHECK_EQ(ef_canrig_run_until(&B, EF_COM_RUN, 3000000, 100), EF_COM_RUN);
+    int i = 0;
+    sim_csp_run(300000, 100, &i);
+    B.hold_drives = 1u << 2;
+    uint64_t t0 = B.bus.now_us;
+    for (int s = 0; s < 100000 && ef_comaster_state(&M) == EF_COM_RUN; s++)
+        sim_csp_run(100, 100, &i);
+    const ef_com_error_t *e = ef_comaster_error(&M);
+    EF_CHECK_EQ(e->code, EF_ERR_HEARTBEAT);
+    EF_CHECK_EQ(e->node, 3);
+    EF_CHECK_EQ(ef_canrig_run_until(&B, EF_COM_ERROR, 6000000, 100), EF_COM_ERROR);
+    /* lost within the timeout (+ a heartbeat period), stopped within the ramp after it */
+    uint64_t dt = B.bus.now_us - t0;
+    printf("dead node: lost and the others stopped %.0f ms after its last frame\n", dt / 1e3);
+    EF_CHECK(dt < (uint64_t)(c.hb_timeout_ms + 100 + 1500) * 1000u);
+    for (int k = 0; k < 2; k++) {
+        EF_CHECK(D[k].power != EF_CO_PS_OP_ENABLED && D[k].power != EF_CO_PS_QUICK_STOP);
+        EF_CHECK(D[k].last_fault != EF_DRV_FAULT_WATCHDOG);
+        EF_CHECK_NEAR(D[k].drv.cmd_vel.x, 0.0, 1e-3);
+    }
+    B.hold_drives = 0;
 }
 
 /* Step the bus until the caller's SDO transfer is no longer pending; its result. */
@@ -1495,6 +1605,9 @@ int main(int argc, char **argv)
         {"resend_limit", t_resend_limit},
         {"emcy", t_emcy},
         {"heartbeat", t_heartbeat},
+        {"starved", t_starved},
+        {"heartbeat_all", t_heartbeat_all},
+        {"node_dead", t_node_dead},
         {"sdo_segdl_fake", t_sdo_segdl_fake},
         {"sdo_user", t_sdo_user},
         {"sdo_client", t_sdo_client},

@@ -1467,6 +1467,27 @@ static int cod_reset_app(ef_codrive_t *d, float home)
     return EF_OK;
 }
 
+/* Leaving OPERATIONAL (NMT stop, enter pre-operational, reset communication) while the axis
+ * moves or is stopping: CiA 402's abort connection, here always option 1 (fault). The master's
+ * PDOs, its quick stop among them, no longer reach the drive and its SYNC may end, so the
+ * fault reaction runs on the wall clock as after a SYNC loss (a SYNC that still comes, in
+ * PRE-OPERATIONAL, takes the stepping back). Without it the drive would stay in OPERATION
+ * ENABLED with motion queued, unwatched and deaf to PDOs. */
+static void cod_comm_abort(ef_codrive_t *d)
+{
+    int p = d->power;
+    if (d->nmt != EF_CO_NMT_OPERATIONAL ||
+        (p != EF_CO_PS_OP_ENABLED && p != EF_CO_PS_QUICK_STOP && p != EF_CO_PS_FAULT_REACTION) ||
+        cod_at_rest(d))
+        return;
+    if (d->drv.fault == EF_DRV_FAULT_NONE)
+        (void)ef_drive_fault(&d->drv, EF_DRV_FAULT_WATCHDOG);
+    d->sync_lost = 1u;
+    d->sync_gap_us = 0u;
+    cod_update(d); /* EMCY 0x8130, sent before the new NMT state; FAULT REACTION */
+    d->statusword = cod_statusword(d);
+}
+
 /* NMT command [cs, node]: for this node or all (node 0). */
 static void cod_nmt(ef_codrive_t *d, const ef_can_frame_t *f)
 {
@@ -1474,7 +1495,10 @@ static void cod_nmt(ef_codrive_t *d, const ef_can_frame_t *f)
         d->rx_ignored++;
         return;
     }
-    switch (f->data[0]) {
+    uint8_t cs = f->data[0];
+    if (cs == EF_CO_NMT_STOP || cs == EF_CO_NMT_PREOP || cs == EF_CO_NMT_RESET_COMM)
+        cod_comm_abort(d);
+    switch (cs) {
     case EF_CO_NMT_START:
         if (d->nmt != EF_CO_NMT_OPERATIONAL)
             for (uint32_t k = 0; k < EF_CODRIVE_TPDOS; k++)

@@ -26,6 +26,11 @@
 /** TPDO1s must be newer than the SYNC a command went out after by this many SYNCs before
  *  the master believes them: the RPDO is applied at the next SYNC and reported after it. */
 #define COM_STALE_SYNCS 2u
+/** A lost node (heartbeat silent) counts as gone from a stop only after this many SYNCs with
+ *  no TPDO1 from it: a node that lost only its heartbeat (or whose heartbeats a starved
+ *  master read late) is reachable, takes the quick stop and must reach rest before SYNC
+ *  ends, since motion advances only at SYNC. */
+#define COM_GONE_SYNCS (COM_STALE_SYNCS + 2u)
 /** TPDO1 lengths per mode. */
 #define COM_TPDO1_CSP_LEN 6u
 #define COM_TPDO1_SEG_LEN 8u
@@ -414,6 +419,15 @@ static int com_fresh(const ef_comaster_t *m, int k)
            (int32_t)(m->node[k].tpdo_sync - m->mark_sync) >= (int32_t)COM_STALE_SYNCS;
 }
 
+/* Whether lost node k is out of reach for the current wait: no TPDO1 from it for
+ * COM_GONE_SYNCS SYNCs since the wait began (a node still talking is waited for). */
+static int com_gone(const ef_comaster_t *m, int k)
+{
+    return m->lost[k] && !com_fresh(m, k) && m->sync_count - m->mark_sync >= COM_GONE_SYNCS &&
+           (!m->node[k].seen_tpdo ||
+            (int32_t)(m->sync_count - m->node[k].tpdo_sync) >= (int32_t)COM_GONE_SYNCS);
+}
+
 /* Enter RUN: CSP holds the actual positions; segment mode numbers from 0 (the drives
  * cleared their queues entering OPERATION ENABLED). */
 static void com_enter_run(ef_comaster_t *m)
@@ -532,9 +546,10 @@ static void com_advance(ef_comaster_t *m)
             for (int k = 0; k < n; k++) {
                 const ef_com_node_t *q = &m->node[k];
                 int p = q->power;
-                rest &= m->lost[k] || (com_fresh(m, k) &&
-                                       (p == EF_CO_PS_SWITCH_ON_DISABLED || p == EF_CO_PS_FAULT ||
-                                        (q->statusword & EF_CO_SW_TARGET_REACHED)));
+                rest &=
+                    com_gone(m, k) ||
+                    (com_fresh(m, k) && (p == EF_CO_PS_SWITCH_ON_DISABLED || p == EF_CO_PS_FAULT ||
+                                         (q->statusword & EF_CO_SW_TARGET_REACHED)));
             }
             if (rest)
                 com_enter_shutdown(m);
@@ -542,8 +557,8 @@ static void com_advance(ef_comaster_t *m)
             int off = 1;
             for (int k = 0; k < n; k++) {
                 int p = m->node[k].power;
-                off &= m->lost[k] || (com_fresh(m, k) && p != EF_CO_PS_OP_ENABLED &&
-                                      p != EF_CO_PS_QUICK_STOP && p != EF_CO_PS_FAULT_REACTION);
+                off &= com_gone(m, k) || (com_fresh(m, k) && p != EF_CO_PS_OP_ENABLED &&
+                                          p != EF_CO_PS_QUICK_STOP && p != EF_CO_PS_FAULT_REACTION);
             }
             if (off)
                 com_enter_final(m);
@@ -845,6 +860,7 @@ static void com_heartbeat(ef_comaster_t *m, int k, const ef_can_frame_t *f)
     }
     uint8_t st = f->data[0];
     q->hb_age_us = 0;
+    q->hb_fresh = 1;
     if (st == EF_CO_NMT_BOOTUP) {
         if (m->state == EF_COM_CONFIG && k >= m->cur) {
             /* Booted again before we configured it (a power-up racing our reset
@@ -1022,7 +1038,11 @@ static void com_timers(ef_comaster_t *m, uint32_t dt_us)
     uint32_t now = m->now_us;
     for (int k = 0; k < n; k++) {
         ef_com_node_t *q = &m->node[k];
-        q->hb_age_us = (q->hb_age_us + dt_us < q->hb_age_us) ? 0xFFFFFFFFu : q->hb_age_us + dt_us;
+        if (q->hb_fresh) /* received since the last step, i.e. within this dt */
+            q->hb_fresh = 0;
+        else
+            q->hb_age_us =
+                (q->hb_age_us + dt_us < q->hb_age_us) ? 0xFFFFFFFFu : q->hb_age_us + dt_us;
     }
     com_sdo_timer(m); /* the configuration step or the caller's transfer */
     switch (m->state) {

@@ -62,11 +62,12 @@ int ef_canrig_add_drive(ef_canrig_t *g, ef_codrive_t *d, const ef_codrive_cfg_t 
 void ef_canrig_step(ef_canrig_t *g, uint32_t dt_us)
 {
     ef_canmem_advance(&g->bus, dt_us);
-    if (g->m)
+    if (g->m && !g->hold_master)
         (void)ef_canpump_poll(&g->pump[0], 0); /* the in-memory bus has no I/O errors */
     ef_canmem_deliver(&g->bus);
     for (int k = 1; k <= g->n_drives; k++)
-        (void)ef_canpump_poll(&g->pump[k], 0);
+        if (!(g->hold_drives & (1u << (k - 1))))
+            (void)ef_canpump_poll(&g->pump[k], 0);
     ef_canmem_deliver(&g->bus);
 }
 

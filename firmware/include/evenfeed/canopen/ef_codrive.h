@@ -101,7 +101,10 @@
  *   once; reset node also restores the application objects (mode CSP, SWITCH ON DISABLED,
  *   0x6065 from servo.ferr_lim, 0x2003, counters) and restarts the drive model where the
  *   axis is. A stop the watchdog is stepping goes on through NMT commands other than reset
- *   node.
+ *   node. Leaving OPERATIONAL (stop, pre-operational, reset communication) while the axis
+ *   moves or stops is an abort connection (CiA 402 0x6007 option 1, fixed here): the
+ *   WATCHDOG fault (EMCY 0x8130, sent before the new state) and its reaction on the wall
+ *   clock, since the master's PDOs and perhaps its SYNC no longer arrive.
  * - PDO defaults: RPDO1 0x200+node type 1 {0x6040, 0x607A}; TPDO1 0x180+node type 1 {0x6041,
  *   0x6064}; RPDO2 0x300+node, RPDO3 0x400+node (type 255) and TPDO2 0x280+node (type 1)
  *   disabled and empty. Types 0..240 and 254/255 are accepted. A synchronous RPDO keeps

@@ -50,9 +50,9 @@
  *     FINISH / FINISH_RUN_OFF bit 12 clear on every node                  FINISH / SHUTDOWN
  *     FINISH / FINISH_RUN_OFF enable_timeout_ms (error STOP)              FINISH / SHUTDOWN
  *     START..FINISH         an error or ef_comaster_stop()                STOPPING / STOP_RAMP
- *     STOPPING / STOP_RAMP  every node at rest (or lost)                  STOPPING / SHUTDOWN
+ *     STOPPING / STOP_RAMP  every node at rest (or lost and gone)         STOPPING / SHUTDOWN
  *     STOPPING / STOP_RAMP  stop_timeout_ms (error STOP)                  STOPPING / SHUTDOWN
- *     any / SHUTDOWN        every node out of operation (or lost), or     DONE (no error),
+ *     any / SHUTDOWN        every node out of operation (or gone), or     DONE (no error),
  *                           enable_timeout_ms (error STOP)                ERROR (an error)
  *
  * An error in BOOT or CONFIG ends in ERROR at once: SYNC is not running, so no drive moves.
@@ -276,6 +276,10 @@ typedef struct {
     uint8_t pad[3];
     uint32_t resends;   /**< go-back-N rounds for this node */
     uint32_t hb_age_us; /**< time since its last heartbeat */
+    uint8_t hb_fresh;   /**< a heartbeat came since the last time step: it arrived during
+                             that step's span, so the span does not add to hb_age_us (a
+                             master starved of CPU time finds them queued, not missing) */
+    uint8_t pad2[3];
     uint32_t emcy_count;
     uint32_t rx_bad; /**< malformed / unexpected frames from it */
 } ef_com_node_t;
@@ -321,7 +325,8 @@ typedef struct {
     uint16_t op;                    /**< configuration step of node cur */
     uint8_t cfg_restart;            /**< node cur booted again while being configured: start over */
     uint8_t sync_on;                /**< SYNC production running */
-    uint8_t lost[EF_COM_MAX_NODES]; /**< heartbeat lost: not waited for when stopping */
+    uint8_t lost[EF_COM_MAX_NODES]; /**< heartbeat lost: not waited for when stopping once
+                                         it is gone too (no TPDO1 for a few SYNCs) */
     uint8_t last_power[EF_COM_MAX_NODES]; /**< power state when its step timer started */
     uint16_t cw_sent[EF_COM_MAX_NODES];   /**< segment mode: controlword last sent */
     uint32_t t_node_us[EF_COM_MAX_NODES]; /**< ENABLE: when the node's power step began */

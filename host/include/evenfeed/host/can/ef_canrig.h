@@ -41,6 +41,9 @@ typedef struct {
     ef_comaster_t *m; /**< NULL until ef_canrig_add_master() */
     ef_codrive_t *d[EF_CANRIG_MAX_DRIVES];
     int n_drives;
+    int hold_master;      /**< nonzero: steps leave the master's pump out (a starved master:
+                               frames queue at its port, its next poll sees the whole gap) */
+    uint32_t hold_drives; /**< bit k-1 set: drive k's pump is left out (a dead node) */
 } ef_canrig_t;
 
 /** @brief An empty rig on a bus of `bitrate` bits/s (0: infinitely fast), time 0. */
