@@ -9,7 +9,8 @@ work=$2
 for t in canplayer log2asc tc ip; do
     command -v "$t" >/dev/null 2>&1 || { echo "sockcan.sh: $t missing in the guest"; exit 1; }
 done
-if [ ! -d /sys/module/sch_plug ]; then
+# The project's kernel has it built in (no module tree); a stock kernel loads the module.
+if [ -d "/usr/lib/uml/modules/$(uname -r)" ] && [ ! -d /sys/module/sch_plug ]; then
     ko=$(find "/usr/lib/uml/modules/$(uname -r)" -name sch_plug.ko | head -n 1)
     insmod "$ko" || { echo "sockcan.sh: cannot load sch_plug ($ko)"; exit 1; }
 fi

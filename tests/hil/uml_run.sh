@@ -12,8 +12,14 @@
 # time-out (whole run bounded by TIMEOUT_S); 77 (skip) when linux.uml is missing, unless
 # CI or EF_HIL_REQUIRE is set, which makes a missing UML a failure.
 #
+# The kernel is the project's HIL kernel (tests/hil/build_kernel.sh: vcan, gpio-sim,
+# dummy_hcd, configfs, FunctionFS, gs_usb built in), or Debian's linux.uml with its modules
+# (vcan only) when EF_UML names it. Built-in drivers need no insmod: the guest loads modules
+# only where the kernel has a module tree.
+#
 # Environment (all optional):
-#   EF_UML            UML kernel (default: linux.uml on PATH, else /usr/bin/linux.uml)
+#   EF_UML            UML kernel (default: build/hil-kernel/linux of this checkout; built by
+#                     `bash tests/hil/build_kernel.sh build/hil-kernel`, which ./dev test runs)
 #   EF_HIL_MEM        guest memory (default 256M). AddressSanitizer cannot run in the guest
 #                     at any size (UML 6.1 gives processes 512 GiB of address space; ASan's
 #                     shadow needs 16 TiB): build guest binaries without -fsanitize=address.
@@ -45,15 +51,16 @@ script=$(abspath "$script")
 verdict=$(abspath "$verdict")
 here=$(cd "$(dirname "$0")" && pwd)
 
-uml=${EF_UML:-$(command -v linux.uml 2>/dev/null || echo /usr/bin/linux.uml)}
+uml=${EF_UML:-$(cd "$here/../.." && pwd)/build/hil-kernel/linux}
 if [ ! -x "$uml" ]; then
     if [ -n "${CI:-}" ] || [ -n "${EF_HIL_REQUIRE:-}" ]; then
         echo "FAIL: User-Mode Linux kernel '$uml' not found, and CI/EF_HIL_REQUIRE demands the" \
-            "HIL tests run (install the user-mode-linux package)" >&2
+            "HIL tests run (build it: bash tests/hil/build_kernel.sh build/hil-kernel)" >&2
         exit 1
     fi
-    echo "SKIP: User-Mode Linux kernel '$uml' not found: install user-mode-linux (and kmod" \
-        "can-utils iproute2) to run the hardware-in-loop tests"
+    echo "SKIP: User-Mode Linux kernel '$uml' not found: build it with" \
+        "'bash tests/hil/build_kernel.sh build/hil-kernel' (./dev test does) to run the" \
+        "hardware-in-loop tests"
     exit 77
 fi
 if [ ! -r "$script" ]; then
@@ -104,9 +111,13 @@ fin() { # verdict: the guest's output and a last line PASS / FAIL, then power of
 }
 mount -t proc proc /proc && mount -t sysfs sys /sys || fin "FAIL: mounting /proc, /sys"
 mount -t tmpfs tmp /run 2>/dev/null
+# configfs (gpio-sim, USB gadgets) where the kernel has it; devtmpfs is on /dev already
+# (DEVTMPFS_MOUNT) in the project's kernel.
+grep -qw configfs /proc/filesystems && mount -t configfs none /sys/kernel/config 2>/dev/null
 M=/usr/lib/uml/modules/\$(uname -r)
 echo "guest: kernel \$(uname -r), \$(nproc) cpu, \$(awk '/MemTotal/ {print \$2 " kB"}' /proc/meminfo)" >"\$out"
-ko() { # load a module by name from the UML module tree
+ko() { # load a module by name from the UML module tree (none: the kernel has it built in)
+    [ -d "\$M" ] || return 0
     f=\$(find "\$M" -name "\$1.ko" | head -n 1)
     [ -n "\$f" ] || { echo "guest: module \$1 not found under \$M" >>"\$out"; return 1; }
     shift
@@ -114,6 +125,7 @@ ko() { # load a module by name from the UML module tree
 }
 echo_opt=""
 [ "${EF_HIL_VCAN_ECHO:-0}" = 1 ] && echo_opt="echo=1"
+echo "guest: drivers \$([ -d "\$M" ] && echo "modules from \$M" || echo "built in")" >>"\$out"
 ok=1
 ko can-dev && ko can && ko can-raw && ko vcan \$echo_opt || ok=0
 for m in ${EF_HIL_MODULES:-}; do ko "\$m" || ok=0; done
@@ -142,11 +154,14 @@ esac
 INIT
 chmod +x "$run/init.sh"
 
+# Parameters of built-in drivers come on the command line (a module gets them from insmod).
+cmdline=""
+[ "${EF_HIL_VCAN_ECHO:-0}" = 1 ] && cmdline="vcan.echo=1"
 start=$(date +%s.%N)
 # timeout signals its whole process group, so the machine's helper processes end with it.
 timeout -k 5 "$limit" "$uml" mem="${EF_HIL_MEM:-256M}" root=/dev/root rootfstype=hostfs \
     rootflags=/ rw init="$run/init.sh" con=null ssl=null con0=fd:0,fd:1 uml_dir="$run" \
-    umid=efhil quiet loglevel=3 </dev/null >"$run/console.log" 2>&1
+    umid=efhil quiet loglevel=3 $cmdline </dev/null >"$run/console.log" 2>&1
 urc=$?
 end=$(date +%s.%N)
 secs=$(awk "BEGIN { printf \"%.1f\", $end - $start }")
