@@ -273,8 +273,15 @@ int ef_can_sim_run(const ef_can_sim_cfg_t *c, ef_msg_t *m)
         if (ef_canpump_poll(&S->pump, wait) != EF_OK)
             rc = ef_fail(m, EF_ERR_IO, "sim-drive: %s", ef_canpump_msg(&S->pump));
     }
-    if (S->trace)
+    if (S->trace) {
+        /* Frames the kernel dropped from a full receive queue: what a held-back drive
+         * never saw (a SYNC among them is a step it did not take). */
+        ef_canif_status_t st;
+        memset(&st, 0, sizeof st);
+        ef_canif_status(&S->ci, 0, &st);
+        fprintf(S->trace, "o,%u\n", (unsigned)st.rx_overrun);
         fclose(S->trace);
+    }
     ef_canif_close(&S->ci);
     free(S);
     return rc;

@@ -15,6 +15,8 @@
 
 #include "evenfeed/host/can/ef_sockcan.h"
 
+/* Receive buffer asked for each socket (bytes; see ef_sockcan_open()). */
+#define EF_SC_RCVBUF         (4 << 20)
 #define EF_SC_BACKOFF_MIN_US 100u
 #define EF_SC_BACKOFF_MAX_US 10000u
 
@@ -146,6 +148,14 @@ int ef_sockcan_open(ef_sockcan_t *s, const char *ifname, const ef_sockcan_filter
         return ef_fail(m, EF_ERR_IO, "sockcan open %s: setsockopt(SOL_CAN_RAW): %s", ifname,
                        strerror(e));
     }
+    /* Frames a held-back reader has not read yet wait in the socket's receive queue; the
+     * default (rmem_default, about 200 kB: some 250 frames) is gone in a few hundred ms of
+     * a starved process on a busy bus. 4 MiB where the process may (CAP_NET_ADMIN), else
+     * as much as rmem_max allows. The kernel counts what it still drops (SO_RXQ_OVFL). */
+    int rcv = EF_SC_RCVBUF, on = 1;
+    if (setsockopt(fd, SOL_SOCKET, SO_RCVBUFFORCE, &rcv, sizeof rcv) != 0)
+        (void)setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &rcv, sizeof rcv);
+    (void)setsockopt(fd, SOL_SOCKET, SO_RXQ_OVFL, &on, sizeof on);
     memset(&addr, 0, sizeof addr);
     addr.can_family = AF_CAN;
     addr.can_ifindex = (int)idx;
@@ -335,7 +345,21 @@ static int sc_recv(ef_sockcan_t *s, ef_can_frame_t *f, uint32_t timeout_us, uint
     deadline = now + (uint64_t)timeout_us * 1000u;
     for (;;) {
         struct can_frame cf;
-        ssize_t r = recv(s->fd, &cf, sizeof cf, MSG_DONTWAIT);
+        char ctl[CMSG_SPACE(sizeof(uint32_t))];
+        struct iovec iov = {&cf, sizeof cf};
+        struct msghdr mh;
+        memset(&mh, 0, sizeof mh);
+        mh.msg_iov = &iov;
+        mh.msg_iovlen = 1;
+        mh.msg_control = ctl;
+        mh.msg_controllen = sizeof ctl;
+        ssize_t r = recvmsg(s->fd, &mh, MSG_DONTWAIT);
+        for (struct cmsghdr *c = r >= 0 ? CMSG_FIRSTHDR(&mh) : NULL; c; c = CMSG_NXTHDR(&mh, c))
+            if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SO_RXQ_OVFL) {
+                uint32_t d;
+                memcpy(&d, CMSG_DATA(c), sizeof d);
+                s->rx_overrun = d; /* the kernel's running count for this socket */
+            }
         if (r < 0) {
             int e = errno;
             if (e == EINTR)
@@ -465,6 +489,7 @@ static void sc_if_status(void *ctx, uint32_t clear, ef_canif_status_t *st)
     st->tec = st->rec = -1;
     st->tx = s->tx;
     st->rx = s->rx;
+    st->rx_overrun = s->rx_overrun;
     st->tx_bits = s->tx_bits;
     s->bus &= ~clear;
 }

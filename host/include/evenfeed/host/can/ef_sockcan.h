@@ -56,6 +56,8 @@ typedef struct {
     uint32_t err_frames; /**< error frames received */
     uint32_t enobufs;    /**< sends that met a full TX queue */
     uint64_t tx, rx;     /**< frames sent / received */
+    uint32_t rx_overrun; /**< frames the kernel dropped because this socket's receive queue
+                              was full (SO_RXQ_OVFL): a reader held back too long */
     uint64_t tx_bits;    /**< ef_can_frame_bits() of the frames sent */
     ef_can_frame_t backlog[EF_SOCKCAN_BACKLOG];
     uint32_t bl_head, bl_count;
