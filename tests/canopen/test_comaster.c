@@ -859,6 +859,35 @@ static void t_sdo_client(void)
     EF_CHECK_EQ(ef_sdo_client_result(&c, NULL, NULL, NULL), EF_ERR_STATE);
     a = sc_answer(0x43, 0x1000, 0, 0x00020192u);
     EF_CHECK_EQ(ef_sdo_client_rx(&c, &a, 0, &out), EF_ERR_STATE);
+    /* A slow server answers both the request and its retry (seen in hil_can_segment under
+     * load: a read of 0x1A00:00 retried, its second answer arriving during the next write):
+     * the late duplicate is ignored once; the write completes on its own answer. */
+    EF_CHECK_EQ(ef_sdo_client_upload(&c, 5, 0x1A00, 0, 0, &out), EF_OK);
+    EF_CHECK_EQ(ef_sdo_client_process(&c, 1000, &out), EF_ERR_AGAIN); /* the retry */
+    EF_CHECK_EQ(out.dlc, 8);
+    a = sc_answer(0x4F, 0x1A00, 0, 2);
+    EF_CHECK_EQ(ef_sdo_client_rx(&c, &a, 1100, &out), EF_OK);
+    EF_CHECK_EQ(ef_sdo_client_value(&c), 2u);
+    const uint8_t cob[4] = {0x82, 0x01, 0, 0x80};
+    EF_CHECK_EQ(ef_sdo_client_download(&c, 5, 0x1800, 1, cob, 4, 1200, &out), EF_OK);
+    EF_CHECK_EQ(ef_sdo_client_rx(&c, &a, 1210, &out), EF_ERR_AGAIN); /* the duplicate */
+    EF_CHECK_EQ(out.dlc, 0);
+    EF_CHECK_EQ(c.stale_ignored, 1u);
+    a = sc_answer(0x60, 0x1800, 1, 0);
+    EF_CHECK_EQ(ef_sdo_client_rx(&c, &a, 1220, &out), EF_OK);
+    /* Only one: a second copy is the error it always was. */
+    EF_CHECK_EQ(ef_sdo_client_upload(&c, 5, 0x1A00, 0, 2000, &out), EF_OK);
+    EF_CHECK_EQ(ef_sdo_client_process(&c, 3000, &out), EF_ERR_AGAIN);
+    a = sc_answer(0x4F, 0x1A00, 0, 2);
+    EF_CHECK_EQ(ef_sdo_client_rx(&c, &a, 3100, &out), EF_OK);
+    EF_CHECK_EQ(ef_sdo_client_download(&c, 5, 0x1800, 1, cob, 4, 3200, &out), EF_OK);
+    EF_CHECK_EQ(ef_sdo_client_rx(&c, &a, 3210, &out), EF_ERR_AGAIN);
+    EF_CHECK_EQ(ef_sdo_client_rx(&c, &a, 3220, &out), EF_ERR_PROTO);
+    /* Without a retry, an answer echoing the last transfer is no duplicate: an error. */
+    EF_CHECK_EQ(ef_sdo_client_upload(&c, 5, 0x1A00, 0, 4000, &out), EF_OK);
+    EF_CHECK_EQ(ef_sdo_client_rx(&c, &a, 4100, &out), EF_OK);
+    EF_CHECK_EQ(ef_sdo_client_download(&c, 5, 0x1800, 1, cob, 4, 4200, &out), EF_OK);
+    EF_CHECK_EQ(ef_sdo_client_rx(&c, &a, 4210, &out), EF_ERR_PROTO);
 }
 
 /* The caller's SDO client against the fakes: argument and state checks, the exact frames of

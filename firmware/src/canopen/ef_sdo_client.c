@@ -86,6 +86,10 @@ static void sdc_ul_seg(ef_sdo_client_t *c, uint32_t now_us, ef_can_frame_t *out)
 /* The transfer ends with rc (abort: the code an abort or a wrong toggle carries). */
 static int sdc_end(ef_sdo_client_t *c, int rc, uint32_t abort)
 {
+    /* A retried transfer: the server may still answer its first request. */
+    c->stale_pending = c->tries >= 2u;
+    c->stale_index = c->index;
+    c->stale_sub = c->sub;
     c->state = EF_SDOC_IDLE;
     c->rc = rc;
     c->abort = abort;
@@ -195,6 +199,13 @@ int ef_sdo_client_rx(ef_sdo_client_t *c, const ef_can_frame_t *f, uint32_t now_u
     const uint8_t *d = f->data;
     uint8_t cmd = d[0];
     int echo = ef_co_get16(&d[1]) == c->index && d[3] == c->sub;
+    uint8_t cs = cmd & SDC_CS_MASK;
+    if (!echo && c->stale_pending && ef_co_get16(&d[1]) == c->stale_index && d[3] == c->stale_sub &&
+        (cmd == EF_CO_SDO_ABORT || cmd == SDC_DL_RESP || cs == SDC_UL_INIT)) {
+        c->stale_pending = 0;
+        c->stale_ignored++;
+        return EF_ERR_AGAIN; /* the late answer to a retried transfer's first request */
+    }
     if (cmd == EF_CO_SDO_ABORT)
         return sdc_end(c, EF_ERR_PROTO, echo ? ef_co_get32(&d[4]) : 0u);
     switch (c->state) {

@@ -34,6 +34,11 @@
  *
  * A retry restarts the whole transfer from its initiate (a segmented transfer too: the
  * server has dropped or will drop the half-done one). Every request sent restarts the timer.
+ * A server that was only slow answers both requests: after a retried transfer has ended, one
+ * initiate answer or abort that echoes its index/sub (and not the pending transfer's) is a
+ * late duplicate and is ignored (stale_ignored), wherever it arrives; a second one, or one
+ * echoing anything else, is the error above. (A master held back between reading its clock
+ * and sending a request times out early: seen under a loaded User-Mode Linux guest.)
  * Uploads longer than ::EF_SDO_CLIENT_BUF are read to the end and cut.
  */
 #ifndef EF_SDO_CLIENT_H
@@ -82,6 +87,12 @@ typedef struct {
     uint32_t timeout_us;
     int32_t rc;     /**< outcome of the last transfer (EF_ERR_AGAIN while pending) */
     uint32_t abort; /**< its abort code (0: none) */
+    /* A transfer that was retried may still get the answer to its first request after it
+     * ended: one initiate answer (or abort) echoing its index/sub is then ignored. */
+    uint16_t stale_index;
+    uint8_t stale_sub;
+    uint8_t stale_pending;  /**< 1: that one answer may still come */
+    uint32_t stale_ignored; /**< such answers ignored */
     uint8_t buf[EF_SDO_CLIENT_BUF];
 } ef_sdo_client_t;
 
