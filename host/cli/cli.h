@@ -39,6 +39,13 @@ int cli_cmd_gcode(int argc, char **argv);
 int cli_cmd_smooth(int argc, char **argv);
 int cli_cmd_stream(int argc, char **argv);
 int cli_cmd_sim_drive(int argc, char **argv);
+int cli_cmd_io(int argc, char **argv);
+
+struct ef_mio_s;
+/** Load a machine file and open its machine I/O (cmd_io.c); signals and exit() drive the
+ *  outputs to their safe state from then on.
+ *  @retval EF_OK open (SAFE); otherwise the error, printed (file:line, line, consumer). */
+int cli_mio_open(struct ef_mio_s *io, const char *path);
 
 /* ---- Errors and output ------------------------------------------------------------- */
 

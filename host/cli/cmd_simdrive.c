@@ -38,6 +38,7 @@ static const char usage[] =
     "  --trace FILE         CSV: each SYNC step, accepted segments, EMCYs\n"
     "  --log FILE           candump log of what the drive receives and sends\n"
     "  --run-ms MS          stop after MS ms of wall time (default: run until a signal)\n"
+    "  --sync-timeout MS    SYNC-loss watchdog 0x2003 at power-up (default 500; 0 off)\n"
     "fault injection, at SYNC time in OPERATION ENABLED (SYNCs x cycle period), each once:\n"
     "  --fault-at MS        raise drive fault 4 (EMCY 0xFF04)\n"
     "  --hb-stop-at MS      stop sending heartbeats\n"
@@ -104,7 +105,8 @@ enum {
     O_WIRE_BAUD,
     O_EXCEPTION_AT,
     O_DROP_REPLY_AT,
-    O_DISCONNECT_AT
+    O_DISCONNECT_AT,
+    O_SYNC_TIMEOUT
 };
 
 /* `evenfeed sim-drive can`: one simulated CANopen drive. */
@@ -120,6 +122,7 @@ static int csd_can(int argc, char **argv)
                                          {"hb-stop-at", required_argument, NULL, O_HB_STOP_AT},
                                          {"bus-off-at", required_argument, NULL, O_BUS_OFF_AT},
                                          {"drop-rx", required_argument, NULL, O_DROP_RX},
+                                         {"sync-timeout", required_argument, NULL, O_SYNC_TIMEOUT},
                                          CLI_OPT_HELP,
                                          CLI_OPT_END};
     ef_can_sim_cfg_t c;
@@ -176,6 +179,10 @@ static int csd_can(int argc, char **argv)
             break;
         case O_DROP_RX:
             rc = csd_drops(g.val, &c);
+            break;
+        case O_SYNC_TIMEOUT:
+            if ((rc = cli_opt_int(&g, 0, 60000, &x)) == EF_OK)
+                c.sync_timeout_ms = (long)x;
             break;
         default: /* CLI_ARG */
             return cli_error(EF_ERR_ARG, "sim-drive: unknown option '%s'", g.val);

@@ -6,6 +6,7 @@
 #include "cli.h"
 #include "evenfeed/host/can/ef_canhost.h"
 #include "evenfeed/host/modbus/ef_mb.h"
+#include "evenfeed/host/io/ef_mio.h"
 
 static const char usage[] =
     "usage: evenfeed stream --modbus ADDRESS [options] PROGRAM.ngc\n"
@@ -36,6 +37,9 @@ static const char usage[] =
     "  --trace FILE      CSV: SYNC times, actual positions, targets, segments\n"
     "both:\n"
     "  --fault-reset     reset faulted drives first (default: refuse to enable them)\n"
+    "  --machine FILE    machine I/O on GPIO (docs/io.md): e-stop, drive enable, alarms,\n"
+    "                    charge pump, M62-M65 outputs, feed hold (--can --mode csp);\n"
+    "                    refused while e-stop is active or latched\n"
     "  --params FILE     the machine's LinuxCNC parameter file (work offsets, G28/G30)\n"
     "  --tool-table FILE the machine's LinuxCNC tool table (G43 H lengths, mm)\n"
     "  -v                progress on stderr\n"
@@ -102,10 +106,18 @@ static int cstrm_run_can(const ef_can_stream_cfg_t *cc, const char *path, const 
     printf("sync: %u SYNCs, period mean %.1f us, std %.1f us, min %.1f us, max %.1f us\n",
            res.syncs, res.sync_mean_us, res.sync_std_us, res.sync_min_us, res.sync_max_us);
     printf("bus: master sent %llu frames (%llu bits, %.3f s at %.0f kbit/s), received %llu "
-           "frames; load %.1f %%, %u error frames\n",
+           "frames (%u dropped by a full receive queue); load %.1f %%, %u error frames\n",
            (unsigned long long)res.tx_frames, (unsigned long long)res.tx_bits, res.bus_time_s,
-           cc->bitrate / 1000.0, (unsigned long long)res.rx_frames, 100.0 * res.load,
-           res.err_frames);
+           cc->bitrate / 1000.0, (unsigned long long)res.rx_frames, (unsigned)res.rx_overrun,
+           100.0 * res.load, res.err_frames);
+    if (cc->mio)
+        printf("machine: %u outputs switched (M62-M65), largest distance from the commanded "
+               "point %.4f mm; %u feed holds, %.3f s held\n",
+               (unsigned)res.outputs, res.out_err_max, (unsigned)res.holds, res.held_s);
+    if (rc == EF_ERR_ESTOP && res.estop_latency_s > 0.0)
+        printf("e-stop: line %u, input edge to stop command %.3f ms, to all drives at rest "
+               "%.3f ms\n",
+               (unsigned)res.estop_line, res.estop_latency_s * 1e3, res.estop_rest_s * 1e3);
     printf("drives:");
     for (int k = 0; k < cc->n_nodes; k++)
         printf("%s node %u \"%s\"", k ? "," : "", (unsigned)cc->nodes[k], res.names[k]);
@@ -131,7 +143,8 @@ enum {
     O_TIMEOUT,
     O_RETRIES,
     O_WATCHDOG,
-    O_FAULT_RESET
+    O_FAULT_RESET,
+    O_MACHINE
 };
 
 /* Entry point of `evenfeed stream`. */
@@ -151,6 +164,7 @@ int cli_cmd_stream(int argc, char **argv)
                                          {"retries", required_argument, NULL, O_RETRIES},
                                          {"watchdog", required_argument, NULL, O_WATCHDOG},
                                          {"fault-reset", no_argument, NULL, O_FAULT_RESET},
+                                         {"machine", required_argument, NULL, O_MACHINE},
                                          CLI_PIPE_OPTIONS,
                                          CLI_MACHINE_OPTIONS,
                                          CLI_OPT_HELP,
@@ -160,7 +174,7 @@ int cli_cmd_stream(int argc, char **argv)
                              cli_default_table(EF_TABLE_G1_CUBIC));
     ef_can_stream_cfg_t cc;
     ef_can_stream_cfg_default(&cc, c.pipe.g2, c.pipe.g1);
-    const char *path = NULL, *addr = NULL, *iface = NULL, *mode = NULL;
+    const char *path = NULL, *addr = NULL, *iface = NULL, *mode = NULL, *machine = NULL;
     char mb_only[48] = "", can_only[48] = ""; /* an option of one transport, given */
     ef_msg_t m = {{0}};
     cli_machine_t mc = {0};
@@ -231,6 +245,9 @@ int cli_cmd_stream(int argc, char **argv)
         case O_FAULT_RESET:
             c.fault_reset = 1;
             break;
+        case O_MACHINE:
+            machine = g.val;
+            break;
         case 'v':
             c.verbose = 1;
             break;
@@ -270,6 +287,14 @@ int cli_cmd_stream(int argc, char **argv)
                          iface ? "CAN" : "Modbus", iface ? "segment|csp" : "segment|direct");
     if (!c.pipe.g2 || (c.pipe.smooth_degree == 3 && !c.pipe.g1))
         return cli_error(EF_ERR_ARG, "stream: this binary has no built-in tables");
+    static ef_mio_t mio; /* the lines stay requested until the process ends */
+    if (machine) {
+        int rc = cli_mio_open(&mio, machine); /* bad lines: refused before any motion */
+        if (rc != EF_OK)
+            return rc;
+        cc.mio = &mio;
+        c.mio = &mio;
+    }
     if (iface) {
         if (if_nametoindex(iface) == 0) /* before the program: name the interface first */
             return cli_error(EF_ERR_IO, "stream: --can %s: no such network interface", iface);
@@ -278,7 +303,10 @@ int cli_cmd_stream(int argc, char **argv)
         cc.mode = mode && !strcmp(mode, "csp") ? EF_COM_MODE_CSP : EF_COM_MODE_SEGMENT;
         cc.fault_reset = (uint8_t)c.fault_reset;
         cc.verbose = (uint8_t)c.verbose;
-        return cstrm_run_can(&cc, path, &mc);
+        int rc = cstrm_run_can(&cc, path, &mc);
+        if (machine)
+            ef_mio_close(&mio);
+        return rc;
     }
     if (mode)
         c.mode = !strcmp(mode, "direct") ? EF_MB_MODE_DIRECT : EF_MB_MODE_SEGMENT;
@@ -308,7 +336,11 @@ int cli_cmd_stream(int argc, char **argv)
            "%u duplicate writes acknowledged, %u writes refused\n",
            res.last.state, res.last.fault, res.last.done_count, (double)res.last.ferr_max,
            res.last.duplicates, res.last.rejected);
+    if (machine)
+        printf("machine: %u outputs switched (M62-M65)\n", (unsigned)res.outputs);
     fflush(stdout);
+    if (machine)
+        ef_mio_close(&mio);
     if (rc != EF_OK)
         return cli_error(rc, "stream: %s", m.text);
     return EF_OK;

@@ -15,6 +15,7 @@ static const cli_cmd_t cmain_cmds[] = {
      "smooth a part program: planned moves, setpoints, summary, JSON/CSV/SVG"},
     {"stream", cli_cmd_stream, "smooth a part program and stream it to drives (--modbus, --can)"},
     {"sim-drive", cli_cmd_sim_drive, "a simulated drive (modbus, can) for tests and demos"},
+    {"io", cli_cmd_io, "machine I/O on GPIO: line status, e-stop reset (docs/io.md)"},
     {NULL, NULL, NULL}};
 
 /* The usage text, from the command table. */

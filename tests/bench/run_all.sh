@@ -91,3 +91,16 @@ echo
 echo "== CAN bus load: CSP at 1 kHz against segment mode, 3 drives, the sample profile, real"
 echo "   master and drive code on a simulated 1 Mbit/s bus (docs/benchmarks-can.md)"
 "$b/tests/bench_canbus" samples/profile.ngc
+
+echo
+echo "== E-stop latency: a gpio-sim e-stop input, evenfeed stream --can on vcan, three drives,"
+echo "   inside the project's User-Mode Linux kernel (not a real-time kernel: these are UML"
+echo "   figures); EF_BENCH_PRESSES presses (default 100), docs/io.md"
+if [ -x "$b/tests/test_can_hil" ]; then
+    EF_HIL_PASS_ENV=EF_BENCH_PRESSES EF_BENCH_PRESSES=${EF_BENCH_PRESSES:-100} \
+        bash tests/hil/uml_run.sh tests/hil/can.sh "$b/tests/bench_io_latency/verdict" 1200 \
+        "$b/tests/test_can_hil" "$ef" "$PWD" "$b/tests/bench_io_latency/out" io_latency |
+        grep -E 'latency|presses|press ->|kernel edge|check failed|^(PASS|FAIL|SKIP)' || true
+else
+    echo "(not built: test_can_hil needs the default tables)"
+fi

@@ -1,8 +1,10 @@
 # SPDX-License-Identifier: Apache-2.0
 # Hardware-in-loop tests: real kernel drivers inside User-Mode Linux (docs: see
-# tests/hil/uml_run.sh and /work/shared/docs/hil.md). Each test boots linux.uml on the host's
-# file system, runs a guest script, and passes only on the guest's PASS verdict; it is
-# skipped (exit 77) where linux.uml is not installed, unless CI / EF_HIL_REQUIRE is set.
+# tests/hil/uml_run.sh and docs/hil.md). Each test boots the project's HIL kernel
+# (build/hil-kernel/linux, made by tests/hil/build_kernel.sh from tests/hil/uml-hil.fragment)
+# on the host's file system, runs a guest script, and passes only on the guest's PASS
+# verdict; it is skipped (exit 77) where that kernel is not built, unless CI /
+# EF_HIL_REQUIRE is set. Every HIL test holds RESOURCE_LOCK uml: one guest at a time.
 # Test names start with "hil_" (ctest -R hil_).
 #
 # AddressSanitizer cannot run inside UML 6.1 (512 GiB of user address space; ASan's x86-64
@@ -53,7 +55,7 @@ add_test(NAME hil_sockcan
          COMMAND bash ${EF_HIL_RUN} ${CMAKE_CURRENT_SOURCE_DIR}/hil/sockcan.sh
                  ${CMAKE_CURRENT_BINARY_DIR}/hil_sockcan/verdict 120
                  ${EF_SOCKCAN_GUEST_BIN} ${CMAKE_CURRENT_BINARY_DIR}/hil_sockcan)
-set_tests_properties(hil_sockcan PROPERTIES TIMEOUT 150 SKIP_RETURN_CODE 77 RUN_SERIAL ON)
+set_tests_properties(hil_sockcan PROPERTIES TIMEOUT 150 SKIP_RETURN_CODE 77 RESOURCE_LOCK uml)
 
 # CAN streaming end to end (docs/can.md): three `evenfeed sim-drive can` drives and
 # `evenfeed stream --can` on vcan0 in the guest, checked by test_can_hil (run in the guest).
@@ -63,13 +65,24 @@ if(NOT EF_SANITIZE AND TARGET ef_tables_default)
   add_executable(test_can_hil ${CMAKE_CURRENT_SOURCE_DIR}/can/test_can_hil.c)
   target_include_directories(test_can_hil PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
   target_link_libraries(test_can_hil PRIVATE ef_host ef_tables_default m)
-  foreach(part csp segment drop emcy heartbeat busoff boot start masterdeath)
-    add_test(NAME hil_can_${part}
+  # hil_can_*: streaming and faults; hil_io_*: the machine I/O (docs/io.md) on a gpio-sim
+  # chip the guest script makes.
+  foreach(part csp segment drop emcy heartbeat busoff boot start masterdeath
+               io_estop io_start io_alarm io_pump io_hold io_outputs io_modbus
+               io_gpioerr)
+    if(part MATCHES "^io_")
+      set(name hil_${part})
+    else()
+      set(name hil_can_${part})
+    endif()
+    add_test(NAME ${name}
              COMMAND bash ${EF_HIL_RUN} ${CMAKE_CURRENT_SOURCE_DIR}/hil/can.sh
-                     ${CMAKE_CURRENT_BINARY_DIR}/hil_can_${part}/verdict 240
+                     ${CMAKE_CURRENT_BINARY_DIR}/${name}/verdict 240
                      $<TARGET_FILE:test_can_hil> $<TARGET_FILE:evenfeed> ${PROJECT_SOURCE_DIR}
-                     ${CMAKE_CURRENT_BINARY_DIR}/hil_can_${part}/out ${part})
-    # One guest at a time: two emulated kernels on a 2-core machine starve each other.
-    set_tests_properties(hil_can_${part} PROPERTIES TIMEOUT 280 SKIP_RETURN_CODE 77 RUN_SERIAL ON)
+                     ${CMAKE_CURRENT_BINARY_DIR}/${name}/out ${part})
+    # One guest at a time (RESOURCE_LOCK uml): two emulated kernels on a 2-core machine
+    # starve each other. Other tests may run beside it: the checks hold on a loaded host.
+    set_tests_properties(${name} PROPERTIES TIMEOUT 280 SKIP_RETURN_CODE 77
+                         RESOURCE_LOCK uml)
   endforeach()
 endif()

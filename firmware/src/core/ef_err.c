@@ -62,6 +62,8 @@ const char *ef_err_str(int err)
         return "bus error (bus-off, error-passive or interface down)";
     case EF_ERR_HEARTBEAT:
         return "heartbeat lost or node never booted";
+    case EF_ERR_ESTOP:
+        return "e-stop or drive alarm";
     case EF_ERR_TBL_TRUNCATED:
         return "table truncated";
     case EF_ERR_TBL_MAGIC:

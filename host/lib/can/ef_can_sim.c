@@ -35,6 +35,7 @@ void ef_can_sim_cfg_default(ef_can_sim_cfg_t *c)
 {
     memset(c, 0, sizeof *c);
     c->fault_at_ms = -1;
+    c->sync_timeout_ms = -1;
     c->hb_stop_at_ms = -1;
     c->bus_off_at_ms = -1;
     c->run_ms = -1;
@@ -242,6 +243,8 @@ static int csim_open(csim_t *S, ef_msg_t *m)
     if (rc != EF_OK)
         return ef_fail(m, rc, "sim-drive: node %u: the drive refused its configuration (home %g)",
                        (unsigned)c->node, (double)c->home);
+    if (c->sync_timeout_ms >= 0) /* as the power-up value of 0x2003 (a reset node restores 500) */
+        S->d.sync_timeout_ms = (uint16_t)c->sync_timeout_ms;
     FILE *ready = c->ready ? c->ready : stdout;
     fprintf(ready, "ready can %u %s\n", (unsigned)c->node, c->iface);
     fflush(ready);

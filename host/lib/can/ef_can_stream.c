@@ -6,9 +6,12 @@
 #include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include "evenfeed/host/can/ef_canhost.h"
 #include "evenfeed/host/can/ef_canpump.h"
 #include "evenfeed/host/can/ef_sockcan.h"
+#include "evenfeed/host/io/ef_mio.h"
+#include "evenfeed/geom/ef_bezier.h"
 
 /* Longest receive wait while the socket's backlog holds frames (us). */
 #define CS_BACKLOG_WAIT_US 500u
@@ -27,6 +30,18 @@ typedef struct {
 } cs_item_t;
 
 enum { CS_ITEM_MOVE = 1, CS_ITEM_SETPOINT = 2, CS_ITEM_EVENT = 3 };
+
+/* Longest pump wait with machine I/O: GPIO edges do not wake the CAN socket's poll, so
+ * this bounds the e-stop latency in the slow (segment, 10 ms) cycle (us). */
+#define CS_MIO_WAIT_US 2000u
+/* Feed hold (CSP): setpoints kept between the pipeline and the target queue, so that the
+ * path can be replayed at a slower rate (a power of two, > 2). */
+#define CS_HOLD_RING 8u
+/* Shortest ramp of a feed hold or resume (s). */
+#define CS_HOLD_RAMP_MIN_S 0.05
+/* Moves remembered to name the program line of an e-stop, and points sampled on each. */
+#define CS_MRING 256u
+#define CS_MPTS  9
 
 /** TPDO1 positions kept per node until every node's answer to the same SYNC is in. */
 #define CS_TP_RING 256u
@@ -70,6 +85,34 @@ typedef struct {
     ef_msg_t worker_msg;
     ef_gcode_t *r;
     ef_pipe_cfg_t pc;
+    /* Machine I/O: a trip stops the drives; the moves pushed recently, to name the line
+     * being executed where the drives were then. */
+    int estop;
+    ef_msg_t estop_msg;
+    uint64_t estop_edge_ns, estop_cmd_ns;
+    float estop_pos[EF_CAN_STREAM_MAX_NODES];
+    struct {
+        uint32_t tag;
+        float p[CS_MPTS][3];
+    } mring[CS_MRING];
+    uint32_t mr_n;
+    /* Feed hold in CSP: a time warp. Setpoints come at the cycle's rate (sample index i at
+     * time i * dt); targets go out at w, advanced by rate r in [0, 1] each cycle, linear
+     * between samples. r = 1 passes the samples through unchanged; a hold ramps r down to
+     * 0 (smoothstep over a ramp long enough for the speed and amax), a cycle start back. */
+    int hold_on; /* feed hold is wired (CSP) */
+    float hs[CS_HOLD_RING][EF_CAN_STREAM_MAX_NODES];
+    uint32_t hs_tag[CS_HOLD_RING];
+    uint64_t hs_n;           /* samples received */
+    double hw;               /* virtual time (samples) of the next target */
+    double hr;               /* rate now */
+    double hr0, hr1, hu, hT; /* ramp from hr0 to hr1, phase hu in [0, 1], length hT (s) */
+    int hheld;               /* the hold request the ramp follows */
+    int64_t hlast;           /* sample index the last target was exactly (-1: between two) */
+    float last_cmd[EF_CAN_STREAM_MAX_NODES]; /* where the last target / segment ends */
+    int out_noted;                           /* M62-M65 without machine I/O: said once */
+    uint32_t holds;                          /* holds begun */
+    double held_s;                           /* time spent at rest in a hold (s) */
 } cs_t;
 
 /* Defaults documented in ef_canhost.h. */
@@ -301,10 +344,73 @@ static int cs_io_rc(const cs_t *S)
     return ef_canpump_error(&S->pump);
 }
 
+static uint64_t cs_mono_ns(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (uint64_t)ts.tv_sec * 1000000000u + (uint64_t)ts.tv_nsec;
+}
+
+/* The program line being executed: the remembered move that passes nearest the drives'
+ * actual positions (segment mode executes in the drives, CSP up to a queue ahead). */
+static uint32_t cs_line_at(const cs_t *S, const float *pos)
+{
+    uint32_t n = S->mr_n < CS_MRING ? S->mr_n : CS_MRING, best_tag = 0;
+    double best = 1e300;
+    for (uint32_t i = 0; i < n; i++) {
+        uint32_t k = (S->mr_n - 1u - i) % CS_MRING;
+        for (int j = 0; j < CS_MPTS; j++) {
+            double d = 0;
+            for (int a = 0; a < S->c->n_nodes; a++)
+                d +=
+                    ((double)S->mring[k].p[j][a] - pos[a]) * ((double)S->mring[k].p[j][a] - pos[a]);
+            if (d < best) {
+                best = d;
+                best_tag = S->mring[k].tag;
+            }
+        }
+    }
+    return best_tag;
+}
+
+/* Machine I/O, every pump round: a trip (e-stop, alarm, GPIO error) stops every drive
+ * under control; the error names the input and the line being executed. */
+static void cs_mio(cs_t *S)
+{
+    ef_mio_t *io = S->c->mio;
+    if (!io)
+        return;
+    uint32_t nx;
+    ef_msg_t mm = {{0}};
+    if (ef_mio_process(io, &nx, &mm) != EF_ERR_ESTOP || S->estop)
+        return;
+    S->estop = 1;
+    int st = ef_comaster_state(&S->ms);
+    ef_comaster_stop(&S->ms);
+    S->estop_cmd_ns = cs_mono_ns();
+    S->estop_edge_ns = io->trip_ns ? io->trip_ns : S->estop_cmd_ns;
+    for (int k = 0; k < S->c->n_nodes; k++)
+        S->estop_pos[k] = ef_comaster_node(&S->ms, k)->pos;
+    uint32_t line = st == EF_COM_RUN || st == EF_COM_FINISH ? cs_line_at(S, S->estop_pos) : 0;
+    S->res->estop_line = line;
+    S->res->estop_latency_s = (double)(S->estop_cmd_ns - S->estop_edge_ns) * 1e-9;
+    char at[96] = "before motion";
+    if (line)
+        snprintf(at, sizeof at, "at program line %u", (unsigned)line);
+    else if (st == EF_COM_RUN || st == EF_COM_FINISH)
+        snprintf(at, sizeof at, "while running");
+    else if (st == EF_COM_STOPPING || st == EF_COM_ERROR)
+        snprintf(at, sizeof at, "while the drives were stopping (master state %d)", st);
+    ef_fail(&S->estop_msg, EF_ERR_ESTOP, "%s %s", mm.text, at);
+}
+
 /* One round of the pump, waiting at most until the master's next deadline or max_wait_us. */
 static void cs_pump(cs_t *S, uint32_t max_wait_us)
 {
+    if (S->c->mio && max_wait_us > CS_MIO_WAIT_US)
+        max_wait_us = CS_MIO_WAIT_US;
     (void)ef_canpump_poll(&S->pump, max_wait_us); /* an error is kept by the pump */
+    cs_mio(S);
 }
 
 /* Microseconds since the socket opened, now. */
@@ -317,6 +423,8 @@ static uint64_t cs_now(const cs_t *S)
 static int cs_not_running(cs_t *S)
 {
     S->cb_master = 1;
+    if (S->estop)
+        return S->cb_rc = ef_fail(&S->cbm, EF_ERR_ESTOP, "%s", S->estop_msg.text);
     if (cs_io_rc(S))
         return S->cb_rc = ef_fail(&S->cbm, cs_io_rc(S), "%s", ef_canpump_msg(&S->pump));
     const ef_com_error_t *e = ef_comaster_error(&S->ms);
@@ -373,6 +481,17 @@ static int cs_move(void *user, const ef_move_t *mv, const ef_pipe_move_info_t *m
     cs_t *S = user;
     S->res->moves++;
     S->res->path_time += mv->duration;
+    if (S->c->mio) {
+        uint32_t k = S->mr_n++ % CS_MRING;
+        S->mring[k].tag = mv->tag;
+        for (int j = 0; j < CS_MPTS; j++) {
+            ef_vec3_t q = mv->b[0];
+            (void)ef_bezier_eval(mv->b, mv->degree, (float)j / (CS_MPTS - 1), 0, &q);
+            S->mring[k].p[j][0] = q.x;
+            S->mring[k].p[j][1] = q.y;
+            S->mring[k].p[j][2] = q.z;
+        }
+    }
     if (mv->duration > S->longest)
         S->longest = mv->duration;
     if (S->c->mode != EF_COM_MODE_SEGMENT)
@@ -399,6 +518,9 @@ static int cs_move(void *user, const ef_move_t *mv, const ef_pipe_move_info_t *m
     }
     S->res->segments++;
     S->pushed_time += mv->duration;
+    S->last_cmd[0] = mv->b[mv->degree].x;
+    S->last_cmd[1] = mv->b[mv->degree].y;
+    S->last_cmd[2] = mv->b[mv->degree].z;
     if (S->trace)
         fprintf(S->trace, "m,%u,%u,%u\n", (unsigned)seq, (unsigned)mv->tag, (unsigned)mv->degree);
     if (S->c->verbose && S->res->segments % 200 == 0)
@@ -406,15 +528,9 @@ static int cs_move(void *user, const ef_move_t *mv, const ef_pipe_move_info_t *m
     return EF_OK;
 }
 
-/* CSP: every setpoint (one per cycle) is the next target of the nodes' axes. */
-static int cs_setpoint(void *user, double t, const ef_setpoint_t *sp, const ef_pipe_move_info_t *mi)
+/* One target to the master's queue, pumping while it is full. */
+static int cs_push_target(cs_t *S, const float *pos, uint32_t tag)
 {
-    (void)t;
-    (void)mi;
-    cs_t *S = user;
-    float pos[EF_COM_MAX_NODES] = {sp->p.x, sp->p.y, sp->p.z};
-    if (!S->start_checked && cs_check_start(S, pos) != EF_OK)
-        return S->cb_rc;
     uint64_t t0 = cs_now(S);
     for (;;) {
         if (cs_io_rc(S) || ef_comaster_state(&S->ms) != EF_COM_RUN)
@@ -424,12 +540,13 @@ static int cs_setpoint(void *user, double t, const ef_setpoint_t *sp, const ef_p
             break;
         if (rc != EF_ERR_FULL)
             return S->cb_rc = ef_fail(&S->cbm, rc, "target %u (line %u) refused by the master: %s",
-                                      (unsigned)S->res->targets, (unsigned)sp->tag, ef_err_str(rc));
+                                      (unsigned)S->res->targets, (unsigned)tag, ef_err_str(rc));
         if (cs_stalled(S, t0, "target"))
             return S->cb_rc;
         cs_pump(S, S->mc.cycle_us);
     }
     S->res->targets++;
+    memcpy(S->last_cmd, pos, sizeof S->last_cmd);
     if (S->trace) {
         fprintf(S->trace, "t,%u", (unsigned)S->syncs);
         for (int k = 0; k < S->c->n_nodes; k++)
@@ -437,6 +554,97 @@ static int cs_setpoint(void *user, double t, const ef_setpoint_t *sp, const ef_p
         fputc('\n', S->trace);
     }
     return EF_OK;
+}
+
+static double cs_smoothstep(double u)
+{
+    u = u < 0.0 ? 0.0 : u > 1.0 ? 1.0 : u;
+    return u * u * (3.0 - 2.0 * u);
+}
+
+/* Feed hold: the speed along the path at the warp's place, at full rate (mm/s). */
+static double cs_hold_speed(const cs_t *S)
+{
+    uint64_t i = (uint64_t)S->hw;
+    if (i + 1 >= S->hs_n)
+        return 0.0;
+    const float *a = S->hs[i % CS_HOLD_RING], *b = S->hs[(i + 1) % CS_HOLD_RING];
+    double d = 0;
+    for (int k = 0; k < S->c->n_nodes; k++)
+        d += ((double)b[k] - a[k]) * ((double)b[k] - a[k]);
+    return sqrt(d) / (S->mc.cycle_us * 1e-6);
+}
+
+/* Feed hold: a target for every place w of the warp the samples received cover (end: and
+ * the last sample itself). w advances by the rate, which follows the hold input; held
+ * (rate 0), the same place goes out every cycle, paced by the target queue. */
+static int cs_hold_emit(cs_t *S, int end)
+{
+    double dt = S->mc.cycle_us * 1e-6;
+    while (S->hs_n > 0 && S->hw <= (double)(S->hs_n - 1)) {
+        int want = ef_mio_hold(S->c->mio);
+        if (want != S->hheld) {
+            /* A new request: ramp from the rate now to 0 (hold) or 1 (resume), over a time
+             * that keeps the added tangential acceleration (v * 1.5 / T) below amax / 2. */
+            S->hheld = want;
+            S->hr0 = S->hr;
+            S->hr1 = want ? 0.0 : 1.0;
+            S->hu = 0.0;
+            double a = fmin(S->pc.lim.a_axis[0], fmin(S->pc.lim.a_axis[1], S->pc.lim.a_axis[2]));
+            S->hT = fmax(CS_HOLD_RAMP_MIN_S, 3.0 * cs_hold_speed(S) / (a > 0 ? a : 1000.0));
+            if (want)
+                S->holds++;
+        }
+        uint64_t i = (uint64_t)S->hw;
+        double f = S->hw - (double)i;
+        const float *a = S->hs[i % CS_HOLD_RING];
+        const float *b = i + 1 < S->hs_n ? S->hs[(i + 1) % CS_HOLD_RING] : a;
+        float pos[EF_COM_MAX_NODES] = {0};
+        for (int k = 0; k < S->c->n_nodes; k++)
+            pos[k] = f == 0.0 ? a[k] : (float)((double)a[k] + f * ((double)b[k] - a[k]));
+        if (f != 0.0 && i + 1 >= S->hs_n)
+            break; /* between the newest sample and one not yet received */
+        int rc = cs_push_target(S, pos, S->hs_tag[i % CS_HOLD_RING]);
+        if (rc != EF_OK)
+            return rc;
+        S->hlast = f == 0.0 ? (int64_t)i : -1;
+        if (S->hu < 1.0) {
+            S->hu += dt / S->hT;
+            S->hr = S->hr0 + (S->hr1 - S->hr0) * cs_smoothstep(S->hu);
+        }
+        if (S->hr == 0.0)
+            S->held_s += dt;
+        S->hw += S->hr;
+    }
+    if (end && S->hs_n > 0 && S->hlast != (int64_t)(S->hs_n - 1)) {
+        /* The warp ended between samples: the last one is where the path ends. */
+        uint64_t i = S->hs_n - 1;
+        int rc = cs_push_target(S, S->hs[i % CS_HOLD_RING], S->hs_tag[i % CS_HOLD_RING]);
+        if (rc != EF_OK)
+            return rc;
+        S->hlast = (int64_t)i;
+        S->hw = (double)i + 1.0;
+    }
+    return EF_OK;
+}
+
+/* CSP: every setpoint (one per cycle) is the next target of the nodes' axes (through the
+ * feed-hold warp when a hold input is wired). */
+static int cs_setpoint(void *user, double t, const ef_setpoint_t *sp, const ef_pipe_move_info_t *mi)
+{
+    (void)t;
+    (void)mi;
+    cs_t *S = user;
+    float pos[EF_COM_MAX_NODES] = {sp->p.x, sp->p.y, sp->p.z};
+    if (!S->start_checked && cs_check_start(S, pos) != EF_OK)
+        return S->cb_rc;
+    if (!S->hold_on)
+        return cs_push_target(S, pos, sp->tag);
+    uint64_t k = S->hs_n % CS_HOLD_RING;
+    memcpy(S->hs[k], pos, sizeof S->hs[k]);
+    S->hs_tag[k] = sp->tag;
+    S->hs_n++;
+    return cs_hold_emit(S, 0);
 }
 
 /* Whether every node has received every pushed segment and reports it has executed them. */
@@ -456,9 +664,16 @@ static int cs_seg_drained(const cs_t *S)
 /* Events (tool changes, dwells) come after the motion before them has gone to the drives:
  * CSP waits until the target queue is empty; segment mode, once execution has started,
  * until every node has executed everything (before that, the moves wait in the queue). */
+static int cs_outputs(cs_t *S, const ef_gcode_item_t *it);
+
 static int cs_event(void *user, const ef_gcode_item_t *it)
 {
     cs_t *S = user;
+    if (S->hold_on) {
+        int rc = cs_hold_emit(S, 1); /* the targets before the event first */
+        if (rc != EF_OK)
+            return rc;
+    }
     uint64_t t0 = cs_now(S);
     uint64_t lim = (uint64_t)S->c->stall_ms * 1000u + (uint64_t)(S->pushed_time * 1e6);
     for (;;) {
@@ -480,6 +695,60 @@ static int cs_event(void *user, const ef_gcode_item_t *it)
     if (S->c->verbose)
         fprintf(stderr, "stream: event at line %u after %u moves, SYNC %u\n", (unsigned)it->line,
                 S->res->moves, S->syncs);
+    return cs_outputs(S, it);
+}
+
+/* Largest distance of the drives' actual positions from the last commanded point (mm). */
+static double cs_cmd_error(const cs_t *S)
+{
+    double d = 0;
+    for (int k = 0; k < S->c->n_nodes; k++) {
+        double e = (double)ef_comaster_node(&S->ms, k)->pos - S->last_cmd[k];
+        d += e * e;
+    }
+    return sqrt(d);
+}
+
+/* M62-M65 P in an event (the motion before it is at rest): switch the machine file's output
+ * P once the axes stand at the commanded point (within CS_OUT_TOL, or after CS_OUT_WAIT_MS),
+ * and report how far from it they were. */
+#define CS_OUT_TOL     0.005
+#define CS_OUT_WAIT_MS 500u
+static int cs_outputs(cs_t *S, const ef_gcode_item_t *it)
+{
+    int codes[8];
+    long ps[8];
+    int nw = ef_mio_m_words(it->text, codes, ps, 8);
+    for (int w = 0; w < nw; w++) {
+        long code = codes[w], p = ps[w];
+        if (!S->c->mio) {
+            if (!S->out_noted)
+                fprintf(stderr,
+                        "stream: line %u: M%ld P%ld not switched: no machine file (--machine) "
+                        "wires the program's outputs (said once)\n",
+                        (unsigned)it->line, code, p);
+            S->out_noted = 1;
+            continue;
+        }
+        uint64_t t0 = cs_now(S);
+        while (cs_cmd_error(S) > CS_OUT_TOL && cs_now(S) - t0 < CS_OUT_WAIT_MS * 1000ull) {
+            if (cs_io_rc(S) || ef_comaster_state(&S->ms) != EF_COM_RUN)
+                return cs_not_running(S);
+            cs_pump(S, S->mc.cycle_us);
+        }
+        double err = cs_cmd_error(S);
+        ef_msg_t om = {{0}};
+        int rc = p < 0 ? ef_fail(&om, EF_ERR_ARG, "needs a P word (the output)")
+                       : ef_mio_out(S->c->mio, (unsigned)p, code == 62 || code == 64, &om);
+        if (rc != EF_OK)
+            return S->cb_rc = ef_fail(&S->cbm, rc, "line %u: M%ld P%ld: %s", (unsigned)it->line,
+                                      code, p, om.text);
+        S->res->outputs++;
+        if (err > S->res->out_err_max)
+            S->res->out_err_max = err;
+        if (S->trace)
+            fprintf(S->trace, "o,%u,%ld,%ld,%.6f\n", (unsigned)it->line, code, p, err);
+    }
     return EF_OK;
 }
 
@@ -586,8 +855,11 @@ static int cs_run_pipeline(cs_t *S, ef_msg_t *m)
                 break;
             continue;
         }
-        if (done)
+        if (done) {
+            if (S->hold_on) /* the warp's last targets, the path's end among them */
+                rc = cs_hold_emit(S, 1);
             break;
+        }
         if (cs_io_rc(S) || ef_comaster_state(&S->ms) != EF_COM_RUN) {
             rc = cs_not_running(S);
             break;
@@ -660,6 +932,7 @@ static void cs_result(cs_t *S)
     res->tx_frames = st.tx;
     res->tx_bits = st.tx_bits;
     res->err_frames = st.err_frames;
+    res->rx_overrun = st.rx_overrun;
     res->rx_frames = ef_canpump_rx_frames(&S->pump);
     res->rx_bits = ef_canpump_rx_bits(&S->pump);
     res->wall_time = (double)cs_now(S) * 1e-6;
@@ -681,6 +954,8 @@ static void cs_result(cs_t *S)
             acked = nd->next_seq;
     }
     res->starved = S->ms.starved;
+    res->holds = S->holds;
+    res->held_s = S->held_s;
     int done = res->state == EF_COM_DONE && S->ms.finishing;
     if (S->c->mode == EF_COM_MODE_SEGMENT)
         res->executed = done ? res->segments : (acked < res->segments ? acked : res->segments);
@@ -725,10 +1000,30 @@ int ef_can_stream(ef_gcode_t *r, const ef_can_stream_cfg_t *c, ef_can_stream_res
             return rc;
         }
     }
+    if (c->mio && c->mio->cfg.hold >= 0 && c->mode != EF_COM_MODE_CSP) {
+        free(S);
+        return ef_fail(m, EF_ERR_ARG,
+                       "stream: feed hold is wired (%s) but works in --mode csp only: in segment "
+                       "mode the drives run the segments themselves (docs/io.md)",
+                       c->mio->cfg.path);
+    }
+    /* Machine I/O first: an active e-stop, its latch or an alarm refuses the stream before
+     * a single frame could enable a drive. */
+    if (c->mio && (rc = ef_mio_arm(c->mio, m)) != EF_OK) {
+        char t[sizeof m->text];
+        snprintf(t, sizeof t, "%s", m ? m->text : ef_err_str(rc));
+        ef_fail(m, rc, "stream: %s", t);
+        if (S->trace)
+            fclose(S->trace);
+        free(S);
+        return rc;
+    }
     S->ci = c->canif ? *c->canif : ef_sockcan_canif(&S->sk);
     ef_canif_cfg_t icfg = {.name = c->iface, .log = c->log};
     rc = ef_canif_open(&S->ci, &icfg, m);
     if (rc != EF_OK) {
+        if (c->mio)
+            ef_mio_disarm(c->mio);
         if (S->trace)
             fclose(S->trace);
         free(S);
@@ -782,6 +1077,10 @@ int ef_can_stream(ef_gcode_t *r, const ef_can_stream_cfg_t *c, ef_can_stream_res
                     (unsigned)c->n_nodes, (double)S->t_run * 1e-6);
         S->r = r;
         S->pc = c->pipe;
+        S->hold_on = c->mio && c->mio->cfg.hold >= 0 && c->mode == EF_COM_MODE_CSP;
+        S->hr = 1.0;
+        S->hu = 1.0;
+        S->hlast = -1;
         if (c->mode == EF_COM_MODE_CSP) {
             S->pc.period_us = S->mc.cycle_us;
             S->pc.interp_modes = 1u << S->pc.step_mode;
@@ -816,9 +1115,30 @@ out:
     /* Whatever happened, the drives end stopped under control and disabled (the master's
      * own error already started that; a stop on request does it otherwise). */
     ef_comaster_stop(&S->ms);
-    cs_wait_end(S, ((uint64_t)c->stop_timeout_ms + CS_STOP_MARGIN_MS) * 1000u);
+    uint64_t stop_lim = ((uint64_t)c->stop_timeout_ms + CS_STOP_MARGIN_MS) * 1000u;
+    if (S->estop && c->mio->cfg.stop_ms * 1000ull < stop_lim)
+        stop_lim = c->mio->cfg.stop_ms * 1000ull; /* the machine file's bound on enable */
+    int rested = cs_wait_end(S, stop_lim) && ef_comaster_error(&S->ms)->what != EF_COM_WHAT_STOP;
+    if (c->mio) {
+        /* Enable drops once the drives report rest (the master is DONE or in ERROR after its
+         * stop), or when the bound above ran out. */
+        if (S->estop)
+            res->estop_rest_s = rested ? (double)(cs_mono_ns() - S->estop_edge_ns) * 1e-9 : -1.0;
+        ef_mio_disarm(c->mio);
+    }
     const ef_com_error_t *e = ef_comaster_error(&S->ms);
-    if (e->code != 0 && (rc == EF_OK || S->cb_master)) {
+    if (S->estop) {
+        char also[300] = "";
+        if (e->code != 0) { /* an error of the master's own, before or during the stop */
+            char t[260];
+            cs_error_text(S, t, sizeof t);
+            snprintf(also, sizeof also, "; the master also reported: %s", t);
+        }
+        rc = ef_fail(m, EF_ERR_ESTOP, "stream: %s; %s, enable dropped%s", S->estop_msg.text,
+                     rested ? "every drive stopped under control and at rest"
+                            : "the drives did not report rest in time",
+                     also);
+    } else if (e->code != 0 && (rc == EF_OK || S->cb_master)) {
         /* The master's error is the cause (a callback only saw its consequence). */
         char t[400];
         cs_error_text(S, t, sizeof t);

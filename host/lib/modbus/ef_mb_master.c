@@ -336,6 +336,11 @@ static int mbm_check_fault(ef_mb_master_t *ms, ef_msg_t *m)
 /* A flow-control read that also fails on a fault or an unexpected state. */
 static int mbm_poll_checked(ef_mb_master_t *ms, ef_msg_t *m)
 {
+    if (ms->c.on_poll) {
+        int hrc = ms->c.on_poll(ms->c.on_poll_user, m);
+        if (hrc != 0)
+            return hrc;
+    }
     int rc = mbm_poll_flow(ms, m);
     return rc == EF_OK ? mbm_check_fault(ms, m) : rc;
 }

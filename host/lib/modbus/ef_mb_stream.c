@@ -5,6 +5,10 @@
 #include <string.h>
 #include <time.h>
 #include "evenfeed/host/modbus/ef_mb.h"
+#include "evenfeed/host/io/ef_mio.h"
+
+/* Program lines of the segments sent, by sequence number (the line of the executing one). */
+#define MBS_TAGS 1024u
 
 typedef struct {
     const ef_mb_stream_cfg_t *c;
@@ -14,7 +18,35 @@ typedef struct {
     ef_msg_t cbm; /* what a callback's failure was (the pipeline only says it stopped) */
     int cb_rc;
     double t0; /* direct mode: wall time of the first target */
+    int estop;
+    ef_msg_t estop_msg;
+    uint32_t tags[MBS_TAGS];
+    uint32_t last_tag;
+    int out_noted;
 } stream_t;
+
+/* Machine I/O at every poll and setpoint: a trip is the error that stops the stream. */
+static int mbs_on_poll(void *user, ef_msg_t *m)
+{
+    stream_t *S = user;
+    if (!S->c->mio)
+        return 0;
+    if (S->estop)
+        return ef_fail(m, EF_ERR_ESTOP, "%s", S->estop_msg.text);
+    uint32_t nx;
+    ef_msg_t mm = {{0}};
+    if (ef_mio_process(S->c->mio, &nx, &mm) != EF_ERR_ESTOP)
+        return 0;
+    S->estop = 1;
+    uint32_t line = S->last_tag;
+    if (S->ms && S->c->mode == EF_MB_MODE_SEGMENT && S->res->moves > 0) {
+        const ef_mb_status_t *st = ef_mb_last_status(S->ms);
+        line = S->tags[st->exec_seq % MBS_TAGS];
+    }
+    S->res->estop_line = line;
+    ef_fail(&S->estop_msg, EF_ERR_ESTOP, "%s at program line %u", mm.text, (unsigned)line);
+    return ef_fail(m, EF_ERR_ESTOP, "%s", S->estop_msg.text);
+}
 
 /* Defaults documented in ef_mb.h. */
 void ef_mb_stream_cfg_default(ef_mb_stream_cfg_t *c, const ef_table_t *g2, const ef_table_t *g1)
@@ -39,8 +71,10 @@ static int mbs_stream_move(void *user, const ef_move_t *mv, const ef_pipe_move_i
             return rc;
     }
     S->res->path_time += mv->duration;
+    S->last_tag = mv->tag;
     if (S->c->mode != EF_MB_MODE_SEGMENT)
         return EF_OK;
+    S->tags[S->res->moves % MBS_TAGS] = mv->tag;
     int rc = ef_mb_send(S->ms, mv, &S->cbm);
     S->cb_rc = rc;
     if (rc == EF_OK)
@@ -65,7 +99,11 @@ static int mbs_stream_setpoint(void *user, double t, const ef_setpoint_t *sp,
         nanosleep(&ts, NULL);
     }
     const float p[3] = {sp->p.x, sp->p.y, sp->p.z};
-    int rc = ef_mb_target(S->ms, p, &S->cbm);
+    S->last_tag = sp->tag;
+    int rc = mbs_on_poll(S, &S->cbm);
+    if (rc != 0)
+        return S->cb_rc = rc;
+    rc = ef_mb_target(S->ms, p, &S->cbm);
     S->cb_rc = rc;
     if (rc == EF_OK)
         S->res->targets++;
@@ -76,15 +114,37 @@ static int mbs_stream_setpoint(void *user, double t, const ef_setpoint_t *sp,
 static int mbs_stream_event(void *user, const ef_gcode_item_t *it)
 {
     stream_t *S = user;
-    (void)it;
-    if (S->c->mode != EF_MB_MODE_SEGMENT)
-        return EF_OK;
-    int rc = ef_mb_drain(S->ms, &S->cbm);
+    int rc = ef_mb_drain(S->ms, &S->cbm); /* direct mode too: the outputs need the axis there */
     S->cb_rc = rc;
     if (rc == EF_OK && S->c->verbose)
         fprintf(stderr, "stream: event at line %u after %u segments\n", (unsigned)it->line,
                 S->res->moves);
-    return rc;
+    if (rc != EF_OK)
+        return rc;
+    /* M62-M65: the drive has executed everything before and stands at the point. */
+    int codes[8];
+    long ps[8];
+    int nw = ef_mio_m_words(it->text, codes, ps, 8);
+    for (int w = 0; w < nw; w++) {
+        if (!S->c->mio) {
+            if (!S->out_noted)
+                fprintf(stderr,
+                        "stream: line %u: M%d P%ld not switched: no machine file (--machine) "
+                        "wires the program's outputs (said once)\n",
+                        (unsigned)it->line, codes[w], ps[w]);
+            S->out_noted = 1;
+            continue;
+        }
+        ef_msg_t om = {{0}};
+        rc = ps[w] < 0
+                 ? ef_fail(&om, EF_ERR_ARG, "needs a P word (the output)")
+                 : ef_mio_out(S->c->mio, (unsigned)ps[w], codes[w] == 62 || codes[w] == 64, &om);
+        if (rc != EF_OK)
+            return S->cb_rc = ef_fail(&S->cbm, rc, "line %u: M%d P%ld: %s", (unsigned)it->line,
+                                      codes[w], ps[w], om.text);
+        S->res->outputs++;
+    }
+    return EF_OK;
 }
 
 /* The whole stream (see ef_mb.h). */
@@ -103,9 +163,27 @@ int ef_mb_stream(ef_gcode_t *r, const ef_mb_stream_cfg_t *c, ef_mb_stream_result
     S.c = c;
     S.res = res;
     S.m = m;
-    int rc = ef_mb_open(&c->mb, &S.ms, m);
-    if (rc != EF_OK)
+    int rc;
+    if (c->mio && c->mio->cfg.hold >= 0)
+        return ef_fail(m, EF_ERR_ARG,
+                       "stream: feed hold is wired (%s) but works with --can --mode csp only "
+                       "(docs/io.md)",
+                       c->mio->cfg.path);
+    /* Machine I/O first: an active e-stop, its latch or an alarm refuses the stream before
+     * the drive is contacted. */
+    if (c->mio && (rc = ef_mio_arm(c->mio, m)) != EF_OK)
         return rc;
+    ef_mb_cfg_t mbc = c->mb;
+    if (c->mio) {
+        mbc.on_poll = mbs_on_poll;
+        mbc.on_poll_user = &S;
+    }
+    rc = ef_mb_open(&mbc, &S.ms, m);
+    if (rc != EF_OK) {
+        if (c->mio)
+            ef_mio_disarm(c->mio);
+        return rc;
+    }
     if (c->fault_reset)
         rc = ef_mb_fault_reset(S.ms, m);
     if (rc == EF_OK)
@@ -140,10 +218,16 @@ int ef_mb_stream(ef_gcode_t *r, const ef_mb_stream_cfg_t *c, ef_mb_stream_result
         /* Whatever went wrong, the drive is told to stop under control and disable (not
          * sent to a drive that restarted); the first error is the one reported. */
         ef_msg_t ignore;
-        ef_mb_end(S.ms, &ignore);
+        int erc = ef_mb_end(S.ms, &ignore);
+        if (S.estop)
+            rc = ef_fail(m, EF_ERR_ESTOP, "%s; %s, enable dropped", S.estop_msg.text,
+                         erc == EF_OK ? "the drive stopped under control and at rest"
+                                      : "the drive did not report rest in time");
     }
     res->io = *ef_mb_stats(S.ms);
     res->last = *ef_mb_last_status(S.ms);
     ef_mb_close(S.ms);
+    if (c->mio)
+        ef_mio_disarm(c->mio); /* after the drive reported rest (or the bound of ef_mb_end) */
     return rc;
 }

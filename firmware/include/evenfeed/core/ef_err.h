@@ -66,6 +66,8 @@ typedef enum {
     EF_ERR_BUS = -46,            /**< the field bus failed: CAN bus-off or error-passive, or the
                                       interface went down (message names it) */
     EF_ERR_HEARTBEAT = -47,      /**< a node's heartbeat stopped, or it never booted */
+    EF_ERR_ESTOP = -48,          /**< e-stop or a drive alarm input stopped motion, or keeps
+                                      it from starting (host machine I/O; message names it) */
 } ef_err_t;
 
 /**

@@ -56,6 +56,12 @@ typedef struct {
     uint32_t bitrate;         /**< for the bus-load figure only (1000000; vcan has none) */
     const ef_canif_t *canif;  /**< the transport (ef_canif.h), opened on iface and closed by
                                    the stream; NULL: SocketCAN (ef_sockcan_canif()) */
+    struct ef_mio_s *mio;     /**< machine I/O (ef_mio.h), open and SAFE; NULL: none. Armed
+                                   before the bus is touched (an active e-stop, latch or alarm
+                                   refuses the stream: nothing is sent), read every pump round;
+                                   a trip stops every drive under control (quick stop), waits
+                                   for rest (its stop_ms) and drops enable: ::EF_ERR_ESTOP
+                                   naming the input and the program line. Disarmed at the end */
 } ef_can_stream_cfg_t;
 
 /** Defaults as documented per field; the pipeline is ef_pipe_cfg_default() with the tables
@@ -85,6 +91,16 @@ typedef struct {
     int state;                   /**< the master's final ::ef_com_state_t */
     ef_com_error_t err;          /**< the master's first error (code 0: none) */
     uint32_t err_frames;         /**< error frames seen on the socket */
+    uint32_t rx_overrun;         /**< frames dropped by the master's full receive queue */
+    uint32_t outputs;            /**< M62-M65 outputs switched (machine I/O) */
+    double out_err_max;          /**< largest distance of the axes from the commanded point
+                                      when an output switched (mm) */
+    uint32_t holds;              /**< feed holds (CSP) */
+    double held_s;               /**< time at rest in feed holds (s) */
+    uint32_t estop_line;         /**< after an e-stop: program line being executed (0: none) */
+    double estop_latency_s;      /**< after an e-stop: input edge to the stop command (s) */
+    double estop_rest_s;         /**< after an e-stop: input edge to all drives at rest (s;
+                                      < 0: not at rest when enable dropped) */
     char names[EF_CAN_STREAM_MAX_NODES][EF_CAN_NAME_LEN]; /**< device names (0x1008) read at
                                                               configuration ("" if not) */
     ef_pipe_stats_t pipe;
@@ -151,6 +167,7 @@ typedef struct {
                                                  are dropped */
     uint32_t n_drop;
     long run_ms;                 /**< stop after this much wall time (-1: until *stop) */
+    long sync_timeout_ms;        /**< 0x2003 at power-up (-1: the drive's default, 500) */
     volatile sig_atomic_t *stop; /**< set by a signal handler to end the loop (may be NULL) */
 } ef_can_sim_cfg_t;
 

@@ -44,6 +44,11 @@ typedef struct {
     int retries;          /**< further attempts after a failed transaction */
     double reconnect_s;   /**< how long to keep trying to reconnect (s) */
     uint16_t watchdog_ms; /**< the drive's watchdog while streaming (0: off) */
+    /** Optional, called before every status poll (also in the master's waits for free
+     *  slots and for the drain), from the caller's thread: nonzero stops what the master was
+     *  doing with that code (the message in m). The machine I/O's e-stop check. */
+    int (*on_poll)(void *user, ef_msg_t *m);
+    void *on_poll_user;
 } ef_mb_cfg_t;
 
 /** Defaults: slave 1, timeout 0.2 s, 3 retries, reconnect 2 s, watchdog 1000 ms, RTU
@@ -172,6 +177,12 @@ typedef struct {
     /** Called with every move before it is sent (may be NULL; nonzero stops). */
     int (*on_move)(void *user, const ef_move_t *mv);
     void *user;
+    /** Machine I/O (ef_mio.h), open and SAFE; NULL: none. Armed before the drive is
+     *  contacted (an active e-stop, latch or alarm refuses the stream: nothing is written),
+     *  read at every poll and setpoint; a trip stops the drive under control (the disable
+     *  command: its stop ramp), waits for rest and drops enable: ::EF_ERR_ESTOP naming the
+     *  input and the program line. M62-M65 switch its outputs at their points. */
+    struct ef_mio_s *mio;
 } ef_mb_stream_cfg_t;
 
 /** Defaults: ef_mb_cfg_default(), ef_pipe_cfg_default() with the tables g2 and g1, segment
@@ -186,6 +197,8 @@ typedef struct {
     double wall_time; /**< from the start of smoothing to the drained end (s) */
     ef_mb_stats_t io;
     ef_mb_status_t last; /**< the drive's status at the end */
+    uint32_t outputs;    /**< M62-M65 outputs switched (machine I/O) */
+    uint32_t estop_line; /**< after an e-stop: the program line being executed (0: none) */
     ef_pipe_stats_t pipe;
 } ef_mb_stream_result_t;
 
