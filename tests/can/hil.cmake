@@ -4,7 +4,8 @@
 # (build/hil-kernel/linux, made by tests/hil/build_kernel.sh from tests/hil/uml-hil.fragment)
 # on the host's file system, runs a guest script, and passes only on the guest's PASS
 # verdict; it is skipped (exit 77) where that kernel is not built, unless CI /
-# EF_HIL_REQUIRE is set. Every HIL test holds RESOURCE_LOCK uml: one guest at a time.
+# EF_HIL_REQUIRE is set. Every HIL test holds RESOURCE_LOCK uml (one guest at a time) and
+# runs alone (RUN_SERIAL).
 # Test names start with "hil_" (ctest -R hil_).
 #
 # AddressSanitizer cannot run inside UML 6.1 (512 GiB of user address space; ASan's x86-64
@@ -55,7 +56,8 @@ add_test(NAME hil_sockcan
          COMMAND bash ${EF_HIL_RUN} ${CMAKE_CURRENT_SOURCE_DIR}/hil/sockcan.sh
                  ${CMAKE_CURRENT_BINARY_DIR}/hil_sockcan/verdict 120
                  ${EF_SOCKCAN_GUEST_BIN} ${CMAKE_CURRENT_BINARY_DIR}/hil_sockcan)
-set_tests_properties(hil_sockcan PROPERTIES TIMEOUT 150 SKIP_RETURN_CODE 77 RESOURCE_LOCK uml)
+set_tests_properties(hil_sockcan PROPERTIES TIMEOUT 150 SKIP_RETURN_CODE 77 RESOURCE_LOCK uml
+                     RUN_SERIAL ON)
 
 # CAN streaming end to end (docs/can.md): three `evenfeed sim-drive can` drives and
 # `evenfeed stream --can` on vcan0 in the guest, checked by test_can_hil (run in the guest).
@@ -81,8 +83,10 @@ if(NOT EF_SANITIZE AND TARGET ef_tables_default)
                      $<TARGET_FILE:test_can_hil> $<TARGET_FILE:evenfeed> ${PROJECT_SOURCE_DIR}
                      ${CMAKE_CURRENT_BINARY_DIR}/${name}/out ${part})
     # One guest at a time (RESOURCE_LOCK uml): two emulated kernels on a 2-core machine
-    # starve each other. Other tests may run beside it: the checks hold on a loaded host.
+    # starve each other. And nothing beside it (RUN_SERIAL): the checks are in drive time
+    # and hold on a loaded host, but CI's 2 cores with ctest -j2 held a whole guest back
+    # for over 2 s, which the drives' SYNC watchdog rightly takes for a dead master.
     set_tests_properties(${name} PROPERTIES TIMEOUT 280 SKIP_RETURN_CODE 77
-                         RESOURCE_LOCK uml)
+                         RESOURCE_LOCK uml RUN_SERIAL ON)
   endforeach()
 endif()

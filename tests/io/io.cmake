@@ -35,5 +35,5 @@ foreach(part sim_open sim_errors sim_debounce sim_safe)
                    ${CMAKE_CURRENT_BINARY_DIR}/hil_gpio_${part}/verdict 120
                    ${EF_GPIO_GUEST_BIN} ${part})
   set_tests_properties(hil_gpio_${part} PROPERTIES TIMEOUT 150 SKIP_RETURN_CODE 77
-                       RESOURCE_LOCK uml)
+                       RESOURCE_LOCK uml RUN_SERIAL ON)
 endforeach()
