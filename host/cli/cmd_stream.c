@@ -33,6 +33,7 @@ static const char usage[] =
     "                    interpolator runs at this period (--period-us is not used)\n"
     "  --hb-timeout MS   a node whose heartbeat is silent this long is lost (default 200;\n"
     "                    the drives are asked for one every 50 ms)\n"
+    "  --sdo-timeout MS  wait for each SDO answer at configuration (default 200; one retry)\n"
     "  --log FILE        candump log (candump -l format) of the bus traffic\n"
     "  --trace FILE      CSV: SYNC times, actual positions, targets, segments\n"
     "both:\n"
@@ -144,7 +145,8 @@ enum {
     O_RETRIES,
     O_WATCHDOG,
     O_FAULT_RESET,
-    O_MACHINE
+    O_MACHINE,
+    O_SDO
 };
 
 /* Entry point of `evenfeed stream`. */
@@ -165,6 +167,7 @@ int cli_cmd_stream(int argc, char **argv)
                                          {"watchdog", required_argument, NULL, O_WATCHDOG},
                                          {"fault-reset", no_argument, NULL, O_FAULT_RESET},
                                          {"machine", required_argument, NULL, O_MACHINE},
+                                         {"sdo-timeout", required_argument, NULL, O_SDO},
                                          CLI_PIPE_OPTIONS,
                                          CLI_MACHINE_OPTIONS,
                                          CLI_OPT_HELP,
@@ -205,6 +208,10 @@ int cli_cmd_stream(int argc, char **argv)
         case O_CYCLE:
             if ((rc = cli_opt_int(&g, 100, 1000000, &x)) == EF_OK)
                 cc.cycle_us = (uint32_t)x;
+            break;
+        case O_SDO:
+            if ((rc = cli_opt_int(&g, 10, 60000, &x)) == EF_OK)
+                cc.sdo_timeout_ms = (uint32_t)x;
             break;
         case O_HB:
             if ((rc = cli_opt_int(&g, 100, 60000, &x)) == EF_OK)
@@ -263,7 +270,7 @@ int cli_cmd_stream(int argc, char **argv)
         }
         if (rc != EF_OK)
             return rc;
-        if (k == O_NODES || k == O_CYCLE || k == O_HB || k == O_LOG || k == O_TRACE)
+        if (k == O_NODES || k == O_CYCLE || k == O_HB || k == O_LOG || k == O_TRACE || k == O_SDO)
             snprintf(can_only, sizeof can_only, "%s", g.opt);
         else if (k == O_SLAVE || k == O_DIRECT_HZ || k == O_TIMEOUT || k == O_RETRIES ||
                  k == O_WATCHDOG)

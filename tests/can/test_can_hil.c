@@ -216,12 +216,13 @@ static int hil_stream(const char *name, const char *mode, const char *nodes, con
                       const char *prog)
 {
     char cmd[2048];
-    snprintf(cmd, sizeof cmd,
-             "%s stream --can vcan0 --nodes %s --mode %s --hb-timeout " HIL_HB_TIMEOUT
-             " --log %s/%s.log --trace %s/%s.csv %s %s"
-             " >%s/%s.out 2>%s/%s.err",
-             g_ef, nodes, mode, g_out, name, g_out, name, extra ? extra : "", prog, g_out, name,
-             g_out, name);
+    snprintf(
+        cmd, sizeof cmd,
+        "%s stream --can vcan0 --nodes %s --mode %s --sdo-timeout 1000 --hb-timeout " HIL_HB_TIMEOUT
+        " --log %s/%s.log --trace %s/%s.csv %s %s"
+        " >%s/%s.out 2>%s/%s.err",
+        g_ef, nodes, mode, g_out, name, g_out, name, extra ? extra : "", prog, g_out, name, g_out,
+        name);
     int st = system(cmd);
     int rc = WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
     char path[512];
@@ -953,7 +954,8 @@ static int io_spawn(tm_proc_t *p, const char *name, const char *mode, const char
 {
     static char cmd[2048];
     snprintf(cmd, sizeof cmd,
-             "exec %s stream --can vcan0 --nodes 1,2,3 --mode %s%s --hb-timeout " HIL_HB_TIMEOUT
+             "exec %s stream --can vcan0 --nodes 1,2,3 --mode %s%s --sdo-timeout 1000"
+             " --hb-timeout " HIL_HB_TIMEOUT
              " --log %s/%s.log --trace %s/%s.csv %s %s >%s/%s.out 2>%s/%s.err",
              g_ef, mode, strcmp(mode, "csp") ? "" : " --cycle-us " IO_CSP_CYCLE, g_out, name, g_out,
              name, extra ? extra : "", prog, g_out, name, g_out, name);
