@@ -16,7 +16,9 @@
  * invariants abort.
  *
  * Built with -DEF_FUZZ_REPLAY_MAIN it is a plain-C replay driver (smooth_fuzz_replay
- * DIR|FILE...): every seed ("ok-*") must run without breaking an invariant.
+ * DIR|FILE...): every seed ("ok-*") must run without breaking an invariant. With
+ * EF_FZ_TRACE set, either driver prints every primitive pushed and every move pulled, and
+ * with EF_FZ_TRACE=T (seconds) the setpoints within 20 ms of T as well.
  */
 #include <math.h>
 #include <stdint.h>
@@ -102,6 +104,9 @@ typedef struct {
 
 static ef_smooth_t S;
 static ef_interp_t IP;
+/* EF_FZ_TRACE set (replaying a reproducer): every primitive pushed and move pulled is printed. */
+static int ef_fz_trace = -1;
+static double ef_fz_trace_t = -1.0; /* and EF_FZ_TRACE=T: the setpoints within 20 ms of T s */
 
 /* A move's parametric end speed |f'| at tau = 0 (end 0) or 1 (end 1) over its length: what
  * uniform stepping of tau (the drives' segment mode) moves at, relative to the planned
@@ -133,6 +138,14 @@ static float ef_fz_rho_slack(const ef_move_t *m)
 /* Check one move against the chain so far. */
 static void ef_fz_move(ef_fz_state_t *st, const ef_move_t *m)
 {
+    if (ef_fz_trace)
+        fprintf(stderr,
+                "move %u kind %d deg %d tag %u t %.6f L %.6g v %.6g..%.6g max %.6g a %.6g j %.6g "
+                "dur %.6g flags %u end %.6g %.6g %.6g\n",
+                (unsigned)m->seq, m->kind, m->degree, (unsigned)m->tag, st->t, (double)m->length,
+                (double)m->v_entry, (double)m->v_exit, (double)m->v_max, (double)m->a_max,
+                (double)m->j_max, (double)m->duration, (unsigned)m->flags,
+                (double)m->b[m->degree].x, (double)m->b[m->degree].y, (double)m->b[m->degree].z);
     if (m->degree != 1 && m->degree != 3 && m->degree != 5)
         ef_fz_fail("degree", m->degree);
     for (int k = 0; k <= m->degree; k++)
@@ -201,6 +214,10 @@ static void ef_fz_tick(ef_fz_state_t *st, uint32_t dt_us)
                                      4e-7f * (fabsf(c[i]) + st->scale)))
                 ef_fz_fail("axis faster than its limit", d[i]);
     }
+    if (ef_fz_trace && st->t > ef_fz_trace_t - 0.02 && st->t < ef_fz_trace_t + 0.02)
+        fprintf(stderr, "sp t %.4f %.9g %.9g %.9g v %.6g seq %u moving %d rc %d\n", st->t,
+                (double)sp.p.x, (double)sp.p.y, (double)sp.p.z, (double)sp.v_plan, (unsigned)sp.seq,
+                sp.moving, rc);
     st->last = sp.p;
     st->have_sp = 1;
     /* continuity: differences only over consecutive periods (a late call starts anew) */
@@ -241,6 +258,11 @@ static void ef_fz_drain(ef_fz_state_t *st, int ticks_max)
 static void ef_fz_run(const uint8_t *data, size_t size)
 {
     ef_fz_in_t in = {data, size, 0};
+    if (ef_fz_trace < 0) {
+        const char *e = getenv("EF_FZ_TRACE");
+        ef_fz_trace = e != NULL;
+        ef_fz_trace_t = e ? atof(e) : -1.0;
+    }
     ef_smooth_cfg_t c;
     memset(&c, 0, sizeof c);
     c.g2 = &ef_tbl_g2_default;
@@ -283,8 +305,12 @@ static void ef_fz_run(const uint8_t *data, size_t size)
                 ef_fz_fail("finish", 0);
         }
         if (p.kind == EF_PRIM_LINE) {
-            p.end = ef_v3(pos.x + ef_fz_val(&in, scale), pos.y + ef_fz_val(&in, scale),
-                          pos.z + ((op & 128u) ? ef_fz_val(&in, scale) : 0.0f));
+            /* one read per statement: the order of a call's arguments is unspecified (gcc
+             * and clang differ), and a reproducer must replay the same under both */
+            float dx = ef_fz_val(&in, scale);
+            float dy = ef_fz_val(&in, scale);
+            float dz = (op & 128u) ? ef_fz_val(&in, scale) : 0.0f;
+            p.end = ef_v3(pos.x + dx, pos.y + dy, pos.z + dz);
         } else {
             /* centre offset in the plane, axis +Z (or tilted), sweep, end by rotation (with
              * an optional radius error) */
@@ -303,6 +329,12 @@ static void ef_fz_run(const uint8_t *data, size_t size)
                           p.centre.y + k * (si * rx + co * ry), pos.z + h);
         }
         int rc = ef_smooth_push(&S, &p);
+        if (ef_fz_trace)
+            fprintf(stderr,
+                    "prim %d kind %d flags %u feed %.6g tol %.6g end %.6g %.6g %.6g sweep %.6g "
+                    "-> %d\n",
+                    n, p.kind, (unsigned)p.flags, (double)p.feed, (double)p.tol, (double)p.end.x,
+                    (double)p.end.y, (double)p.end.z, (double)p.sweep, rc);
         for (int guard = 0; rc == EF_ERR_FULL && guard < 64; guard++) {
             ef_fz_drain(&st, 2000);
             rc = ef_smooth_push(&S, &p);

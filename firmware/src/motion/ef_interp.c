@@ -20,6 +20,9 @@
  *  up to about L / |f'| law steps; a smaller cap makes the setpoint lag there and then
  *  catch up, a speed jump (issue 18). */
 #define EF_INTERP_STEP_CAP 16.0f
+/** Bounds of the corrected step's secant factor gap / arc (see ip_eval()). */
+#define EF_INTERP_SECANT_MIN 0.5f
+#define EF_INTERP_SECANT_MAX 2.0f
 /** Largest relative arc-over-chord correction of one step (kappa c ~ 1.1 rad). */
 #define EF_INTERP_ARC_CORR_MAX 0.05f
 
@@ -218,9 +221,15 @@ static void ip_eval(ef_interp_t *ip, const ef_move_t *m, float *v)
     float chord = ef_v3_norm(ef_v3_sub(p[0], d[0]));
     float arc = chord * (1.0f + ef_minf(EF_INTERP_ARC_CORR_MAX, kk * chord * chord));
     /* One secant correction on the arc actually covered: the step scaled by gap / arc takes
-     * out what the quadratic model missed (f''' on a quintic), for one more evaluation. */
+     * out what the quadratic model missed (f''' on a quintic), for one more evaluation.
+     * That is a correction of a few per cent (half a step where the Newton step overshot at
+     * a blend's start), so the factor is held to [1/2, 2]: a chord at the resolution of the
+     * coordinates (a fuzzed arc at 0.9 um/s: 0.9 nm per period, 1.7 mm from b0, where
+     * float32 resolves 0.12 nm) may round to a fraction of its length, and gap / arc then
+     * threw tau 140 periods ahead: a 0.13 um jump, then a 140 ms stand. */
     if (gap > 0.0f && arc > 0.0f && tn > ip->tau) {
-        float t2 = ip->tau + (tn - ip->tau) * (gap / arc);
+        float ratio = ef_maxf(EF_INTERP_SECANT_MIN, ef_minf(EF_INTERP_SECANT_MAX, gap / arc));
+        float t2 = ip->tau + (tn - ip->tau) * ratio;
         t2 = ef_maxf(ip->tau, ef_minf(hi, t2));
         if (ef_finitef(t2) && t2 != tn) {
             tn = t2;
