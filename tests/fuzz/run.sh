@@ -72,7 +72,14 @@ fuzz() {
     st=0
     # libFuzzer reports every new corpus entry; keep that in a log and show its summary.
     log="$build/fuzz-$bin.log"
-    "$build/tests/$bin" "$@" "$corpus" >"$log" 2>&1 || st=$?
+    # A seeded run also runs without address randomisation where the kernel allows it:
+    # libFuzzer takes the operands of comparisons into its dictionary, stack addresses among
+    # them, so with ASLR the same seed mutates differently from run to run.
+    norand=
+    if [ -n "$seed" ] && setarch "$(uname -m)" -R true 2>/dev/null; then
+        norand="setarch $(uname -m) -R"
+    fi
+    $norand "$build/tests/$bin" "$@" "$corpus" >"$log" 2>&1 || st=$?
     grep -E '^(INFO: Seed|#[0-9]+[[:space:]]+DONE|Done [0-9]+ runs|stat::|INFO: fuzzed for)' "$log" || true
     # fork mode (EF_FUZZ_JOBS > 1) prints progress lines instead of the final stats
     [ "$jobs" -gt 1 ] && grep -E '^#[0-9]+: cov:' "$log" | tail -n 1 || true
@@ -80,6 +87,13 @@ fuzz() {
         tail -n 60 "$log" >&2
         echo "$bin failed (exit $st); reproducers in $build/artifacts/:" >&2
         ls -l "$build/artifacts/" >&2 || true
+        # the reproducers themselves, so a CI log alone suffices to replay one (xxd -r -p)
+        for f in "$build/artifacts/"*; do
+            [ -f "$f" ] && [ "$(wc -c <"$f")" -le 8192 ] || continue
+            echo "reproducer $(basename "$f") (hex):" >&2
+            od -An -tx1 -v "$f" | tr -d ' \n' | fold -w 128 >&2
+            echo >&2
+        done
         echo "replay one with: $build/tests/$bin FILE" >&2
     fi
     return "$st"

@@ -110,13 +110,14 @@ extern "C" {
 /** Junctions where the curvature jumps (G1 cubic smooth sections, `smooth_degree` 3: a cubic
  *  cannot meet its neighbours' curvature) step every axis's acceleration by dk_i v^2 at
  *  once. With a jerk limit the entry of the move after such a junction is capped at
- *  v = min_i sqrt(EF_PLAN_JUMP_T j_max / dk_i): a step the jerk limit would make in half a
- *  1 ms servo period, the other half left to the ramps running across the junction (the
- *  fuzzer found 1.2 J at 19 mm/s across a jump of 0.2 / mm without the cap, and 1.06 J
- *  at 7 mm/s with a whole period). G2 junctions (every other kind) jump by float rounding
- *  only. */
+ *  v = min_i sqrt(EF_PLAN_JUMP_T j_max / dk_i): a step the jerk limit would make in a
+ *  quarter of a 1 ms servo period, the rest left to the ramps running across the junction
+ *  (the fuzzer found 1.2 J at 19 mm/s across a jump of 0.2 / mm without the cap, 1.06 J
+ *  at 7 mm/s with a whole period, and 1.04 J at 4.9 mm/s with half of one: a line's
+ *  deceleration ramp at 0.98 J on the axis ending at a cubic section). G2 junctions (every
+ *  other kind) jump by float rounding only. */
 #ifndef EF_PLAN_JUMP_T
-#define EF_PLAN_JUMP_T 0.5e-3f
+#define EF_PLAN_JUMP_T 0.25e-3f
 #endif
 
 /** Share of each axis's acceleration limit and of the jerk limit the planner plans to. The
