@@ -295,22 +295,22 @@ static int mio_key(ef_mio_cfg_t *c, mio_parse_t *P, const char *k, char *v, ef_m
         snprintf(c->latch, sizeof c->latch, "%s", v);
         return EF_OK;
     }
-    if (!strcmp(s, "estop") && !strcmp(k, "stop_timeout_ms")) {
-        if (mio_num(v, 1, 60000, &x))
-            return mio_err(m, P, "stop_timeout_ms '%s': 1..60000", v);
-        c->stop_ms = (uint32_t)x;
-        return EF_OK;
-    }
-    if (!strcmp(s, "charge_pump") && !strcmp(k, "hz")) {
-        if (mio_num(v, 1, 5000, &x))
-            return mio_err(m, P, "hz '%s': 1..5000", v);
-        c->pump_hz = (uint32_t)x;
-        return EF_OK;
-    }
-    if (!strcmp(s, "charge_pump") && !strcmp(k, "watchdog_ms")) {
-        if (mio_num(v, 10, 10000, &x))
-            return mio_err(m, P, "watchdog_ms '%s': 10..10000", v);
-        c->pump_watchdog_ms = (uint32_t)x;
+    /* the whole-machine numbers: section, key, range, field */
+    const struct {
+        const char *sec, *key;
+        long lo, hi;
+        uint32_t *to;
+    } nums[] = {
+        {"estop", "stop_timeout_ms", 1, 60000, &c->stop_ms},
+        {"charge_pump", "hz", 1, 5000, &c->pump_hz},
+        {"charge_pump", "watchdog_ms", 10, 10000, &c->pump_watchdog_ms},
+    };
+    for (size_t i = 0; i < sizeof nums / sizeof nums[0]; i++) {
+        if (strcmp(s, nums[i].sec) || strcmp(k, nums[i].key))
+            continue;
+        if (mio_num(v, nums[i].lo, nums[i].hi, &x))
+            return mio_err(m, P, "%s '%s': %ld..%ld", k, v, nums[i].lo, nums[i].hi);
+        *nums[i].to = (uint32_t)x;
         return EF_OK;
     }
     char t[64];
