@@ -1043,6 +1043,30 @@ static int io_drive_now(int node, double *cmd, double *act)
     return ok;
 }
 
+/* The start every io_* part shares: the machine file (feed hold wired when hold) into
+ * mach, no latch left at latch, idle inputs, prog's reference path when reference, three
+ * drives in d and a stream of prog in mode as st. Returns 0 with both running; otherwise -1
+ * after a failed check, with the drives stopped. mach and latch are 512 and 600 bytes. */
+static int io_begin(tm_proc_t d[4], tm_proc_t *st, const char *name, const char *mode,
+                    const char *prog, char *mach, char *latch, int hold, int reference)
+{
+    io_machine(mach, 512, hold);
+    snprintf(latch, 600, "%s/estop.latch", g_out);
+    unlink(latch);
+    EF_CHECK_EQ(io_idle(), 0);
+    if (reference)
+        EF_CHECK_EQ(hil_reference(prog), 0);
+    if (hil_start(d, NULL) != 0) {
+        EF_CHECK(0);
+        hil_stop(d);
+        return -1;
+    }
+    char extra[700];
+    snprintf(extra, sizeof extra, "--machine %s", mach);
+    EF_CHECK_EQ(io_spawn(st, name, mode, extra, prog), 0);
+    return 0;
+}
+
 /* Wait (bounded: 60 s) until drive 1's actual x passes x while the streamer runs (the
  * trace's tail: a whole parse every round would load the guest's one CPU). */
 static int io_wait_x(const tm_proc_t *st, double x)
@@ -1111,20 +1135,9 @@ static void part_io_estop(void)
 {
     char prog[512], mach[512], latch[600];
     snprintf(prog, sizeof prog, "%s/samples/profile.ngc", g_src);
-    io_machine(mach, sizeof mach, 0);
-    snprintf(latch, sizeof latch, "%s/estop.latch", g_out);
-    unlink(latch);
-    EF_CHECK_EQ(io_idle(), 0);
-    EF_CHECK_EQ(hil_reference(prog), 0);
     tm_proc_t d[4] = {{0}}, st;
-    if (hil_start(d, NULL) != 0) {
-        EF_CHECK(0);
-        hil_stop(d);
+    if (io_begin(d, &st, "estop", "csp", prog, mach, latch, 0, 1) != 0)
         return;
-    }
-    char extra[700];
-    snprintf(extra, sizeof extra, "--machine %s", mach);
-    EF_CHECK_EQ(io_spawn(&st, "estop", "csp", extra, prog), 0);
     EF_CHECK(io_wait_x(&st, 20.0));
     EF_CHECK_EQ(io_level(IO_ENABLE), 1);
     int pe = io_edges(IO_PUMP, 100, NULL);
@@ -1171,9 +1184,10 @@ static void part_io_estop(void)
     hil_check_stopped("io_estop", 4000);
     io_check_stop_distance("io_estop", 4e-3);
     /* Released, but latched: refused before the bus is opened (no log, no frame). */
-    char log[700];
+    char log[700], extra[700];
     snprintf(log, sizeof log, "%s/again.log", g_out);
     unlink(log);
+    snprintf(extra, sizeof extra, "--machine %s", mach);
     int rc2 = hil_stream("again", "csp", "1,2,3", extra, prog);
     EF_CHECK_EQ(rc2, IO_EXIT_ESTOP);
     EF_CHECK(hil_err_has("again", "latched", "io reset"));
@@ -1254,19 +1268,9 @@ static void part_io_alarm(void)
 {
     char prog[512], mach[512], latch[600];
     snprintf(prog, sizeof prog, "%s/samples/profile.ngc", g_src);
-    io_machine(mach, sizeof mach, 0);
-    snprintf(latch, sizeof latch, "%s/estop.latch", g_out);
-    unlink(latch);
-    EF_CHECK_EQ(io_idle(), 0);
     tm_proc_t d[4] = {{0}}, st;
-    if (hil_start(d, NULL) != 0) {
-        EF_CHECK(0);
-        hil_stop(d);
+    if (io_begin(d, &st, "alarm", "segment", prog, mach, latch, 0, 0) != 0)
         return;
-    }
-    char extra[700];
-    snprintf(extra, sizeof extra, "--machine %s", mach);
-    EF_CHECK_EQ(io_spawn(&st, "alarm", "segment", extra, prog), 0);
     EF_CHECK(io_wait_x(&st, 20.0));
     io_pull(IO_ALARM, 1);
     int rc = io_wait(&st, "alarm", 30000);
@@ -1284,19 +1288,9 @@ static void part_io_pump(void)
 {
     char prog[512], mach[512], latch[600];
     snprintf(prog, sizeof prog, "%s/samples/profile.ngc", g_src);
-    io_machine(mach, sizeof mach, 0);
-    snprintf(latch, sizeof latch, "%s/estop.latch", g_out);
-    unlink(latch);
-    EF_CHECK_EQ(io_idle(), 0);
     tm_proc_t d[4] = {{0}}, st;
-    if (hil_start(d, NULL) != 0) {
-        EF_CHECK(0);
-        hil_stop(d);
+    if (io_begin(d, &st, "pump", "csp", prog, mach, latch, 0, 0) != 0)
         return;
-    }
-    char extra[700];
-    snprintf(extra, sizeof extra, "--machine %s", mach);
-    EF_CHECK_EQ(io_spawn(&st, "pump", "csp", extra, prog), 0);
     EF_CHECK(io_wait_x(&st, 20.0));
     int before = io_edges(IO_PUMP, 200, NULL);
     kill(st.pid, SIGKILL);
@@ -1323,20 +1317,9 @@ static void part_io_hold(void)
 {
     char prog[512], mach[512], latch[600];
     snprintf(prog, sizeof prog, "%s/samples/profile.ngc", g_src);
-    io_machine(mach, sizeof mach, 1);
-    snprintf(latch, sizeof latch, "%s/estop.latch", g_out);
-    unlink(latch);
-    EF_CHECK_EQ(io_idle(), 0);
-    EF_CHECK_EQ(hil_reference(prog), 0);
     tm_proc_t d[4] = {{0}}, st;
-    if (hil_start(d, NULL) != 0) {
-        EF_CHECK(0);
-        hil_stop(d);
+    if (io_begin(d, &st, "hold", "csp", prog, mach, latch, 1, 1) != 0)
         return;
-    }
-    char extra[700];
-    snprintf(extra, sizeof extra, "--machine %s", mach);
-    EF_CHECK_EQ(io_spawn(&st, "hold", "csp", extra, prog), 0);
     EF_CHECK(io_wait_x(&st, 20.0));
     io_pull(IO_HOLD, 1);
     /* At rest: the command stands still over 200 ms (bounded wait). */
@@ -1389,19 +1372,9 @@ static void part_io_outputs(void)
               f);
         fclose(f);
     }
-    io_machine(mach, sizeof mach, 0);
-    snprintf(latch, sizeof latch, "%s/estop.latch", g_out);
-    unlink(latch);
-    EF_CHECK_EQ(io_idle(), 0);
     tm_proc_t d[4] = {{0}}, st;
-    if (hil_start(d, NULL) != 0) {
-        EF_CHECK(0);
-        hil_stop(d);
+    if (io_begin(d, &st, "outputs", "csp", prog, mach, latch, 0, 0) != 0)
         return;
-    }
-    char extra[700];
-    snprintf(extra, sizeof extra, "--machine %s", mach);
-    EF_CHECK_EQ(io_spawn(&st, "outputs", "csp", extra, prog), 0);
     double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
     int seen[2] = {0, 0};
     for (int i = 0; i < 15000 && io_running(&st); i++) {
@@ -1440,19 +1413,9 @@ static void part_io_gpioerr(void)
 {
     char prog[512], mach[512], latch[600];
     snprintf(prog, sizeof prog, "%s/samples/profile.ngc", g_src);
-    io_machine(mach, sizeof mach, 0);
-    snprintf(latch, sizeof latch, "%s/estop.latch", g_out);
-    unlink(latch);
-    EF_CHECK_EQ(io_idle(), 0);
     tm_proc_t d[4] = {{0}}, st;
-    if (hil_start(d, NULL) != 0) {
-        EF_CHECK(0);
-        hil_stop(d);
+    if (io_begin(d, &st, "gpioerr", "csp", prog, mach, latch, 0, 0) != 0)
         return;
-    }
-    char extra[700];
-    snprintf(extra, sizeof extra, "--machine %s", mach);
-    EF_CHECK_EQ(io_spawn(&st, "gpioerr", "csp", extra, prog), 0);
     EF_CHECK(io_wait_x(&st, 20.0));
     int fd = open("/sys/kernel/config/gpio-sim/efio/live", O_WRONLY);
     EF_CHECK(fd >= 0 && write(fd, "0", 1) == 1);
