@@ -344,7 +344,8 @@ int cli_cmd_stream(int argc, char **argv)
            res.last.state, res.last.fault, res.last.done_count, (double)res.last.ferr_max,
            res.last.duplicates, res.last.rejected);
     if (machine)
-        printf("machine: %u outputs switched (M62-M65)\n", (unsigned)res.outputs);
+        printf("machine: %u outputs switched (M62-M65); %u feed holds, %.3f s held\n",
+               (unsigned)res.outputs, (unsigned)res.holds, res.held_s);
     fflush(stdout);
     if (machine)
         ef_mio_close(&mio);

@@ -1963,13 +1963,76 @@ static void test_watchdog(void)
     EF_CHECK_EQ(g_d.power, EF_CO_PS_OP_ENABLED);
 }
 
+/* Feed hold in segment mode: controlword bit 8 (halt) mid-path decelerates the drive along
+ * its segment to rest (statusword bit 14 once there, bit 12 still set: executing, bit 10
+ * not: work is left), it stands while halted, and clearing it completes the path exactly:
+ * every segment once, progress never backwards, the end exact. */
+static void test_seg_hold(void)
+{
+    drive_up(NULL);
+    seg_pdos();
+    to_op_enabled(10000, EF_CO_MODE_SEGMENT);
+    ef_move_t mv[3];
+    mk_three_3d(mv);
+    for (int i = 0; i < 3; i++) {
+        send_law(&mv[i], -1);
+        send_axis(&mv[i], -1);
+    }
+    EF_CHECK_EQ(rd(EF_CO_OBJ_SEG_STATUS, EF_CO_SEGST_NEXT), 3);
+    uint16_t run = EF_CO_CW_ENABLE_OP | EF_CO_CW_SEG_RUN;
+    double prev = 0;
+    int back = 0, held_seen = 0, stood = 1, bits_ok = 1, k;
+    float at_rest = 0;
+    for (k = 0; k < 400; k++) {
+        int halt = k >= 25 && k < 75; /* 0.25 s in: accelerating on the first line */
+        rpdo1((uint16_t)(run | (halt ? EF_CO_CW_HALT : 0u)), 0);
+        log_clear();
+        EF_CHECK_EQ(sync1(), EF_OK);
+        double x = g_d.drv.cmd.x;
+        back += x < prev;
+        prev = x;
+        const ef_can_frame_t *f = log_last(TPDO1_ID);
+        uint16_t sw = f ? ef_co_get16(f->data) : 0u;
+        if (halt && (sw & EF_CO_SW_HELD)) {
+            if (!held_seen)
+                at_rest = g_d.drv.cmd.x;
+            held_seen++;
+            stood &= g_d.drv.cmd.x == at_rest;
+            bits_ok &= (sw & EF_CO_SW_FOLLOWING) && !(sw & EF_CO_SW_TARGET_REACHED);
+        }
+        if (!halt)
+            bits_ok &= !(sw & EF_CO_SW_HELD);
+        if (k > 75 && g_d.drv.done_any == 3 && !g_d.drv.moving)
+            break;
+    }
+    /* The ramp is 75 ms (3 v / a_stop): held within 9 cycles of the request. */
+    EF_CHECK(held_seen >= 40 && held_seen <= 50);
+    EF_CHECK(stood);
+    EF_CHECK(bits_ok);
+    EF_CHECK_EQ(back, 0);
+    EF_CHECK(at_rest > 2.0f && at_rest < 10.0f);
+    EF_CHECK_EQ(g_d.drv.done_any, 3);
+    EF_CHECK(g_d.drv.cmd.x == 30.0f);
+    EF_CHECK_EQ(g_d.drv.fault, EF_DRV_FAULT_NONE);
+    EF_CHECK_EQ(power(), EF_CO_PS_OP_ENABLED);
+    for (int i = 0; i < 30; i++) { /* the servo settles onto the end */
+        rpdo1(run, 0);
+        sync1();
+    }
+    EF_CHECK(g_d.statusword & EF_CO_SW_TARGET_REACHED);
+    EF_CHECK_NEAR(g_d.drv.ferr_max, 0, 0.07);
+    /* Executed time includes the 0.5 s halted: the path's own time plus the hold. */
+    double path_t = mv[0].duration + mv[1].duration + mv[2].duration;
+    EF_CHECK(drive_time() > path_t + 0.45);
+}
+
 int main(int argc, char **argv)
 {
     static const ef_test_part_t parts[] = {
         {"nmt", test_nmt},           {"sdo", test_sdo}, {"pdo", test_pdo},
         {"power", test_power},       {"csp", test_csp}, {"segment", test_segment},
         {"faults", test_faults},     {"bad", test_bad}, {"tx", test_tx},
-        {"watchdog", test_watchdog}, {"txq", test_txq},
+        {"watchdog", test_watchdog}, {"txq", test_txq}, {"hold", test_seg_hold},
     };
     return EF_TEST_RUN(argc, argv, 1, parts);
 }

@@ -1224,6 +1224,87 @@ static void t_seg(void)
            (unsigned long long)B.bus.bits, (double)B.bus.now_us * 1e-6);
 }
 
+/* Distance of the three drives' commanded point from the square path of seg_moves(). */
+static double seg_off_path(void)
+{
+    double p[3] = {D[0].drv.cmd.x, D[1].drv.cmd.x, D[2].drv.cmd.x}, best = 1e30;
+    for (int i = 0; i < SEG_MOVES; i++) {
+        const ef_vec3_t a = SM[i].b[0], b = SM[i].b[1];
+        double ab[3] = {b.x - a.x, b.y - a.y, b.z - a.z},
+               ap[3] = {p[0] - a.x, p[1] - a.y, p[2] - a.z};
+        double l2 = ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2];
+        double u = l2 > 0 ? (ab[0] * ap[0] + ab[1] * ap[1] + ab[2] * ap[2]) / l2 : 0;
+        u = u < 0 ? 0 : u > 1 ? 1 : u;
+        double e = 0;
+        for (int k = 0; k < 3; k++)
+            e += (ap[k] - u * ab[k]) * (ap[k] - u * ab[k]);
+        best = sqrt(e) < best ? sqrt(e) : best;
+    }
+    return best;
+}
+
+/* Feed hold mid-side at 20 units/s (t 1.25 .. 2.25 s): every drive got the halt bit in the same
+ * SYNC, so the three axes decelerate together and stand on the path; the master keeps streaming
+ * into the rings meanwhile; the resume completes every segment once and ends at the path's end. */
+static double sh_off;
+static int sh_held, sh_stood;
+static float sh_at[3];
+static void seg_hold_mid(uint32_t t)
+{
+    double e = seg_off_path();
+    sh_off = e > sh_off ? e : sh_off;
+    if (t == 1250000)
+        EF_CHECK_EQ(ef_comaster_hold(&M, 1), EF_OK);
+    if (t == 2250000)
+        EF_CHECK_EQ(ef_comaster_hold(&M, 0), EF_OK);
+    int all = D[0].drv.held && D[1].drv.held && D[2].drv.held;
+    if (t > 1550000 && t < 2250000) {
+        if (!sh_held)
+            for (int k = 0; k < 3; k++)
+                sh_at[k] = D[k].drv.cmd.x;
+        sh_held += all;
+        for (int k = 0; k < 3; k++)
+            sh_stood &= D[k].drv.cmd.x == sh_at[k];
+    }
+}
+
+static void t_seg_hold(void)
+{
+    seg_moves();
+    ef_com_cfg_t c = sim_cfg(EF_COM_MODE_SEGMENT);
+    sim_setup(&c);
+    EF_CHECK_EQ(ef_comaster_hold(NULL, 1), EF_ERR_ARG);
+    EF_CHECK_EQ(ef_canrig_run_until(&B, EF_COM_RUN, 3000000, 100), EF_COM_RUN);
+    uint64_t t0 = B.bus.now_us;
+    sh_off = 0;
+    sh_held = 0;
+    sh_stood = 1;
+    EF_CHECK_EQ(seg_stream(SEG_MOVES, 30000000, seg_hold_mid), EF_COM_DONE);
+    EF_CHECK_EQ(ef_comaster_error(&M)->code, 0);
+    seg_check_end();
+    EF_CHECK_EQ(sh_held, 6999); /* every 100 us step from 1.55 to 2.25 s: all three held */
+    EF_CHECK(sh_stood);
+    EF_CHECK_NEAR(sh_off, 0, 1e-3);
+    for (int k = 0; k < 3; k++) {
+        EF_CHECK_EQ(D[k].seg_dups, 0);
+        EF_CHECK_EQ(D[k].seg_dropped, 0);
+        EF_CHECK(D[k].drv.fault == EF_DRV_FAULT_NONE);
+    }
+    /* The stream took the path's time plus the second held (less the ramps' half). */
+    double path_t = 0;
+    for (int i = 0; i < SEG_MOVES; i++)
+        path_t += SM[i].duration;
+    double took = (double)(B.bus.now_us - t0) * 1e-6;
+    printf("seg_hold: off the path at most %.2g mm, stood at (%.3f %.3f %.3f), %.2f s for a "
+           "%.2f s path\n",
+           sh_off, (double)sh_at[0], (double)sh_at[1], (double)sh_at[2], took, path_t);
+    EF_CHECK(took > path_t + 0.9);
+    /* CSP has no halt: the caller slows the targets. */
+    c = sim_cfg(EF_COM_MODE_CSP);
+    sim_setup(&c);
+    EF_CHECK_EQ(ef_comaster_hold(&M, 1), EF_ERR_ARG);
+}
+
 /* Drop hook: lose the second (last) chunk on RPDO2 of node 2 of the record with sequence bits 5
  * (once), and the first law chunk of sequence 9 (once). */
 /* A chunk's header byte: the sequence number's low bits and the chunk index. */
@@ -1630,6 +1711,7 @@ int main(int argc, char **argv)
         {"bus", t_bus},
         {"csp", t_csp},
         {"seg", t_seg},
+        {"seg_hold", t_seg_hold},
         {"gobackn", t_gobackn},
         {"resend_limit", t_resend_limit},
         {"emcy", t_emcy},

@@ -671,6 +671,200 @@ static void test_quick_stop(void)
     EF_CHECK_EQ(ef_drive_process(d, PERIOD_US, NULL), EF_OK); /* raised outside the call */
 }
 
+/* ------------------------------------------------------------------ feed hold */
+
+/* The chain sampled every 0.1 ms, the reference the held drive's command must lie on. */
+#define HOLD_REF_DT 1e-4
+#define HOLD_REF_N  40000
+static double g_ref[HOLD_REF_N][3];
+static int g_ref_n;
+
+static void hold_ref(const ef_move_t *mv, int n)
+{
+    double total = 0;
+    for (int i = 0; i < n; i++)
+        total += mv[i].duration;
+    g_ref_n = (int)(total / HOLD_REF_DT) + 2;
+    EF_CHECK(g_ref_n <= HOLD_REF_N);
+    for (int i = 0; i < g_ref_n && i < HOLD_REF_N; i++)
+        tm_chain_pos(mv, n, i * HOLD_REF_DT, g_ref[i]);
+}
+
+/* Distance from p to the reference polyline's piece i .. i + 1. */
+static double hold_seg_dist(ef_vec3_t p, int i)
+{
+    const double *a = g_ref[i], *b = g_ref[i + 1];
+    double ab[3], ap[3], l2 = 0, dot = 0;
+    for (int k = 0; k < 3; k++) {
+        ab[k] = b[k] - a[k];
+        ap[k] = (k == 0 ? p.x : k == 1 ? p.y : p.z) - a[k];
+        l2 += ab[k] * ab[k];
+        dot += ab[k] * ap[k];
+    }
+    double u = l2 > 0 ? dot / l2 : 0;
+    u = u < 0 ? 0 : u > 1 ? 1 : u;
+    double q[3] = {a[0] + u * ab[0], a[1] + u * ab[1], a[2] + u * ab[2]};
+    return dist3(p, q);
+}
+
+/* Distance from the reference path near piece *j (it only moves forward: progress never
+ * goes back), and the nearest piece. */
+static double hold_on_path(ef_vec3_t p, int *j)
+{
+    double best = 1e30;
+    int bi = *j;
+    for (int i = *j; i + 1 < g_ref_n && i < *j + 200; i++) {
+        double e = hold_seg_dist(p, i);
+        if (e < best) {
+            best = e;
+            bi = i;
+        }
+    }
+    *j = bi;
+    return best;
+}
+
+/* A feed hold at cruise: the command decelerates along the path within a_stop / 2 of added
+ * deceleration, in v T / 2 of path (T = 3 v / a_stop), stands there while held (RUNNING,
+ * no underrun, no fault), resumes on release and completes the chain exactly: every
+ * command lies on the path and progress never goes back. */
+static void test_hold(void)
+{
+    ef_move_t mv[5];
+    int n = mk_chain(mv);
+    hold_ref(mv, n);
+    ef_drive_t *d = &g_d;
+    drive_up(d, NULL);
+    for (int i = 0; i < n; i++)
+        EF_CHECK_EQ(ef_drive_push(d, &mv[i]), EF_OK);
+    EF_CHECK_EQ(ef_drive_start(d), EF_OK);
+    double dt = PERIOD_US * 1e-6, off = 0, back = 0, v_prev = 0, acc = 0;
+    int j = 0, k = 0, phase = 0, bad_rc = 0, checked = 0;
+    ef_vec3_t prev = d->cmd, at_hold = d->cmd, at_rest = d->cmd;
+    uint32_t held_periods = 0, ramp_periods = 0;
+    for (k = 0; k < 20000; k++) {
+        if (phase == 0 && d->exec_seq == 1 && d->moving) { /* the cruise line at V0 */
+            EF_CHECK_EQ(ef_drive_hold(d, 1), EF_OK);
+            EF_CHECK_EQ(ef_drive_hold(d, 1), EF_OK); /* the same request: no new ramp */
+            at_hold = d->cmd;
+            v_prev = V0;
+            phase = 1;
+        }
+        bad_rc |= ef_drive_process(d, PERIOD_US, NULL) != EF_OK;
+        int j0 = j;
+        double e = hold_on_path(d->cmd, &j);
+        off = e > off ? e : off;
+        back += j < j0;
+        double v = vlen(ef_v3_sub(d->cmd, prev)) / dt;
+        prev = d->cmd;
+        if (phase == 1) {
+            ramp_periods++;
+            double a = (v_prev - v) / dt; /* added deceleration along the path at V0 */
+            acc = a > acc ? a : acc;
+            v_prev = v;
+            if (d->held) {
+                EF_CHECK_NEAR(v, 0, 1e-6);
+                at_rest = d->cmd;
+                phase = 2;
+            }
+        } else if (phase == 2) {
+            /* Held: nothing moves, still RUNNING, the ring is kept. */
+            checked += d->cmd.x == at_rest.x && d->cmd.y == at_rest.y && d->cmd.z == at_rest.z &&
+                       d->state == EF_DRV_RUNNING && d->held && d->moving;
+            if (++held_periods == 500) {
+                EF_CHECK_EQ(ef_drive_hold(d, 0), EF_OK);
+                EF_CHECK(!d->held);
+                phase = 3;
+            }
+        } else if (phase == 3 && !d->moving && d->done_any == 5) {
+            break;
+        }
+    }
+    EF_CHECK(!bad_rc);
+    EF_CHECK_EQ(phase, 3);
+    EF_CHECK_EQ(checked, 500);
+    EF_CHECK_EQ(d->fault, EF_DRV_FAULT_NONE);
+    EF_CHECK_EQ(d->state, EF_DRV_RUNNING);
+    EF_CHECK_EQ(d->done_any, 5);
+    EF_CHECK_EQ(d->done_seq, 4);
+    EF_CHECK(d->cmd.x == 50.0f && d->cmd.y == 5.0f && d->cmd.z == 2.0f);
+    EF_CHECK_NEAR(off, 0, 2e-5);    /* on the path throughout */
+    EF_CHECK_EQ(back, 0);           /* never backwards */
+    EF_CHECK(acc <= 1000.0 * 1.02); /* a_stop / 2 (default a_stop 2000) */
+    EF_CHECK(acc >= 1000.0 * 0.9);  /* and the ramp is the short one allowed, not a crawl */
+    /* T = 3 V0 / a_stop = 75 ms; the smoothstep's distance is V0 T / 2 (arc, ~ chord here). */
+    EF_CHECK(ramp_periods >= 74 && ramp_periods <= 77);
+    double dist = vlen(ef_v3_sub(at_rest, at_hold));
+    EF_CHECK(dist > 0.9 * V0 * 0.075 / 2 && dist <= V0 * 0.075 / 2 + 0.05);
+    EF_CHECK(d->ferr_max < 0.1);
+    printf("hold: stood %.3f mm after the request (ramp %u ms, peak added deceleration %.0f "
+           "units/s^2), off the path at most %.2g\n",
+           dist, (unsigned)ramp_periods, acc, off);
+
+    /* A hold at rest applies at once: it starts RUNNING and stands; a release starts it. */
+    drive_up(d, NULL);
+    for (int i = 0; i < n; i++)
+        EF_CHECK_EQ(ef_drive_push(d, &mv[i]), EF_OK);
+    EF_CHECK_EQ(ef_drive_hold(d, 1), EF_OK);
+    EF_CHECK(d->held && d->rate == 0.0f);
+    EF_CHECK_EQ(ef_drive_start(d), EF_OK);
+    for (int i = 0; i < 200; i++)
+        EF_CHECK_EQ(ef_drive_process(d, PERIOD_US, NULL), EF_OK);
+    EF_CHECK(d->cmd.x == 0.0f && d->held && d->state == EF_DRV_RUNNING);
+    EF_CHECK_EQ(ef_drive_hold(d, 0), EF_OK);
+    j = 0;
+    off = 0;
+    for (int i = 0; i < 5000 && d->done_any < 5; i++) {
+        EF_CHECK_EQ(ef_drive_process(d, PERIOD_US, NULL), EF_OK);
+        double e = hold_on_path(d->cmd, &j);
+        off = e > off ? e : off;
+    }
+    EF_CHECK_EQ(d->done_any, 5);
+    EF_CHECK_NEAR(off, 0, 2e-5);
+
+    /* A quick stop during a hold's ramp stops as ever; the hold stays requested. */
+    drive_up(d, NULL);
+    for (int i = 0; i < n; i++)
+        EF_CHECK_EQ(ef_drive_push(d, &mv[i]), EF_OK);
+    EF_CHECK_EQ(ef_drive_start(d), EF_OK);
+    for (int i = 0; i < 300; i++)
+        ef_drive_process(d, PERIOD_US, NULL);
+    EF_CHECK_EQ(ef_drive_hold(d, 1), EF_OK);
+    for (int i = 0; i < 20; i++)
+        ef_drive_process(d, PERIOD_US, NULL);
+    EF_CHECK(d->rate > 0.0f && d->rate < 1.0f);
+    EF_CHECK_EQ(ef_drive_quick_stop(d), EF_OK);
+    int ok = 1;
+    watch_stop(d, vlen(d->cmd_vel), &ok);
+    EF_CHECK(ok);
+    EF_CHECK_EQ(d->state, EF_DRV_ENABLED);
+    EF_CHECK(d->hold && d->held && d->rate == 0.0f);
+
+    /* Direct mode refuses a hold; entering it clears one. Bad arguments. */
+    EF_CHECK_EQ(ef_drive_set_direct(d, 1), EF_OK);
+    EF_CHECK(!d->hold && d->rate == 1.0f);
+    EF_CHECK_EQ(ef_drive_hold(d, 1), EF_ERR_STATE);
+    EF_CHECK_EQ(ef_drive_hold(d, 0), EF_OK);
+    EF_CHECK_EQ(ef_drive_hold(NULL, 1), EF_ERR_ARG);
+
+    /* The interpolator's rate: NaN stands still, above 1 is 1. */
+    ef_interp_t ip;
+    EF_CHECK_EQ(ef_interp_init(&ip, ef_v3(0, 0, 0), PERIOD_US, EF_STEP_UNIFORM), EF_OK);
+    EF_CHECK_EQ(ef_interp_push(&ip, &mv[0]), EF_OK);
+    ef_setpoint_t sp;
+    for (int i = 0; i < 50; i++)
+        EF_CHECK_EQ(ef_interp_process_rate(&ip, PERIOD_US, (float)NAN, NULL, &sp), EF_OK);
+    EF_CHECK(sp.p.x == 0.0f && sp.moving);
+    ef_interp_t iq = ip;
+    ef_setpoint_t sq;
+    for (int i = 0; i < 50; i++) {
+        EF_CHECK_EQ(ef_interp_process_rate(&ip, PERIOD_US, 7.0f, NULL, &sp), EF_OK);
+        EF_CHECK_EQ(ef_interp_process(&iq, PERIOD_US, NULL, &sq), EF_OK);
+    }
+    EF_CHECK(sp.p.x == sq.p.x && sp.p.x > 0.0f);
+    EF_CHECK_EQ(ef_interp_process_rate(NULL, PERIOD_US, 1.0f, NULL, &sp), EF_ERR_ARG);
+}
+
 static void test_direct(void)
 {
     ef_drive_t *d = &g_d;
@@ -991,13 +1185,60 @@ static void test_mbdev(void)
     EF_CHECK_EQ(ef_mbdev_process(NULL, 1, NULL), EF_ERR_ARG);
 }
 
+/* Feed hold over the register map: the HOLD control bit (a level) holds the drive on the
+ * path (status HELD, still RUNNING), a control word without it resumes, the chain completes;
+ * direct mode refuses it (illegal value). */
+static void test_mbhold(void)
+{
+    ef_mbdev_t *dev = &g_dev;
+    ef_servo_cfg_t c;
+    ef_servo_cfg_default(&c);
+    EF_CHECK_EQ(ef_mbdev_init(dev, &c, ef_v3(0, 0, 0), PERIOD_US, 9), EF_OK);
+    uint8_t exc = 0xFF;
+    ef_move_t mv[5];
+    int n = mk_chain(mv);
+    EF_CHECK_EQ(wr1(dev, EF_MB_REG_CONTROL, EF_MB_CTL_ENABLE, &exc), EF_OK);
+    for (int i = 0; i < n; i++)
+        EF_CHECK_EQ(wr_slot(dev, (uint32_t)i, &mv[i], &exc), EF_OK);
+    EF_CHECK_EQ(wr1(dev, EF_MB_REG_CONTROL, EF_MB_CTL_ENABLE | EF_MB_CTL_START, &exc), EF_OK);
+    for (int i = 0; i < 300; i++)
+        EF_CHECK_EQ(ef_mbdev_process(dev, PERIOD_US, NULL), EF_OK);
+    EF_CHECK_EQ(wr1(dev, EF_MB_REG_CONTROL, EF_MB_CTL_ENABLE | EF_MB_CTL_HOLD, &exc), EF_OK);
+    for (int i = 0; i < 200; i++)
+        EF_CHECK_EQ(ef_mbdev_process(dev, PERIOD_US, NULL), EF_OK);
+    uint16_t st = rd16(dev, EF_MB_REG_STATUS);
+    EF_CHECK(st & EF_MB_ST_HELD);
+    EF_CHECK(st & EF_MB_ST_MOVING); /* still executing a segment */
+    EF_CHECK_EQ(rd16(dev, EF_MB_REG_STATE), EF_DRV_RUNNING);
+    float x = dev->drv.cmd.x;
+    for (int i = 0; i < 200; i++)
+        EF_CHECK_EQ(ef_mbdev_process(dev, PERIOD_US, NULL), EF_OK);
+    EF_CHECK(dev->drv.cmd.x == x && x > 0.0f);
+    /* Any enabling write without the bit resumes. */
+    EF_CHECK_EQ(wr1(dev, EF_MB_REG_CONTROL, EF_MB_CTL_ENABLE | EF_MB_CTL_START, &exc), EF_OK);
+    EF_CHECK(!(rd16(dev, EF_MB_REG_STATUS) & EF_MB_ST_HELD));
+    for (int i = 0; i < 3000 && rd32(dev, EF_MB_REG_DONE_COUNT) < 5; i++)
+        EF_CHECK_EQ(ef_mbdev_process(dev, PERIOD_US, NULL), EF_OK);
+    EF_CHECK_EQ(rd32(dev, EF_MB_REG_DONE_COUNT), 5);
+    EF_CHECK(dev->drv.cmd.x == 50.0f && dev->drv.cmd.y == 5.0f && dev->drv.cmd.z == 2.0f);
+    EF_CHECK_EQ(dev->drv.fault, EF_DRV_FAULT_NONE);
+    /* Direct mode: the bit is an illegal value. */
+    uint16_t w[2] = {EF_MB_CTL_ENABLE | EF_MB_CTL_HOLD, EF_MB_MODE_DIRECT};
+    EF_CHECK_EQ(wr1(dev, EF_MB_REG_CONTROL, 0, &exc), EF_OK);
+    for (int i = 0; i < 100; i++)
+        ef_mbdev_process(dev, PERIOD_US, NULL);
+    EF_CHECK_EQ(ef_mbdev_write(dev, EF_MB_REG_CONTROL, 2, w, &exc), EF_ERR_ARG);
+    EF_CHECK_EQ(exc, EF_MB_EX_ILLEGAL_VALUE);
+}
+
 int main(int argc, char **argv)
 {
     static const ef_test_part_t parts[] = {
         {"codec", test_crc},       {"codec", test_codec},      {"exec", test_init_args},
         {"exec", test_chain},      {"exec", test_push_checks}, {"exec", test_direct},
         {"exec", test_late},       {"stop", test_underrun},    {"stop", test_following},
-        {"stop", test_quick_stop}, {"mbdev", test_mbdev},
+        {"stop", test_quick_stop}, {"hold", test_hold},        {"mbdev", test_mbdev},
+        {"mbdev", test_mbhold},
     };
     return EF_TEST_RUN(argc, argv, 1, parts);
 }

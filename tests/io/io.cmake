@@ -17,6 +17,14 @@ target_link_libraries(test_mio PRIVATE ef_host)
 add_test(NAME mio_cfg COMMAND test_mio ${CMAKE_CURRENT_BINARY_DIR} cfg)
 set_tests_properties(mio_cfg PROPERTIES TIMEOUT 30)
 
+# The feed-hold time warp (host/lib/io/ef_warp.c) that CSP and Modbus direct mode stream
+# through: on the path, within a / 2, nothing skipped, the end exact.
+add_executable(test_warp ${CMAKE_CURRENT_SOURCE_DIR}/io/test_warp.c)
+target_include_directories(test_warp PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
+target_link_libraries(test_warp PRIVATE ef_host m)
+add_test(NAME warp COMMAND test_warp warp)
+set_tests_properties(warp PROPERTIES TIMEOUT 60)
+
 if(EF_SANITIZE)
   ef_hil_executable(test_gpio_uml ${CMAKE_CURRENT_SOURCE_DIR}/io/test_gpio.c
     ${PROJECT_SOURCE_DIR}/host/lib/io/ef_gpio.c ${PROJECT_SOURCE_DIR}/host/lib/core/ef_host.c)

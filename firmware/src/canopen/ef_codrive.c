@@ -198,7 +198,7 @@ static int cod_settled(const ef_codrive_t *d, float goal)
     return v->cmd_vel.x == 0.0f && ef_fabsf(v->act.x - goal) <= win;
 }
 
-/* The statusword of the present state (CiA 402 state bits plus bits 7, 9, 10, 12, 13). */
+/* The statusword of the present state (CiA 402 state bits plus bits 7, 9, 10, 12, 13, 14). */
 static uint16_t cod_statusword(const ef_codrive_t *d)
 {
     static const uint16_t bits[] = {0u,        COD_SW_SOD, COD_SW_READY, COD_SW_ON,
@@ -218,6 +218,8 @@ static uint16_t cod_statusword(const ef_codrive_t *d)
             sw |= EF_CO_SW_TARGET_REACHED;
         if (v->state == EF_DRV_RUNNING)
             sw |= EF_CO_SW_FOLLOWING;
+        if (v->held)
+            sw |= EF_CO_SW_HELD;
     } else {
         int following = op && v->direct && v->state == EF_DRV_ENABLED;
         if (v->state != EF_DRV_STOPPING && cod_settled(d, following ? v->target.x : v->cmd.x))
@@ -317,6 +319,7 @@ static void cod_update(ef_codrive_t *d)
     if (d->power == EF_CO_PS_OP_ENABLED && d->power_next == EF_CO_PS_OP_ENABLED &&
         d->mode == EF_CO_MODE_SEGMENT) {
         int run = (d->controlword & EF_CO_CW_SEG_RUN) != 0u;
+        (void)ef_drive_hold(v, (d->controlword & EF_CO_CW_HALT) != 0u); /* segment: no refusal */
         if (run && v->state == EF_DRV_ENABLED)
             (void)ef_drive_start(v);
         else if (!run && v->state == EF_DRV_RUNNING)

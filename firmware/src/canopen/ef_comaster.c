@@ -600,7 +600,8 @@ static uint16_t com_cw(ef_comaster_t *m, int k)
     case EF_COM_FINISH:
         if (m->sub == EF_COM_SUB_SHUTDOWN)
             break;
-        return (uint16_t)(EF_CO_CW_ENABLE_OP | (m->running ? EF_CO_CW_SEG_RUN : 0u));
+        return (uint16_t)(EF_CO_CW_ENABLE_OP | (m->running ? EF_CO_CW_SEG_RUN : 0u) |
+                          (m->halt ? EF_CO_CW_HALT : 0u));
     case EF_COM_STOPPING:
         if (m->sub == EF_COM_SUB_SHUTDOWN)
             break;
@@ -1280,6 +1281,15 @@ int ef_comaster_finish(ef_comaster_t *m)
 }
 
 /* Requested controlled stop. */
+/* Feed hold in segment mode: the halt bit of every node's next controlword. */
+int ef_comaster_hold(ef_comaster_t *m, int on)
+{
+    if (!m || m->cfg.mode != EF_COM_MODE_SEGMENT)
+        return EF_ERR_ARG;
+    m->halt = on != 0;
+    return EF_OK;
+}
+
 int ef_comaster_stop(ef_comaster_t *m)
 {
     if (!m)

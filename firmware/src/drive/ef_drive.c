@@ -65,6 +65,11 @@ static void drv_flush(ef_drive_t *d)
     /* cmd is always finite and within range (it only moves along checked segments or
      * towards checked targets), so this cannot fail. */
     (void)ef_interp_init(&d->ip, d->cmd, d->period_us, EF_STEP_UNIFORM);
+    /* Nothing moves after a flush, so the rate the hold asks for applies at once. */
+    d->rate = d->rate0 = d->rate1 = d->hold ? 0.0f : 1.0f;
+    d->ramp_u = 1.0f;
+    d->v_law = 0.0f;
+    d->held = d->hold;
 }
 
 /* Reset the queue and the counters a clear (or fault reset) starts from. */
@@ -242,6 +247,8 @@ int ef_drive_set_direct(ef_drive_t *d, int on)
         return EF_ERR_STATE;
     uint8_t want = on ? 1u : 0u;
     if (want != d->direct) {
+        if (want)
+            d->hold = 0u; /* a hold is a segment-mode request */
         drv_flush(d);
         d->target = d->cmd;
         d->direct = want;
@@ -317,6 +324,45 @@ static void drv_feed(ef_drive_t *d)
     }
 }
 
+/* Feed hold or resume (ef_drive.h): a smoothstep ramp of the rate, long enough that the
+ * deceleration it adds (1.5 v / T at its steepest) stays within a_stop / 2. */
+int ef_drive_hold(ef_drive_t *d, int on)
+{
+    if (!d)
+        return EF_ERR_ARG;
+    uint8_t want = on != 0;
+    if (want && d->direct)
+        return EF_ERR_STATE;
+    if (want == d->hold)
+        return EF_OK;
+    d->hold = want;
+    d->rate0 = d->rate;
+    d->rate1 = want ? 0.0f : 1.0f;
+    if (!d->moving || d->direct) {
+        d->rate = d->rate0 = d->rate1; /* nothing moves: nothing to ramp */
+        d->ramp_u = 1.0f;
+        d->held = want;
+        return EF_OK;
+    }
+    float t = ef_maxf((float)EF_DRIVE_HOLD_RAMP_MIN_US * 1e-6f, 3.0f * d->v_law / d->cfg.a_stop);
+    d->ramp_u = 0.0f;
+    d->ramp_k = drv_dt(d) / t; /* t >= the minimum, a_stop > 0: finite */
+    d->held = 0u;
+    return EF_OK;
+}
+
+/* One period of the rate's ramp. */
+static void drv_rate_step(ef_drive_t *d)
+{
+    if (d->ramp_u < 1.0f) {
+        float u = ef_minf(1.0f, d->ramp_u + d->ramp_k);
+        d->ramp_u = u;
+        d->rate =
+            u >= 1.0f ? d->rate1 : d->rate0 + (d->rate1 - d->rate0) * (u * u * (3.0f - 2.0f * u));
+    }
+    d->held = d->hold && d->rate == 0.0f;
+}
+
 /* One period of the stop ramp: same direction, speed down by a_stop * dt; at rest the
  * drive enters the stop's destination state. */
 static void drv_stop_step(ef_drive_t *d, float dt)
@@ -379,8 +425,9 @@ static void drv_run_step(ef_drive_t *d, float dt)
     }
     ef_vec3_t prev = d->cmd;
     uint32_t before = d->ip.count;
+    drv_rate_step(d);
     ef_setpoint_t sp;
-    int rc = ef_interp_process(&d->ip, d->period_us, NULL, &sp);
+    int rc = ef_interp_process_rate(&d->ip, d->period_us, d->rate, NULL, &sp);
     uint32_t popped = before - d->ip.count;
     if (popped > 0u) {
         d->done_any += popped;
@@ -394,6 +441,7 @@ static void drv_run_step(ef_drive_t *d, float dt)
         return;
     }
     d->moving = sp.moving;
+    d->v_law = sp.v_plan;
     if (sp.moving)
         d->exec_seq = sp.seq;
     d->cmd = sp.p;

@@ -16,7 +16,7 @@
 /** Control bits a master may set (every EF_MB_CTL_*). */
 #define EF_MB_CTL_ALL                                                                              \
     (EF_MB_CTL_ENABLE | EF_MB_CTL_START | EF_MB_CTL_QUICK_STOP | EF_MB_CTL_FAULT_RESET |           \
-     EF_MB_CTL_CLEAR)
+     EF_MB_CTL_CLEAR | EF_MB_CTL_HOLD)
 /** End (exclusive) of the writable control block. */
 #define EF_MB_CONTROL_END (EF_MB_REG_WATCHDOG + 1)
 /** Time-law coefficients per phase in a slot. */
@@ -248,6 +248,8 @@ static void mbd_snapshot(const ef_mbdev_t *dev, uint16_t blk[EF_MB_FIXED_WORDS])
         st |= EF_MB_ST_FAULT;
     if (d->direct)
         st |= EF_MB_ST_DIRECT;
+    if (d->held)
+        st |= EF_MB_ST_HELD;
     blk[EF_MB_REG_STATUS] = st;
     blk[EF_MB_REG_STATE] = d->state;
     blk[EF_MB_REG_FAULT] = d->fault;
@@ -327,6 +329,8 @@ static int mbd_control(ef_drive_t *d, uint16_t cw)
         rc = ef_drive_quick_stop(d);
     if (rc == EF_OK && (cw & EF_MB_CTL_START))
         rc = ef_drive_start(d);
+    if (rc == EF_OK)
+        rc = ef_drive_hold(d, (cw & EF_MB_CTL_HOLD) != 0u); /* a level, as enable */
     return rc;
 }
 
@@ -352,6 +356,8 @@ static int mbd_write_control(ef_mbdev_t *dev, uint16_t addr, uint16_t n, const u
         return EF_ERR_ARG;
     if (has_mode && mode != EF_MB_MODE_SEGMENT && mode != EF_MB_MODE_DIRECT)
         return EF_ERR_ARG;
+    if (has_cw && (cw & EF_MB_CTL_HOLD) && mode == EF_MB_MODE_DIRECT)
+        return EF_ERR_ARG; /* the master's targets are the path there */
     if (has_mode && mode != dev->mode) {
         int rc = ef_drive_set_direct(&dev->drv, mode == EF_MB_MODE_DIRECT);
         if (rc != EF_OK)

@@ -246,14 +246,22 @@ static void ip_eval(ef_interp_t *ip, const ef_move_t *m, float *v)
 /* Advance by dt_us and give the next setpoint (contract in ef_interp.h). */
 int ef_interp_process(ef_interp_t *ip, uint32_t dt_us, uint32_t *next_us, ef_setpoint_t *sp)
 {
+    return ef_interp_process_rate(ip, dt_us, 1.0f, next_us, sp);
+}
+
+/* Advance the moves' time by rate * dt_us (contract in ef_interp.h). */
+int ef_interp_process_rate(ef_interp_t *ip, uint32_t dt_us, float rate, uint32_t *next_us,
+                           ef_setpoint_t *sp)
+{
     if (!ip || !sp)
         return EF_ERR_ARG;
     if (next_us)
         *next_us = ip->period_us;
+    rate = rate >= 0.0f ? ef_minf(rate, 1.0f) : 0.0f; /* NaN fails the test: 0 */
     int rc = EF_OK;
     float v = 0.0f;
     if (ip->count > 0) {
-        ip_kahan(&ip->t, &ip->t_c, (float)dt_us * 1e-6f);
+        ip_kahan(&ip->t, &ip->t_c, (float)dt_us * 1e-6f * rate);
         /* Finish every move the elapsed time covers; the leftover carries into the next. */
         for (uint32_t i = 0; i < EF_INTERP_QUEUE && ip->count > 0; i++) {
             const ef_move_t *m = &ip->q[ip->head];

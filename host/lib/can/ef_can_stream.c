@@ -11,6 +11,7 @@
 #include "evenfeed/host/can/ef_canpump.h"
 #include "evenfeed/host/can/ef_sockcan.h"
 #include "evenfeed/host/io/ef_mio.h"
+#include "evenfeed/host/io/ef_warp.h"
 #include "evenfeed/geom/ef_bezier.h"
 
 /* Longest receive wait while the socket's backlog holds frames (us). */
@@ -34,11 +35,6 @@ enum { CS_ITEM_MOVE = 1, CS_ITEM_SETPOINT = 2, CS_ITEM_EVENT = 3 };
 /* Longest pump wait with machine I/O: GPIO edges do not wake the CAN socket's poll, so
  * this bounds the e-stop latency in the slow (segment, 10 ms) cycle (us). */
 #define CS_MIO_WAIT_US 2000u
-/* Feed hold (CSP): setpoints kept between the pipeline and the target queue, so that the
- * path can be replayed at a slower rate (a power of two, > 2). */
-#define CS_HOLD_RING 8u
-/* Shortest ramp of a feed hold or resume (s). */
-#define CS_HOLD_RAMP_MIN_S 0.05
 /* Moves remembered to name the program line of an e-stop, and points sampled on each. */
 #define CS_MRING 256u
 #define CS_MPTS  9
@@ -96,23 +92,19 @@ typedef struct {
         float p[CS_MPTS][3];
     } mring[CS_MRING];
     uint32_t mr_n;
-    /* Feed hold in CSP: a time warp. Setpoints come at the cycle's rate (sample index i at
-     * time i * dt); targets go out at w, advanced by rate r in [0, 1] each cycle, linear
-     * between samples. r = 1 passes the samples through unchanged; a hold ramps r down to
-     * 0 (smoothstep over a ramp long enough for the speed and amax), a cycle start back. */
+    /* Feed hold in CSP: the setpoints (one per cycle) replayed through a time warp
+     * (ef_warp.h) whose rate follows the hold input. */
     int hold_on; /* feed hold is wired (CSP) */
-    float hs[CS_HOLD_RING][EF_CAN_STREAM_MAX_NODES];
-    uint32_t hs_tag[CS_HOLD_RING];
-    uint64_t hs_n;           /* samples received */
-    double hw;               /* virtual time (samples) of the next target */
-    double hr;               /* rate now */
-    double hr0, hr1, hu, hT; /* ramp from hr0 to hr1, phase hu in [0, 1], length hT (s) */
-    int hheld;               /* the hold request the ramp follows */
-    int64_t hlast;           /* sample index the last target was exactly (-1: between two) */
+    ef_warp_t warp;
     float last_cmd[EF_CAN_STREAM_MAX_NODES]; /* where the last target / segment ends */
     int out_noted;                           /* M62-M65 without machine I/O: said once */
-    uint32_t holds;                          /* holds begun */
-    double held_s;                           /* time spent at rest in a hold (s) */
+    uint32_t holds;                          /* segment mode: holds begun */
+    double held_s;                           /* segment mode: time every drive stood held (s) */
+    /* Feed hold in segment mode: the drives hold (controlword bit 8); every wait whose bound
+     * is the path's time runs on a clock that stops while a hold is requested. */
+    int seg_hold_on;
+    uint64_t hold_t;  /* pump time of the last hold bookkeeping (us) */
+    uint64_t held_us; /* time with a hold requested while RUN / FINISH (us) */
 } cs_t;
 
 /* Defaults documented in ef_canhost.h. */
@@ -338,6 +330,19 @@ static int cs_process(void *obj, uint32_t dt_us, uint32_t *next_us)
     return rc;
 }
 
+/* Microseconds since the socket opened, now. */
+static uint64_t cs_now(const cs_t *S)
+{
+    return ef_canpump_elapsed_us(&S->pump);
+}
+
+/* The clock of the waits bounded by the path's time: it stands while a segment-mode feed
+ * hold is requested (a hold may last as long as the operator wants). */
+static uint64_t cs_run_now(const cs_t *S)
+{
+    return cs_now(S) - S->held_us;
+}
+
 /* A socket error that ended the pump (0: none): nothing can reach the drives any more. */
 static int cs_io_rc(const cs_t *S)
 {
@@ -373,6 +378,32 @@ static uint32_t cs_line_at(const cs_t *S, const float *pos)
     return best_tag;
 }
 
+/* Segment mode, every pump round: the drives hold while the feed-hold input asks (the
+ * master sends the halt bit to all of them in one SYNC); the time it is asked for while the
+ * drives execute does not count against the waits' bounds, and the time they all report
+ * standing is the held time. */
+static void cs_seg_hold(cs_t *S)
+{
+    uint64_t now = cs_now(S), dt = now - S->hold_t;
+    S->hold_t = now;
+    int st = ef_comaster_state(&S->ms);
+    int exec = st == EF_COM_RUN || st == EF_COM_FINISH;
+    int all = 1;
+    for (int k = 0; k < S->c->n_nodes; k++)
+        all &= (ef_comaster_node(&S->ms, k)->statusword & EF_CO_SW_HELD) != 0;
+    if (exec && S->ms.halt) {
+        S->held_us += dt;
+        if (all)
+            S->held_s += (double)dt * 1e-6;
+    }
+    int want = ef_mio_hold(S->c->mio);
+    if (want != S->ms.halt && exec) {
+        (void)ef_comaster_hold(&S->ms, want); /* segment mode: cannot fail */
+        if (want)
+            S->holds++;
+    }
+}
+
 /* Machine I/O, every pump round: a trip (e-stop, alarm, GPIO error) stops every drive
  * under control; the error names the input and the line being executed. */
 static void cs_mio(cs_t *S)
@@ -382,7 +413,10 @@ static void cs_mio(cs_t *S)
         return;
     uint32_t nx;
     ef_msg_t mm = {{0}};
-    if (ef_mio_process(io, &nx, &mm) != EF_ERR_ESTOP || S->estop)
+    int trip = ef_mio_process(io, &nx, &mm) == EF_ERR_ESTOP;
+    if (S->seg_hold_on && !S->estop && !trip)
+        cs_seg_hold(S);
+    if (!trip || S->estop)
         return;
     S->estop = 1;
     int st = ef_comaster_state(&S->ms);
@@ -413,12 +447,6 @@ static void cs_pump(cs_t *S, uint32_t max_wait_us)
     cs_mio(S);
 }
 
-/* Microseconds since the socket opened, now. */
-static uint64_t cs_now(const cs_t *S)
-{
-    return ef_canpump_elapsed_us(&S->pump);
-}
-
 /* The master left RUN (or the socket failed) while the caller streams: its error. */
 static int cs_not_running(cs_t *S)
 {
@@ -441,7 +469,7 @@ static int cs_not_running(cs_t *S)
 static int cs_stalled(cs_t *S, uint64_t t0, const char *what)
 {
     uint64_t lim = (uint64_t)S->c->stall_ms * 1000u + (uint64_t)(S->longest * 1e6);
-    if (cs_now(S) - t0 <= lim)
+    if (cs_run_now(S) - t0 <= lim)
         return 0;
     S->cb_rc = ef_fail(&S->cbm, EF_ERR_TIMEOUT, "%s: the master's queue has not drained for %.1f s",
                        what, (double)lim * 1e-6);
@@ -502,7 +530,7 @@ static int cs_move(void *user, const ef_move_t *mv, const ef_pipe_move_info_t *m
             return S->cb_rc;
     }
     uint32_t seq = S->ms.next_seq;
-    uint64_t t0 = cs_now(S);
+    uint64_t t0 = cs_run_now(S);
     for (;;) {
         if (cs_io_rc(S) || ef_comaster_state(&S->ms) != EF_COM_RUN)
             return cs_not_running(S);
@@ -531,7 +559,7 @@ static int cs_move(void *user, const ef_move_t *mv, const ef_pipe_move_info_t *m
 /* One target to the master's queue, pumping while it is full. */
 static int cs_push_target(cs_t *S, const float *pos, uint32_t tag)
 {
-    uint64_t t0 = cs_now(S);
+    uint64_t t0 = cs_run_now(S);
     for (;;) {
         if (cs_io_rc(S) || ef_comaster_state(&S->ms) != EF_COM_RUN)
             return cs_not_running(S);
@@ -556,74 +584,16 @@ static int cs_push_target(cs_t *S, const float *pos, uint32_t tag)
     return EF_OK;
 }
 
-static double cs_smoothstep(double u)
-{
-    u = u < 0.0 ? 0.0 : u > 1.0 ? 1.0 : u;
-    return u * u * (3.0 - 2.0 * u);
-}
-
-/* Feed hold: the speed along the path at the warp's place, at full rate (mm/s). */
-static double cs_hold_speed(const cs_t *S)
-{
-    uint64_t i = (uint64_t)S->hw;
-    if (i + 1 >= S->hs_n)
-        return 0.0;
-    const float *a = S->hs[i % CS_HOLD_RING], *b = S->hs[(i + 1) % CS_HOLD_RING];
-    double d = 0;
-    for (int k = 0; k < S->c->n_nodes; k++)
-        d += ((double)b[k] - a[k]) * ((double)b[k] - a[k]);
-    return sqrt(d) / (S->mc.cycle_us * 1e-6);
-}
-
-/* Feed hold: a target for every place w of the warp the samples received cover (end: and
- * the last sample itself). w advances by the rate, which follows the hold input; held
- * (rate 0), the same place goes out every cycle, paced by the target queue. */
+/* Feed hold (CSP): every target the warp has for the samples received (end: and the last
+ * sample itself). Held, the same place goes out every cycle, paced by the target queue. */
 static int cs_hold_emit(cs_t *S, int end)
 {
-    double dt = S->mc.cycle_us * 1e-6;
-    while (S->hs_n > 0 && S->hw <= (double)(S->hs_n - 1)) {
-        int want = ef_mio_hold(S->c->mio);
-        if (want != S->hheld) {
-            /* A new request: ramp from the rate now to 0 (hold) or 1 (resume), over a time
-             * that keeps the added tangential acceleration (v * 1.5 / T) below amax / 2. */
-            S->hheld = want;
-            S->hr0 = S->hr;
-            S->hr1 = want ? 0.0 : 1.0;
-            S->hu = 0.0;
-            double a = fmin(S->pc.lim.a_axis[0], fmin(S->pc.lim.a_axis[1], S->pc.lim.a_axis[2]));
-            S->hT = fmax(CS_HOLD_RAMP_MIN_S, 3.0 * cs_hold_speed(S) / (a > 0 ? a : 1000.0));
-            if (want)
-                S->holds++;
-        }
-        uint64_t i = (uint64_t)S->hw;
-        double f = S->hw - (double)i;
-        const float *a = S->hs[i % CS_HOLD_RING];
-        const float *b = i + 1 < S->hs_n ? S->hs[(i + 1) % CS_HOLD_RING] : a;
-        float pos[EF_COM_MAX_NODES] = {0};
-        for (int k = 0; k < S->c->n_nodes; k++)
-            pos[k] = f == 0.0 ? a[k] : (float)((double)a[k] + f * ((double)b[k] - a[k]));
-        if (f != 0.0 && i + 1 >= S->hs_n)
-            break; /* between the newest sample and one not yet received */
-        int rc = cs_push_target(S, pos, S->hs_tag[i % CS_HOLD_RING]);
+    float pos[EF_COM_MAX_NODES] = {0};
+    uint32_t tag = 0;
+    while (ef_warp_next(&S->warp, ef_mio_hold(S->c->mio), end, pos, &tag)) {
+        int rc = cs_push_target(S, pos, tag);
         if (rc != EF_OK)
             return rc;
-        S->hlast = f == 0.0 ? (int64_t)i : -1;
-        if (S->hu < 1.0) {
-            S->hu += dt / S->hT;
-            S->hr = S->hr0 + (S->hr1 - S->hr0) * cs_smoothstep(S->hu);
-        }
-        if (S->hr == 0.0)
-            S->held_s += dt;
-        S->hw += S->hr;
-    }
-    if (end && S->hs_n > 0 && S->hlast != (int64_t)(S->hs_n - 1)) {
-        /* The warp ended between samples: the last one is where the path ends. */
-        uint64_t i = S->hs_n - 1;
-        int rc = cs_push_target(S, S->hs[i % CS_HOLD_RING], S->hs_tag[i % CS_HOLD_RING]);
-        if (rc != EF_OK)
-            return rc;
-        S->hlast = (int64_t)i;
-        S->hw = (double)i + 1.0;
     }
     return EF_OK;
 }
@@ -640,10 +610,7 @@ static int cs_setpoint(void *user, double t, const ef_setpoint_t *sp, const ef_p
         return S->cb_rc;
     if (!S->hold_on)
         return cs_push_target(S, pos, sp->tag);
-    uint64_t k = S->hs_n % CS_HOLD_RING;
-    memcpy(S->hs[k], pos, sizeof S->hs[k]);
-    S->hs_tag[k] = sp->tag;
-    S->hs_n++;
+    ef_warp_push(&S->warp, pos, sp->tag);
     return cs_hold_emit(S, 0);
 }
 
@@ -674,7 +641,7 @@ static int cs_event(void *user, const ef_gcode_item_t *it)
         if (rc != EF_OK)
             return rc;
     }
-    uint64_t t0 = cs_now(S);
+    uint64_t t0 = cs_run_now(S);
     uint64_t lim = (uint64_t)S->c->stall_ms * 1000u + (uint64_t)(S->pushed_time * 1e6);
     for (;;) {
         if (cs_io_rc(S) || ef_comaster_state(&S->ms) != EF_COM_RUN)
@@ -685,7 +652,7 @@ static int cs_event(void *user, const ef_gcode_item_t *it)
         } else if (!S->ms.running || cs_seg_drained(S)) {
             break;
         }
-        if (cs_now(S) - t0 > lim)
+        if (cs_run_now(S) - t0 > lim)
             return S->cb_rc = ef_fail(&S->cbm, EF_ERR_TIMEOUT,
                                       "event at line %u: the drives did not finish the moves "
                                       "before it in %.1f s",
@@ -881,12 +848,12 @@ static int cs_run_pipeline(cs_t *S, ef_msg_t *m)
 /* Pump until the master is DONE or in ERROR, for at most lim_us; 1 if it got there. */
 static int cs_wait_end(cs_t *S, uint64_t lim_us)
 {
-    uint64_t t0 = cs_now(S);
+    uint64_t t0 = cs_run_now(S); /* a hold stops it only while FINISH executes */
     for (;;) {
         int st = ef_comaster_state(&S->ms);
         if (st == EF_COM_DONE || st == EF_COM_ERROR)
             return 1;
-        if (cs_io_rc(S) || cs_now(S) - t0 > lim_us)
+        if (cs_io_rc(S) || cs_run_now(S) - t0 > lim_us)
             return 0;
         cs_pump(S, S->mc.cycle_us);
     }
@@ -954,8 +921,8 @@ static void cs_result(cs_t *S)
             acked = nd->next_seq;
     }
     res->starved = S->ms.starved;
-    res->holds = S->holds;
-    res->held_s = S->held_s;
+    res->holds = S->holds + S->warp.holds;
+    res->held_s = S->held_s + S->warp.held_s;
     int done = res->state == EF_COM_DONE && S->ms.finishing;
     if (S->c->mode == EF_COM_MODE_SEGMENT)
         res->executed = done ? res->segments : (acked < res->segments ? acked : res->segments);
@@ -999,13 +966,6 @@ int ef_can_stream(ef_gcode_t *r, const ef_can_stream_cfg_t *c, ef_can_stream_res
             free(S);
             return rc;
         }
-    }
-    if (c->mio && c->mio->cfg.hold >= 0 && c->mode != EF_COM_MODE_CSP) {
-        free(S);
-        return ef_fail(m, EF_ERR_ARG,
-                       "stream: feed hold is wired (%s) but works in --mode csp only: in segment "
-                       "mode the drives run the segments themselves (docs/io.md)",
-                       c->mio->cfg.path);
     }
     /* Machine I/O first: an active e-stop, its latch or an alarm refuses the stream before
      * a single frame could enable a drive. */
@@ -1078,9 +1038,9 @@ int ef_can_stream(ef_gcode_t *r, const ef_can_stream_cfg_t *c, ef_can_stream_res
         S->r = r;
         S->pc = c->pipe;
         S->hold_on = c->mio && c->mio->cfg.hold >= 0 && c->mode == EF_COM_MODE_CSP;
-        S->hr = 1.0;
-        S->hu = 1.0;
-        S->hlast = -1;
+        S->seg_hold_on = c->mio && c->mio->cfg.hold >= 0 && c->mode == EF_COM_MODE_SEGMENT;
+        const float *aa = S->pc.lim.a_axis;
+        ef_warp_init(&S->warp, c->n_nodes, S->mc.cycle_us * 1e-6, fmin(aa[0], fmin(aa[1], aa[2])));
         if (c->mode == EF_COM_MODE_CSP) {
             S->pc.period_us = S->mc.cycle_us;
             S->pc.interp_modes = 1u << S->pc.step_mode;

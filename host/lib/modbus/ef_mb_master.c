@@ -19,6 +19,7 @@ struct ef_mb_master {
     uint32_t next_seq; /* sequence number of the next slot to send */
     uint32_t credits;  /* slots known to be free */
     int begun, started, mode;
+    int hold; /* feed hold requested: every enabling control word carries it */
     int lost; /* the drive restarted: nothing more is sent to it (its state is unknown) */
     double last_poll, last_full; /* any status read; the last whole-block read */
     float pos[3];                /* the drive's command at begin */
@@ -349,6 +350,8 @@ static int mbm_poll_checked(ef_mb_master_t *ms, ef_msg_t *m)
 static int mbm_control(ef_mb_master_t *ms, uint16_t word, const char *what, ef_msg_t *m)
 {
     int exc;
+    if (ms->hold && (word & EF_MB_CTL_ENABLE))
+        word |= EF_MB_CTL_HOLD; /* a level: a start or a quick stop must not drop it */
     return mbm_xfer(ms, 1, EF_MB_REG_CONTROL, 1, &word, what, &exc, m);
 }
 
@@ -459,6 +462,7 @@ int ef_mb_begin(ef_mb_master_t *ms, int mode, ef_msg_t *m)
     ms->credits = ms->slots;
     ms->begun = 1;
     ms->started = 0;
+    ms->hold = 0;
     return EF_OK;
 }
 
@@ -623,6 +627,18 @@ int ef_mb_fault_reset(ef_mb_master_t *ms, ef_msg_t *m)
         return ef_fail(m, EF_ERR_DRIVE, "drive still in fault %u (%s) after a reset", ms->st.fault,
                        mbm_fault_name(ms->st.fault));
     return rc;
+}
+
+/* Feed hold (see ef_mb.h). */
+int ef_mb_hold(ef_mb_master_t *ms, int on, ef_msg_t *m)
+{
+    if (!ms || !ms->begun || ms->mode != EF_MB_MODE_SEGMENT)
+        return ef_fail(m, EF_ERR_STATE, "feed hold needs a drive prepared for segments");
+    if ((on != 0) == ms->hold)
+        return EF_OK;
+    ms->hold = on != 0;
+    uint16_t w = (uint16_t)(EF_MB_CTL_ENABLE | (ms->started ? EF_MB_CTL_START : 0u));
+    return mbm_control(ms, w, on ? "feed hold" : "resume", m);
 }
 
 /* Controlled stop; errors are only reported. */

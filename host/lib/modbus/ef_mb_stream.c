@@ -6,6 +6,7 @@
 #include <time.h>
 #include "evenfeed/host/modbus/ef_mb.h"
 #include "evenfeed/host/io/ef_mio.h"
+#include "evenfeed/host/io/ef_warp.h"
 
 /* Program lines of the segments sent, by sequence number (the line of the executing one). */
 #define MBS_TAGS 1024u
@@ -17,13 +18,35 @@ typedef struct {
     ef_msg_t *m;
     ef_msg_t cbm; /* what a callback's failure was (the pipeline only says it stopped) */
     int cb_rc;
-    double t0; /* direct mode: wall time of the first target */
+    double t0;      /* direct mode: wall time of the first target */
+    double dt;      /* direct mode: the target period (s) */
+    int warp_on;    /* direct mode with feed hold: targets through the warp */
+    ef_warp_t warp; /* ef_warp.h */
     int estop;
     ef_msg_t estop_msg;
     uint32_t tags[MBS_TAGS];
     uint32_t last_tag;
     int out_noted;
+    int begun;     /* the drive is prepared (ef_mb_begin() done) */
+    int holding;   /* segment mode: the hold last asked of the drive */
+    double hold_t; /* segment mode: when the hold bookkeeping last ran (s) */
 } stream_t;
+
+/* Segment mode, at every poll: the drive holds while the feed-hold input asks (the status
+ * of the poll before says whether it stood since). */
+static int mbs_hold(stream_t *S, ef_msg_t *m)
+{
+    double now = ef_mb_now();
+    const ef_mb_status_t *st = ef_mb_last_status(S->ms);
+    if (S->hold_t > 0.0 && (st->status & EF_MB_ST_HELD))
+        S->res->held_s += now - S->hold_t;
+    S->hold_t = now;
+    int want = ef_mio_hold(S->c->mio);
+    if (want && !S->holding)
+        S->res->holds++;
+    S->holding = want;
+    return ef_mb_hold(S->ms, want, m);
+}
 
 /* Machine I/O at every poll and setpoint: a trip is the error that stops the stream. */
 static int mbs_on_poll(void *user, ef_msg_t *m)
@@ -35,8 +58,11 @@ static int mbs_on_poll(void *user, ef_msg_t *m)
         return ef_fail(m, EF_ERR_ESTOP, "%s", S->estop_msg.text);
     uint32_t nx;
     ef_msg_t mm = {{0}};
-    if (ef_mio_process(S->c->mio, &nx, &mm) != EF_ERR_ESTOP)
+    if (ef_mio_process(S->c->mio, &nx, &mm) != EF_ERR_ESTOP) {
+        if (S->begun && S->c->mode == EF_MB_MODE_SEGMENT && S->c->mio->cfg.hold >= 0)
+            return mbs_hold(S, m);
         return 0;
+    }
     S->estop = 1;
     uint32_t line = S->last_tag;
     if (S->ms && S->c->mode == EF_MB_MODE_SEGMENT && S->res->moves > 0) {
@@ -84,22 +110,19 @@ static int mbs_stream_move(void *user, const ef_move_t *mv, const ef_pipe_move_i
     return rc;
 }
 
-/* Direct mode: every setpoint is a target, written when its time comes (real time). */
-static int mbs_stream_setpoint(void *user, double t, const ef_setpoint_t *sp,
-                               const ef_pipe_move_info_t *mi)
+/* Direct mode: one target, written when its time comes (the k-th at t0 + k periods: real
+ * time; a feed hold's warp gives more targets than setpoints, each a period apart). */
+static int mbs_target(stream_t *S, const float *p, uint32_t tag)
 {
-    (void)mi;
-    stream_t *S = user;
     double now = ef_mb_now();
     if (S->res->targets == 0)
-        S->t0 = now - t;
-    double wait = S->t0 + t - now;
+        S->t0 = now;
+    double wait = S->t0 + S->res->targets * S->dt - now;
     if (wait > 0.0) {
         struct timespec ts = {(time_t)wait, (long)((wait - floor(wait)) * 1e9)};
         nanosleep(&ts, NULL);
     }
-    const float p[3] = {sp->p.x, sp->p.y, sp->p.z};
-    S->last_tag = sp->tag;
+    S->last_tag = tag;
     int rc = mbs_on_poll(S, &S->cbm);
     if (rc != 0)
         return S->cb_rc = rc;
@@ -110,10 +133,40 @@ static int mbs_stream_setpoint(void *user, double t, const ef_setpoint_t *sp,
     return rc;
 }
 
+/* Direct mode with feed hold: every target the warp has for the setpoints received (end:
+ * and the last one itself). Held, the same place goes out every period. */
+static int mbs_warp_emit(stream_t *S, int end)
+{
+    float q[3];
+    uint32_t tag;
+    while (ef_warp_next(&S->warp, ef_mio_hold(S->c->mio), end, q, &tag)) {
+        int rc = mbs_target(S, q, tag);
+        if (rc != EF_OK)
+            return rc;
+    }
+    return EF_OK;
+}
+
+/* Direct mode: every setpoint is a target (through the feed-hold warp when one is wired). */
+static int mbs_stream_setpoint(void *user, double t, const ef_setpoint_t *sp,
+                               const ef_pipe_move_info_t *mi)
+{
+    (void)t;
+    (void)mi;
+    stream_t *S = user;
+    const float p[3] = {sp->p.x, sp->p.y, sp->p.z};
+    if (!S->warp_on)
+        return mbs_target(S, p, sp->tag);
+    ef_warp_push(&S->warp, p, sp->tag);
+    return mbs_warp_emit(S, 0);
+}
+
 /* Events (M-codes, dwells) wait until the drive has executed everything before them. */
 static int mbs_stream_event(void *user, const ef_gcode_item_t *it)
 {
     stream_t *S = user;
+    if (S->warp_on && mbs_warp_emit(S, 1) != EF_OK) /* the targets before the event first */
+        return S->cb_rc;
     int rc = ef_mb_drain(S->ms, &S->cbm); /* direct mode too: the outputs need the axis there */
     S->cb_rc = rc;
     if (rc == EF_OK && S->c->verbose)
@@ -164,11 +217,6 @@ int ef_mb_stream(ef_gcode_t *r, const ef_mb_stream_cfg_t *c, ef_mb_stream_result
     S.res = res;
     S.m = m;
     int rc;
-    if (c->mio && c->mio->cfg.hold >= 0)
-        return ef_fail(m, EF_ERR_ARG,
-                       "stream: feed hold is wired (%s) but works with --can --mode csp only "
-                       "(docs/io.md)",
-                       c->mio->cfg.path);
     /* Machine I/O first: an active e-stop, its latch or an alarm refuses the stream before
      * the drive is contacted. */
     if (c->mio && (rc = ef_mio_arm(c->mio, m)) != EF_OK)
@@ -189,6 +237,7 @@ int ef_mb_stream(ef_gcode_t *r, const ef_mb_stream_cfg_t *c, ef_mb_stream_result
     if (rc == EF_OK)
         rc = ef_mb_begin(S.ms, c->mode, m);
     int begun = rc == EF_OK;
+    S.begun = begun;
     ef_pipe_cfg_t pc = c->pipe;
     ef_pipe_cb_t cb;
     memset(&cb, 0, sizeof cb);
@@ -200,6 +249,10 @@ int ef_mb_stream(ef_gcode_t *r, const ef_mb_stream_cfg_t *c, ef_mb_stream_result
         pc.step_mode = EF_STEP_CORRECTED;
         pc.period_us = (uint32_t)lrint(1e6 / c->direct_hz);
         cb.on_setpoint = mbs_stream_setpoint;
+        S.dt = pc.period_us * 1e-6;
+        S.warp_on = c->mio && c->mio->cfg.hold >= 0;
+        const float *a = pc.lim.a_axis;
+        ef_warp_init(&S.warp, 3, S.dt, fmin(a[0], fmin(a[1], a[2])));
     }
     double t_start = ef_mb_now();
     if (rc == EF_OK) {
@@ -209,9 +262,18 @@ int ef_mb_stream(ef_gcode_t *r, const ef_mb_stream_cfg_t *c, ef_mb_stream_result
             ef_fail(m, rc, "%s", S.cbm.text);
         }
     }
+    if (rc == EF_OK && S.warp_on && mbs_warp_emit(&S, 1) != EF_OK) {
+        rc = S.cb_rc; /* the warp's last targets, the path's end among them */
+        ef_fail(m, rc, "%s", S.cbm.text);
+    }
     if (rc == EF_OK)
         rc = ef_mb_drain(S.ms, m);
+    if (S.warp_on) {
+        res->holds = S.warp.holds;
+        res->held_s = S.warp.held_s;
+    }
     res->wall_time = ef_mb_now() - t_start;
+    S.begun = 0; /* ef_mb_end() disables: no hold is written after it */
     if (rc == EF_OK) {
         rc = ef_mb_end(S.ms, m);
     } else if (begun) {

@@ -159,6 +159,11 @@ const char *ef_co_abort_str(uint32_t code);
 /** Controlword bit 4 in segment mode: execute the queue (level; all drives see it at the same
  *  SYNC, so they start together). Clearing it while moving is a quick stop. */
 #define EF_CO_CW_SEG_RUN 0x0010u
+/** Controlword bit 8, halt (CiA 402), in segment mode: feed hold. The drive decelerates
+ *  along the path to rest and stands there, still executing (ef_drive.h's feed hold);
+ *  clearing it resumes exactly there. A level; RPDO1 is applied at SYNC, so every drive
+ *  begins its ramp in the same period. CSP ignores it (the master's targets are the path). */
+#define EF_CO_CW_HALT 0x0100u
 /** Statusword bits. */
 #define EF_CO_SW_FAULT          0x0008u
 #define EF_CO_SW_WARNING        0x0080u
@@ -168,6 +173,9 @@ const char *ef_co_abort_str(uint32_t code);
     0x1000u                   /**< bit 12: CSP: following the target;                              \
                                    segment mode: executing (queue running) */
 #define EF_CO_SW_FERR 0x2000u /**< bit 13: following error above the window */
+/** Statusword bit 14 (manufacturer specific), segment mode: feed hold complete (halt
+ *  requested and the drive stands on the path). */
+#define EF_CO_SW_HELD 0x4000u
 /** Power states decoded from the statusword. */
 typedef enum {
     EF_CO_PS_NOT_READY = 0, /**< not ready to switch on */

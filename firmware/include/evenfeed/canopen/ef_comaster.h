@@ -316,7 +316,8 @@ typedef struct {
     uint32_t last_progress_sync[EF_COM_MAX_NODES];
     uint16_t cw[EF_COM_MAX_NODES]; /**< controlword being sent */
     uint8_t running;               /**< execution started (bit 4 sent) */
-    uint8_t pad[3];
+    uint8_t halt;                  /**< feed hold requested (bit 8 sent, ef_comaster_hold()) */
+    uint8_t pad[2];
     /* TX queue: ::EF_TXQ_DROP_NEWEST, refused frames dropped (ef_txq.h says why). */
     ef_txq_t txq;                       /**< count, sent, again, lost: read only */
     ef_can_frame_t txq_buf[EF_COM_TXQ]; /**< private: its storage */
@@ -404,6 +405,16 @@ int ef_comaster_push_move(ef_comaster_t *m, const ef_move_t *mv);
 
 /** @brief Free places in the active queue (targets or moves). */
 uint32_t ef_comaster_space(const ef_comaster_t *m);
+
+/**
+ * @brief Segment mode: feed hold (on != 0) or resume. Controlword bit 8 (halt,
+ * ::EF_CO_CW_HALT) goes to every node in the same cycle while RUN or FINISH; the drives
+ * decelerate along the path and stand, and resume where they stood when it clears. Segments
+ * keep flowing into the drives' rings meanwhile. A level: stopping or finishing keeps it.
+ * @retval EF_OK
+ * @retval EF_ERR_ARG NULL, or CSP (there the caller's targets are the path: it slows them)
+ */
+int ef_comaster_hold(ef_comaster_t *m, int on);
 
 /**
  * @brief No more input: execute what is queued, come to rest, disable (FINISH -> DONE).

@@ -30,6 +30,16 @@
  * or FAULT (a fault). Motion is commanded only in RUNNING and STOPPING; DISABLED and FAULT
  * hold nothing (the servo's command is frozen where it stopped).
  *
+ * Feed hold (::ef_drive_hold): the drive keeps executing its segments, only slower: the
+ * interpolator's time advances by a rate that ramps from 1 to 0 (a hold) or back (a
+ * resume) along a smoothstep over T = max(::EF_DRIVE_HOLD_RAMP_MIN_US, 3 v / a_stop), v the
+ * law's speed where the ramp begins, so the deceleration the hold adds peaks at
+ * 1.5 v / T <= a_stop / 2. The axes decelerate along the path and stand on it; a resume
+ * continues exactly there, nothing skipped or repeated. Drives that share a time law (CAN
+ * drives in segment mode get one law for all axes) and switch the hold in the same period
+ * stay on the path together. The state stays RUNNING throughout; a hold at rest (nothing
+ * moving) takes effect at once. A quick stop or a fault during a hold stops as ever.
+ *
  * Direct mode (::ef_drive_set_target): for drives streamed plain target positions, the
  * command is moved towards the latest target by a profile limited to the servo's v/a, as
  * a simple drive's own profile generator would. In direct mode the drive follows its
@@ -59,6 +69,11 @@ extern "C" {
  *  the rest of its dt is dropped and counted in ::ef_drive_t::late_us). */
 #ifndef EF_DRIVE_MAX_STEPS
 #define EF_DRIVE_MAX_STEPS 64
+#endif
+
+/** Shortest feed-hold or resume ramp (us): a slow axis still gets a gentle one. */
+#ifndef EF_DRIVE_HOLD_RAMP_MIN_US
+#define EF_DRIVE_HOLD_RAMP_MIN_US 50000u
 #endif
 
 /** Drive states. */
@@ -120,7 +135,15 @@ typedef struct {
     uint32_t time_ms;  /**< time executed in RUNNING/STOPPING since the clear (ms, wraps) */
     uint32_t time_us;  /**< sub-millisecond part of time_ms */
     uint32_t late_us;  /**< time dropped by late calls (see ::EF_DRIVE_MAX_STEPS) */
+    float rate;        /**< feed rate now, 0..1 (a feed hold ramps it down and back) */
+    float rate0;       /**< private: where the rate's ramp began */
+    float rate1;       /**< private: where it ends (0 hold, 1 resume) */
+    float ramp_u;      /**< private: the ramp's phase, 0..1 (1: done) */
+    float ramp_k;      /**< private: phase per servo period */
+    float v_law;       /**< private: the law's speed at the last setpoint (at rate 1) */
     uint8_t moving;    /**< the interpolator is executing a segment */
+    uint8_t hold;      /**< feed hold requested (ef_drive_hold) */
+    uint8_t held;      /**< feed hold complete: requested and the rate is 0 */
 } ef_drive_t;
 
 /**
@@ -212,6 +235,17 @@ int ef_drive_set_target(ef_drive_t *d, ef_vec3_t p);
  * @retval EF_ERR_STATE DISABLED, STOPPING or FAULT, or direct mode
  */
 int ef_drive_push(ef_drive_t *d, const ef_move_t *m);
+
+/**
+ * @brief Feed hold (on != 0) or resume (0): ramp the segments' time rate to 0 or back to 1
+ * (see the file comment). A request equal to the present one changes nothing; a new one
+ * during a ramp starts a new ramp from the rate reached. Kept across stops and clears (the
+ * master's level); in direct mode the master's targets are the path, so a hold is refused.
+ * @retval EF_OK
+ * @retval EF_ERR_ARG   NULL
+ * @retval EF_ERR_STATE on != 0 in direct mode
+ */
+int ef_drive_hold(ef_drive_t *d, int on);
 
 /** @brief Free ring places (0 for NULL). */
 uint32_t ef_drive_free(const ef_drive_t *d);

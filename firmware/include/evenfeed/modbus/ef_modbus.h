@@ -50,8 +50,12 @@ extern "C" {
 #define EF_MB_CTL_QUICK_STOP  0x0004u /**< controlled stop, ring flushed */
 #define EF_MB_CTL_FAULT_RESET 0x0008u /**< FAULT -> DISABLED */
 #define EF_MB_CTL_CLEAR       0x0010u /**< empty the ring, sequence numbers from 0 */
-#define EF_MB_MODE_SEGMENT    1u
-#define EF_MB_MODE_DIRECT     2u
+/** Level, segment mode: feed hold. The drive decelerates along the path and stands there,
+ *  still RUNNING; a write without it resumes exactly there (ef_drive.h's feed hold). Refused
+ *  (illegal value) in direct mode, where the master's targets are the path. */
+#define EF_MB_CTL_HOLD     0x0020u
+#define EF_MB_MODE_SEGMENT 1u
+#define EF_MB_MODE_DIRECT  2u
 /**@}*/
 
 /** @name Status (read-only) */
@@ -78,6 +82,7 @@ extern "C" {
 #define EF_MB_ST_STOPPING    0x0008u
 #define EF_MB_ST_FAULT       0x0010u
 #define EF_MB_ST_DIRECT      0x0020u
+#define EF_MB_ST_HELD        0x0040u /**< feed hold complete: standing on the path */
 #define EF_MB_DONE_NONE      0xFFFFFFFFu
 /**@}*/
 

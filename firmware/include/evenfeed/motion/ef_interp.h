@@ -71,7 +71,7 @@ typedef enum {
 /** One setpoint. */
 typedef struct {
     ef_vec3_t p;    /**< commanded position */
-    float v_plan;   /**< planned path speed now (units/s) */
+    float v_plan;   /**< planned path speed now (units/s), the law's (at rate 1) */
     uint32_t seq;   /**< sequence number of the move being executed (last one when idle) */
     uint32_t tag;   /**< its tag */
     uint8_t moving; /**< 1 while executing a move, 0 when idle or holding */
@@ -143,6 +143,19 @@ uint32_t ef_interp_space(const ef_interp_t *ip);
  * carries the leftover time into the next one.
  */
 int ef_interp_process(ef_interp_t *ip, uint32_t dt_us, uint32_t *next_us, ef_setpoint_t *sp);
+
+/**
+ * @brief ef_interp_process() with the moves' time advanced by rate * dt_us: a feed
+ * override. The path is the same, only traversed slower: speeds scale by rate, and a rate
+ * that changes adds v * d(rate)/dt of tangential acceleration, which the caller keeps small
+ * by ramping it (ef_drive.h's feed hold ramps a smoothstep). At rate 0 time stands still:
+ * the setpoint stays where it is, still moving (sp->moving 1) and never an underrun.
+ * @param rate share of the moves' time per unit of real time, clamped to [0, 1]; NaN is 0
+ *             (a rate nobody can trust stands still)
+ * @retval EF_OK, EF_ERR_ARG, EF_ERR_UNDERRUN as ef_interp_process()
+ */
+int ef_interp_process_rate(ef_interp_t *ip, uint32_t dt_us, float rate, uint32_t *next_us,
+                           ef_setpoint_t *sp);
 
 #ifdef __cplusplus
 }

@@ -95,8 +95,9 @@ typedef struct {
     uint32_t outputs;            /**< M62-M65 outputs switched (machine I/O) */
     double out_err_max;          /**< largest distance of the axes from the commanded point
                                       when an output switched (mm) */
-    uint32_t holds;              /**< feed holds (CSP) */
-    double held_s;               /**< time at rest in feed holds (s) */
+    uint32_t holds;              /**< feed holds begun */
+    double held_s;               /**< time at rest in feed holds (s; segment mode: every
+                                      drive reporting it stands, statusword bit 14) */
     uint32_t estop_line;         /**< after an e-stop: program line being executed (0: none) */
     double estop_latency_s;      /**< after an e-stop: input edge to the stop command (s) */
     double estop_rest_s;         /**< after an e-stop: input edge to all drives at rest (s;

@@ -150,6 +150,16 @@ int ef_mb_target(ef_mb_master_t *ms, const float p[3], ef_msg_t *m);
  */
 int ef_mb_fault_reset(ef_mb_master_t *ms, ef_msg_t *m);
 
+/**
+ * @brief Segment mode: feed hold (on != 0) or resume (::EF_MB_CTL_HOLD, a level every
+ * later enabling control word keeps). The drive decelerates along the path and stands; the
+ * status says ::EF_MB_ST_HELD once it does. A request equal to the last is not written.
+ * @retval EF_OK
+ * @retval EF_ERR_STATE not begun in segment mode
+ * @retval others as the control write (the drive refused it, connection)
+ */
+int ef_mb_hold(ef_mb_master_t *ms, int on, ef_msg_t *m);
+
 /** @brief Best effort controlled stop (quick stop command); the drive's answer is ignored
  *  beyond being logged in m. */
 int ef_mb_quick_stop(ef_mb_master_t *ms, ef_msg_t *m);
@@ -181,7 +191,9 @@ typedef struct {
      *  contacted (an active e-stop, latch or alarm refuses the stream: nothing is written),
      *  read at every poll and setpoint; a trip stops the drive under control (the disable
      *  command: its stop ramp), waits for rest and drops enable: ::EF_ERR_ESTOP naming the
-     *  input and the program line. M62-M65 switch its outputs at their points. */
+     *  input and the program line. M62-M65 switch its outputs at their points. Feed hold:
+     *  segment mode holds the drive (ef_mb_hold()); direct mode slows its targets through a
+     *  time warp (ef_warp.h), as CAN CSP does. */
     struct ef_mio_s *mio;
 } ef_mb_stream_cfg_t;
 
@@ -199,6 +211,9 @@ typedef struct {
     ef_mb_status_t last; /**< the drive's status at the end */
     uint32_t outputs;    /**< M62-M65 outputs switched (machine I/O) */
     uint32_t estop_line; /**< after an e-stop: the program line being executed (0: none) */
+    uint32_t holds;      /**< feed holds begun (machine I/O) */
+    double held_s;       /**< time held (s): segment mode, the drive reporting it stands;
+                              direct mode, the targets given at rate 0 */
     ef_pipe_stats_t pipe;
 } ef_mb_stream_result_t;
 
