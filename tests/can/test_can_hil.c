@@ -1457,6 +1457,9 @@ static void part_io_gpioerr(void)
     EF_CHECK_EQ(rc, IO_EXIT_ESTOP);
     EF_CHECK(hil_err_has("gpioerr", "GPIO read error", "taken as e-stop"));
     EF_CHECK(hil_err_has("gpioerr", "at rest", NULL));
+    /* The chip is gone: enable cannot have been written, and the message must not say it
+     * dropped (the charge pump stopped, which is what drops the drives' relay). */
+    EF_CHECK(hil_err_has("gpioerr", "enable not confirmed off", "charge pump stopped"));
     EF_CHECK(io_exists(latch));
     hil_check_stopped("io_gpioerr", 4000);
 }

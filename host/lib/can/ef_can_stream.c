@@ -983,7 +983,7 @@ int ef_can_stream(ef_gcode_t *r, const ef_can_stream_cfg_t *c, ef_can_stream_res
     rc = ef_canif_open(&S->ci, &icfg, m);
     if (rc != EF_OK) {
         if (c->mio)
-            ef_mio_disarm(c->mio);
+            (void)ef_mio_disarm(c->mio, NULL); /* nothing was sent: the open's error is it */
         if (S->trace)
             fclose(S->trace);
         free(S);
@@ -1079,12 +1079,14 @@ out:
     if (S->estop && c->mio->cfg.stop_ms * 1000ull < stop_lim)
         stop_lim = c->mio->cfg.stop_ms * 1000ull; /* the machine file's bound on enable */
     int rested = cs_wait_end(S, stop_lim) && ef_comaster_error(&S->ms)->what != EF_COM_WHAT_STOP;
+    ef_msg_t dm = {{0}};
+    int drc = EF_OK;
     if (c->mio) {
         /* Enable drops once the drives report rest (the master is DONE or in ERROR after its
          * stop), or when the bound above ran out. */
         if (S->estop)
             res->estop_rest_s = rested ? (double)(cs_mono_ns() - S->estop_edge_ns) * 1e-9 : -1.0;
-        ef_mio_disarm(c->mio);
+        drc = ef_mio_disarm(c->mio, &dm);
     }
     const ef_com_error_t *e = ef_comaster_error(&S->ms);
     if (S->estop) {
@@ -1094,10 +1096,12 @@ out:
             cs_error_text(S, t, sizeof t);
             snprintf(also, sizeof also, "; the master also reported: %s", t);
         }
-        rc = ef_fail(m, EF_ERR_ESTOP, "stream: %s; %s, enable dropped%s", S->estop_msg.text,
+        rc = ef_fail(m, EF_ERR_ESTOP, "stream: %s; %s, %s%s", S->estop_msg.text,
                      rested ? "every drive stopped under control and at rest"
                             : "the drives did not report rest in time",
-                     also);
+                     drc == EF_OK ? "enable dropped" : dm.text, also);
+    } else if (drc != EF_OK && rc == EF_OK) {
+        rc = ef_fail(m, drc, "stream: machine I/O: %s", dm.text);
     } else if (e->code != 0 && (rc == EF_OK || S->cb_master)) {
         /* The master's error is the cause (a callback only saw its consequence). */
         char t[400];

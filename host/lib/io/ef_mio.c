@@ -743,27 +743,34 @@ int ef_mio_out(ef_mio_t *io, unsigned p, int value, ef_msg_t *m)
     return ef_gpio_set(&io->out, (unsigned)io->set_of[io->cfg.out[p]], (uint8_t)(value != 0), m);
 }
 
-void ef_mio_disarm(ef_mio_t *io)
+int ef_mio_disarm(ef_mio_t *io, ef_msg_t *m)
 {
     if (!io || io->state == EF_MIO_CLOSED)
-        return;
+        return EF_OK;
     pthread_mutex_lock(&io->mu);
     int was = io->state;
     if (was == EF_MIO_ARMED || was == EF_MIO_TRIPPED)
         io->state = EF_MIO_SAFE; /* the pump stops at the thread's next round */
     pthread_mutex_unlock(&io->mu);
     if (was != EF_MIO_ARMED && was != EF_MIO_TRIPPED)
-        return;
-    (void)mio_enable(io, 0, NULL);
-    if (io->out.n)
-        (void)ef_gpio_safe(&io->out, NULL);
+        return EF_OK;
+    ef_msg_t em = {{0}}, om = {{0}};
+    int rc = mio_enable(io, 0, &em);
+    int orc = io->out.n ? ef_gpio_safe(&io->out, &om) : EF_OK;
+    if (rc != EF_OK)
+        return ef_fail(m, EF_ERR_IO, "enable not confirmed off: %s (the charge pump stopped)",
+                       em.text);
+    if (orc != EF_OK)
+        return ef_fail(m, EF_ERR_IO, "outputs not confirmed safe: %s (the charge pump stopped)",
+                       om.text);
+    return EF_OK;
 }
 
 void ef_mio_close(ef_mio_t *io)
 {
     if (!io || io->state == EF_MIO_CLOSED)
         return;
-    ef_mio_disarm(io);
+    (void)ef_mio_disarm(io, NULL); /* closing: the lines are released safe next, or gone */
     if (io->th_started) {
         pthread_mutex_lock(&io->mu);
         io->th_quit = 1;

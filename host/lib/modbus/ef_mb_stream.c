@@ -229,7 +229,7 @@ int ef_mb_stream(ef_gcode_t *r, const ef_mb_stream_cfg_t *c, ef_mb_stream_result
     rc = ef_mb_open(&mbc, &S.ms, m);
     if (rc != EF_OK) {
         if (c->mio)
-            ef_mio_disarm(c->mio);
+            (void)ef_mio_disarm(c->mio, NULL); /* nothing was sent: the open's error is it */
         return rc;
     }
     if (c->fault_reset)
@@ -274,22 +274,29 @@ int ef_mb_stream(ef_gcode_t *r, const ef_mb_stream_cfg_t *c, ef_mb_stream_result
     }
     res->wall_time = ef_mb_now() - t_start;
     S.begun = 0; /* ef_mb_end() disables: no hold is written after it */
+    int ended = 0;
     if (rc == EF_OK) {
         rc = ef_mb_end(S.ms, m);
-    } else if (begun) {
+        ended = 1;
+    }
+    int erc = EF_OK;
+    if (rc != EF_OK && begun && !ended) {
         /* Whatever went wrong, the drive is told to stop under control and disable (not
          * sent to a drive that restarted); the first error is the one reported. */
         ef_msg_t ignore;
-        int erc = ef_mb_end(S.ms, &ignore);
-        if (S.estop)
-            rc = ef_fail(m, EF_ERR_ESTOP, "%s; %s, enable dropped", S.estop_msg.text,
-                         erc == EF_OK ? "the drive stopped under control and at rest"
-                                      : "the drive did not report rest in time");
+        erc = ef_mb_end(S.ms, &ignore);
     }
     res->io = *ef_mb_stats(S.ms);
     res->last = *ef_mb_last_status(S.ms);
     ef_mb_close(S.ms);
-    if (c->mio)
-        ef_mio_disarm(c->mio); /* after the drive reported rest (or the bound of ef_mb_end) */
+    ef_msg_t dm = {{0}};
+    int drc = c->mio ? ef_mio_disarm(c->mio, &dm) : EF_OK; /* after rest (or ef_mb_end's bound) */
+    if (S.estop)
+        rc = ef_fail(m, EF_ERR_ESTOP, "%s; %s, %s", S.estop_msg.text,
+                     erc == EF_OK ? "the drive stopped under control and at rest"
+                                  : "the drive did not report rest in time",
+                     drc == EF_OK ? "enable dropped" : dm.text);
+    else if (drc != EF_OK && rc == EF_OK)
+        rc = ef_fail(m, drc, "machine I/O: %s", dm.text);
     return rc;
 }

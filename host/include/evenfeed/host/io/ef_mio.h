@@ -207,8 +207,15 @@ int ef_mio_out(ef_mio_t *io, unsigned p, int value, ef_msg_t *m);
  */
 int ef_mio_m_words(const char *text, int *codes, long *ps, int max);
 
-/** @brief Enable off, pump stopped, program outputs safe: SAFE (from ARMED or TRIPPED). */
-void ef_mio_disarm(ef_mio_t *io);
+/**
+ * @brief Enable off, pump stopped, program outputs safe: SAFE (from ARMED or TRIPPED).
+ * The pump stops whatever else happens (its thread stops the wave), so a safety relay on it
+ * drops the drives' enable even where a line cannot be written.
+ * @retval EF_OK every enable and program output was written inactive (or nothing to do)
+ * @retval EF_ERR_IO a line could not be written (its chip gone, the kernel refused): m names
+ *         it; the caller must not say enable dropped
+ */
+int ef_mio_disarm(ef_mio_t *io, ef_msg_t *m);
 
 /** @brief Safe outputs, lines released, the pump thread ended. */
 void ef_mio_close(ef_mio_t *io);
