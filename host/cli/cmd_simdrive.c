@@ -27,6 +27,10 @@ static const char usage[] =
     "  --drop-reply-at SEQ  execute segment SEQ's write but send no reply\n"
     "  --disconnect-at SEQ  execute segment SEQ's write, then drop the connection\n"
     "  --fault-at SEC       raise a drive fault at drive time SEC\n"
+    "the drive's own I/O on GPIO (docs/io.md), CHIP:LINE or a line name on gpiochip0:\n"
+    "  --sto LINE           hardware enable (safe torque off) input: while it reads 0\n"
+    "                       the power stage may not be on (drive fault 6 when it is)\n"
+    "  --alarm-out LINE     alarm output: 1 while the drive is in fault, and on exit\n"
     "\n"
     "A simulated CANopen CiA 402 drive (one axis, docs/can.md) on a SocketCAN interface:\n"
     "CSP and evenfeed segment mode through the same servo model. Prints\n"
@@ -39,6 +43,10 @@ static const char usage[] =
     "  --log FILE           candump log of what the drive receives and sends\n"
     "  --run-ms MS          stop after MS ms of wall time (default: run until a signal)\n"
     "  --sync-timeout MS    SYNC-loss watchdog 0x2003 at power-up (default 500; 0 off)\n"
+    "the drive's own I/O on GPIO (docs/io.md), CHIP:LINE or a line name on gpiochip0:\n"
+    "  --sto LINE           hardware enable (safe torque off) input: while it reads 0\n"
+    "                       the power stage may not be on (EMCY 0xFF06 when it is)\n"
+    "  --alarm-out LINE     alarm output: 1 while the drive is in fault, and on exit\n"
     "fault injection, at SYNC time in OPERATION ENABLED (SYNCs x cycle period), each once:\n"
     "  --fault-at MS        raise drive fault 4 (EMCY 0xFF04)\n"
     "  --hb-stop-at MS      stop sending heartbeats\n"
@@ -106,7 +114,9 @@ enum {
     O_EXCEPTION_AT,
     O_DROP_REPLY_AT,
     O_DISCONNECT_AT,
-    O_SYNC_TIMEOUT
+    O_SYNC_TIMEOUT,
+    O_STO,
+    O_ALARM_OUT
 };
 
 /* `evenfeed sim-drive can`: one simulated CANopen drive. */
@@ -123,6 +133,8 @@ static int csd_can(int argc, char **argv)
                                          {"bus-off-at", required_argument, NULL, O_BUS_OFF_AT},
                                          {"drop-rx", required_argument, NULL, O_DROP_RX},
                                          {"sync-timeout", required_argument, NULL, O_SYNC_TIMEOUT},
+                                         {"sto", required_argument, NULL, O_STO},
+                                         {"alarm-out", required_argument, NULL, O_ALARM_OUT},
                                          CLI_OPT_HELP,
                                          CLI_OPT_END};
     ef_can_sim_cfg_t c;
@@ -183,6 +195,12 @@ static int csd_can(int argc, char **argv)
         case O_SYNC_TIMEOUT:
             if ((rc = cli_opt_int(&g, 0, 60000, &x)) == EF_OK)
                 c.sync_timeout_ms = (long)x;
+            break;
+        case O_STO:
+            c.sto_line = g.val;
+            break;
+        case O_ALARM_OUT:
+            c.alarm_line = g.val;
             break;
         default: /* CLI_ARG */
             return cli_error(EF_ERR_ARG, "sim-drive: unknown option '%s'", g.val);
@@ -246,6 +264,8 @@ static int csd_modbus(int argc, char **argv)
         {"drop-reply-at", required_argument, NULL, O_DROP_REPLY_AT},
         {"disconnect-at", required_argument, NULL, O_DISCONNECT_AT},
         {"fault-at", required_argument, NULL, O_FAULT_AT},
+        {"sto", required_argument, NULL, O_STO},
+        {"alarm-out", required_argument, NULL, O_ALARM_OUT},
         CLI_OPT_HELP,
         CLI_OPT_END};
     ef_mb_server_cfg_t c;
@@ -309,6 +329,12 @@ static int csd_modbus(int argc, char **argv)
             if (cli_parse_double(g.val, &d) != EF_OK || !(d >= 0.0))
                 return cli_error(EF_ERR_ARG, "sim-drive: --fault-at needs seconds >= 0");
             c.fault_at_s = d;
+            break;
+        case O_STO:
+            c.sto_line = g.val;
+            break;
+        case O_ALARM_OUT:
+            c.alarm_line = g.val;
             break;
         default: /* CLI_ARG */
             return cli_error(EF_ERR_ARG, "sim-drive: unknown option '%s'", g.val);

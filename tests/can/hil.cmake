@@ -71,7 +71,7 @@ if(NOT EF_SANITIZE AND TARGET ef_tables_default)
   # chip the guest script makes.
   foreach(part csp segment drop emcy heartbeat busoff boot start masterdeath
                io_estop io_start io_alarm io_pump io_hold io_hold_seg io_outputs io_modbus
-               io_modbus_hold io_modbus_hold_direct io_gpioerr)
+               io_modbus_hold io_modbus_hold_direct io_gpioerr io_sto io_modbus_sto)
     if(part MATCHES "^io_")
       set(name hil_${part})
     else()

@@ -20,8 +20,9 @@
  * Usage: test_can_hil EVENFEED SRC_DIR OUT_DIR PART
  *   PART: csp | segment | drop | emcy | heartbeat | busoff | boot | start | masterdeath
  *         io_estop | io_start | io_alarm | io_pump | io_hold | io_hold_seg | io_outputs |
- *         io_modbus | io_modbus_hold | io_modbus_hold_direct | io_gpioerr (machine I/O on a
- * gpio-sim chip that tests/hil/can.sh makes: EF_GSIM_CHIP, EF_GSIM_SYS)
+ *         io_modbus | io_modbus_hold | io_modbus_hold_direct | io_gpioerr | io_sto |
+ *         io_modbus_sto (machine I/O on
+ * a gpio-sim chip that tests/hil/can.sh makes: EF_GSIM_CHIP, EF_GSIM_SYS)
  */
 #include <errno.h>
 #include <fcntl.h>
@@ -852,7 +853,18 @@ static void part_boot(void)
 
 /* Lines of the guest's simulated chip "efio" (tests/hil/can.sh), by offset; the machine
  * file names them. */
-enum { IO_ESTOP, IO_ENABLE, IO_ALARM, IO_PUMP, IO_HOLD, IO_START, IO_OUT0, IO_OUT1 };
+enum {
+    IO_ESTOP,
+    IO_ENABLE,
+    IO_ALARM,
+    IO_PUMP,
+    IO_HOLD,
+    IO_START,
+    IO_OUT0,
+    IO_OUT1,
+    IO_STO,
+    IO_ALMOUT
+};
 /** SYNC period of the CSP machine I/O parts (us): 1 ms SYNC is beyond User-Mode Linux (the
  *  mean period comes out near 7 ms, and the drives step per SYNC: a 12 s path takes 90 s). */
 #define IO_CSP_CYCLE "4000"
@@ -1288,6 +1300,99 @@ static void part_io_alarm(void)
     io_pull(IO_ALARM, 0);
 }
 
+/* A drive's own I/O (sim-drive --sto --alarm-out on node 1): its enable (STO) input dropping
+ * mid-path faults it (EMCY 0xFF06), its alarm output goes active, the streamer stops every
+ * axis under control naming the node and the cause, and drops enable; with the input off
+ * from the start, the drive refuses to run and nothing moves. */
+static int io_sto_drives(tm_proc_t d[4])
+{
+    static char x1[300];
+    const char *chip = getenv("EF_GSIM_CHIP");
+    snprintf(x1, sizeof x1, "--sto %s:STO --alarm-out %s:ALMOUT", chip ? chip : "gpiochip0",
+             chip ? chip : "gpiochip0");
+    hil_drives_t x = {{NULL}};
+    x.extra[1] = x1;
+    return hil_start(d, &x);
+}
+
+static void part_io_sto(void)
+{
+    char prog[512], mach[512], latch[600], extra[700];
+    snprintf(prog, sizeof prog, "%s/samples/profile.ngc", g_src);
+    io_machine(mach, sizeof mach, 0);
+    snprintf(latch, sizeof latch, "%s/estop.latch", g_out);
+    snprintf(extra, sizeof extra, "--machine %s", mach);
+    unlink(latch);
+    EF_CHECK_EQ(io_idle(), 0);
+    EF_CHECK_EQ(io_pull(IO_STO, 1), 0); /* torque permitted */
+    tm_proc_t d[4] = {{0}}, st;
+    if (io_sto_drives(d) != 0) {
+        EF_CHECK(0);
+        hil_stop(d);
+        return;
+    }
+    EF_CHECK_EQ(io_level(IO_ALMOUT), 0); /* no fault: no alarm */
+    EF_CHECK_EQ(io_spawn(&st, "sto", "segment", extra, prog), 0);
+    EF_CHECK(io_wait_x(&st, 20.0));
+    EF_CHECK_EQ(io_level(IO_ALMOUT), 0);
+    io_pull(IO_STO, 0); /* the drive's enable wire broken */
+    int rc = io_wait(&st, "sto", 30000);
+    EF_CHECK_EQ(rc, -EF_ERR_DRIVE);
+    EF_CHECK(hil_err_has("sto", "node 1", "safe torque off"));
+    EF_CHECK_EQ(io_level(IO_ALMOUT), 1);
+    EF_CHECK_EQ(io_level(IO_ENABLE), 0);
+    hil_stop(d); /* (a released gpio-sim line reads its pull again, so the alarm output's
+                  * safe state at exit is not visible here) */
+    hil_check_stopped("io_sto", 10000);
+    char path[512];
+    snprintf(path, sizeof path, "%s/drive1.csv", g_out);
+    char *o = hil_slurp(path);
+    EF_CHECK(o && strstr(o, "# STO: enable input off"));
+    free(o);
+
+    /* Off from the start: the drive faults as its power stage comes on; nothing moves. */
+    EF_CHECK_EQ(io_pull(IO_STO, 0), 0);
+    if (io_sto_drives(d) != 0) {
+        EF_CHECK(0);
+        hil_stop(d);
+        return;
+    }
+    EF_CHECK_EQ(io_spawn(&st, "sto0", "segment", extra, prog), 0);
+    rc = io_wait(&st, "sto0", 30000);
+    hil_stop(d);
+    EF_CHECK_EQ(rc, -EF_ERR_DRIVE);
+    EF_CHECK(hil_err_has("sto0", "node 1", "safe torque off"));
+    EF_CHECK_EQ(io_level(IO_ENABLE), 0);
+    double moved = 0;
+    for (int node = 1; node <= 3; node++) {
+        hil_dtrace_t T;
+        if (hil_dtrace_load(node, &T) != 0) {
+            EF_CHECK(0);
+            continue;
+        }
+        for (size_t i = 0; i < T.np; i++)
+            moved = fmax(moved, fabs(T.p[i].cmd - T.p[0].cmd));
+        hil_dtrace_free(&T);
+    }
+    printf("io_sto: STO off at the start: the commands moved by %.6f mm\n", moved);
+    EF_CHECK(moved == 0.0);
+    io_pull(IO_STO, 1);
+
+    /* A line that does not exist: refused before the drive appears on the bus. */
+    char cmd[1024];
+    snprintf(cmd, sizeof cmd,
+             "%s sim-drive can --iface vcan0 --node 9 --sto %s:NOPE >%s/sto_bad.out "
+             "2>%s/sto_bad.err",
+             g_ef, getenv("EF_GSIM_CHIP") ? getenv("EF_GSIM_CHIP") : "gpiochip0", g_out, g_out);
+    int sr = system(cmd);
+    EF_CHECK(WIFEXITED(sr) && WEXITSTATUS(sr) != 0);
+    EF_CHECK(hil_err_has("sto_bad", "sto", "NOPE"));
+    snprintf(cmd, sizeof cmd, "%s/sto_bad.out", g_out);
+    char *bo = hil_slurp(cmd);
+    EF_CHECK(!bo || !strstr(bo, "ready"));
+    free(bo);
+}
+
 /* The charge pump runs while streaming and stops within 10 ms of SIGKILL of the streamer. */
 static void part_io_pump(void)
 {
@@ -1684,6 +1789,56 @@ static void part_io_modbus_hold_direct(void)
     io_modbus_hold_in("direct");
 }
 
+/* The same on Modbus (sim-drive modbus --sto --alarm-out): the enable input dropping
+ * mid-path faults the drive (fault 6), its alarm output goes active, the stream stops
+ * naming the fault, enable drops. */
+static void part_io_modbus_sto(void)
+{
+    char prog[512], mach[512], latch[600], trace[600], x[200];
+    snprintf(prog, sizeof prog, "%s/samples/profile.ngc", g_src);
+    io_machine(mach, sizeof mach, 0);
+    snprintf(latch, sizeof latch, "%s/estop.latch", g_out);
+    snprintf(trace, sizeof trace, "%s/mbdrive.csv", g_out);
+    unlink(latch);
+    EF_CHECK_EQ(io_idle(), 0);
+    EF_CHECK_EQ(io_pull(IO_STO, 1), 0);
+    const char *chip = getenv("EF_GSIM_CHIP") ? getenv("EF_GSIM_CHIP") : "gpiochip0";
+    snprintf(x, sizeof x, "--sto %s:STO --alarm-out %s:ALMOUT", chip, chip);
+    tm_proc_t d, st;
+    int port = 0;
+    if (tm_drive(&d, "--tcp", "127.0.0.1:0", trace, x, &port) != 0 || port <= 0) {
+        EF_CHECK(0);
+        return;
+    }
+    EF_CHECK_EQ(io_level(IO_ALMOUT), 0);
+    static char cmd[2048];
+    snprintf(cmd, sizeof cmd,
+             "exec %s stream --modbus tcp://127.0.0.1:%d --timeout 1000 --machine %s %s"
+             " >%s/mbs.out 2>%s/mbs.err",
+             g_ef, port, mach, prog, g_out, g_out);
+    char *argv[] = {"/bin/sh", "-c", cmd, NULL};
+    EF_CHECK_EQ(tm_spawn(argv, 0, &st), 0);
+    int state = 0, moving = 0;
+    double c = 0, a = 0;
+    for (int i = 0; i < 1200 && !moving && io_running(&st); i++) {
+        moving = io_mb_now(trace, &state, &c, &a) && a > 20.0;
+        if (!moving)
+            usleep(50000);
+    }
+    EF_CHECK(moving);
+    io_pull(IO_STO, 0);
+    int rc = io_wait(&st, "mbs", 30000);
+    EF_CHECK_EQ(rc, -EF_ERR_DRIVE);
+    EF_CHECK(hil_err_has("mbs", "drive fault 6", "safe torque off"));
+    EF_CHECK_EQ(io_level(IO_ALMOUT), 1);
+    EF_CHECK_EQ(io_level(IO_ENABLE), 0);
+    io_mb_now(trace, &state, &c, &a);
+    printf("io_modbus_sto: drive state %d at the end\n", state);
+    EF_CHECK_EQ(state, EF_DRV_FAULT);
+    tm_stop(&d, SIGTERM);
+    io_pull(IO_STO, 1);
+}
+
 /* ------------------------------------------------------------------ e-stop latency benchmark */
 
 static int io_cmp_double(const void *a, const void *b)
@@ -1870,6 +2025,8 @@ int main(int argc, char **argv)
         {"io_outputs", part_io_outputs},
         {"io_modbus", part_io_modbus},
         {"io_gpioerr", part_io_gpioerr},
+        {"io_sto", part_io_sto},
+        {"io_modbus_sto", part_io_modbus_sto},
         {"io_latency", part_io_latency},
     };
     if (argc < 5) {

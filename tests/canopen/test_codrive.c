@@ -1160,7 +1160,7 @@ static void test_faults(void)
     drive_up(NULL);
     to_op_enabled(1000, EF_CO_MODE_CSP);
     EF_CHECK_EQ(ef_codrive_fault(&g_d, 0), EF_ERR_ARG);
-    EF_CHECK_EQ(ef_codrive_fault(&g_d, 6), EF_ERR_ARG);
+    EF_CHECK_EQ(ef_codrive_fault(&g_d, EF_DRV_FAULT_LAST + 1), EF_ERR_ARG);
     /* Injected at rest: EMCY, FAULT at once. */
     log_clear();
     EF_CHECK_EQ(ef_codrive_fault(&g_d, EF_DRV_FAULT_INJECTED), EF_OK);

@@ -310,7 +310,7 @@ static void test_init_args(void)
     EF_CHECK(d->cmd.x == 1 && d->act.z == 3);
     EF_CHECK_EQ(ef_drive_start(d), EF_ERR_STATE); /* disabled */
     EF_CHECK_EQ(ef_drive_fault(d, 0), EF_ERR_ARG);
-    EF_CHECK_EQ(ef_drive_fault(d, 6), EF_ERR_ARG);
+    EF_CHECK_EQ(ef_drive_fault(d, EF_DRV_FAULT_LAST + 1), EF_ERR_ARG);
     EF_CHECK_EQ(ef_drive_fault_reset(d), EF_ERR_STATE);
     EF_CHECK_EQ(ef_drive_process(NULL, 10, NULL), EF_ERR_ARG);
 }

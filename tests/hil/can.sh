@@ -21,7 +21,8 @@ io_*)
     # the test writes (e-stop, enable, alarm, charge pump, feed hold, cycle start, outputs).
     . "$EF_HIL_DIR/gpio_lib.sh"
     gsim_setup || exit 1
-    dev=$(gsim_chip efio 8 "ESTOP ENABLE ALARM PUMP HOLD START OUT0 OUT1") || exit 1
+    # STO and ALMOUT are a drive's own (sim-drive --sto, --alarm-out).
+    dev=$(gsim_chip efio 10 "ESTOP ENABLE ALARM PUMP HOLD START OUT0 OUT1 STO ALMOUT") || exit 1
     EF_GSIM_CHIP=${dev#/dev/}
     EF_GSIM_SYS=$(gsim_sysdir efio)
     export EF_GSIM_CHIP EF_GSIM_SYS

@@ -112,6 +112,8 @@ uint16_t ef_co_emcy_of_fault(int drive_fault)
         return EF_CO_EMCY_HEARTBEAT;
     case EF_DRV_FAULT_INJECTED:
         return EF_CO_EMCY_INJECTED;
+    case EF_DRV_FAULT_STO:
+        return EF_CO_EMCY_STO;
     default:
         return EF_CO_EMCY_SEGMENT;
     }
@@ -133,6 +135,8 @@ const char *ef_co_emcy_str(uint16_t code)
         return "fault injected";
     case EF_CO_EMCY_SEGMENT:
         return "segment refused";
+    case EF_CO_EMCY_STO:
+        return "safe torque off: the drive's enable input dropped";
     default:
         return "unknown emergency code";
     }

@@ -1651,7 +1651,7 @@ int ef_codrive_process(ef_codrive_t *d, uint32_t dt_us, uint32_t *next_us)
 /* Fault injection (contract in ef_codrive.h). */
 int ef_codrive_fault(ef_codrive_t *d, int code)
 {
-    if (!d || code <= EF_DRV_FAULT_NONE || code > EF_DRV_FAULT_SEGMENT)
+    if (!d || code <= EF_DRV_FAULT_NONE || code > EF_DRV_FAULT_LAST)
         return EF_ERR_ARG;
     (void)ef_drive_fault(&d->drv, code);
     cod_update(d);

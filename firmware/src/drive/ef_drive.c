@@ -207,7 +207,7 @@ int ef_drive_quick_stop(ef_drive_t *d)
 /* External fault input (ef_drive.h). */
 int ef_drive_fault(ef_drive_t *d, int code)
 {
-    if (!d || code <= EF_DRV_FAULT_NONE || code > EF_DRV_FAULT_SEGMENT)
+    if (!d || code <= EF_DRV_FAULT_NONE || code > EF_DRV_FAULT_LAST)
         return EF_ERR_ARG;
     drv_raise(d, (uint8_t)code);
     return EF_OK;

@@ -10,6 +10,7 @@
 #include "evenfeed/host/can/ef_canhost.h"
 #include "evenfeed/host/can/ef_canpump.h"
 #include "evenfeed/host/can/ef_sockcan.h"
+#include "evenfeed/host/io/ef_drvio.h"
 
 /* Longest receive wait (us): bounds how late a signal that arrives just before the wait
  * is noticed. */
@@ -28,7 +29,29 @@ typedef struct {
     uint32_t chunks;   /* segment chunk frames received (1-based count of the last) */
     uint32_t last_seq; /* d.drv.next_seq already traced */
     int fault_done, hb_done, busoff_done;
+    ef_drvio_t io; /* STO input, alarm output (ef_drvio.h) */
+    int sto_said;  /* the STO fault was traced */
 } csim_t;
+
+/* The drive's own I/O, every SYNC and loop round: no torque without the enable input (a
+ * power stage on then is an STO fault), the alarm output follows the fault. */
+static void csim_io(csim_t *S)
+{
+    if (!S->io.open)
+        return;
+    int p = S->d.power;
+    ef_msg_t mm = {{0}};
+    int ok = ef_drvio_process(&S->io, p == EF_CO_PS_FAULT || p == EF_CO_PS_FAULT_REACTION, &mm);
+    if (!ok && p == EF_CO_PS_OP_ENABLED) {
+        S->io.sto_drops++;
+        if (S->trace)
+            fprintf(S->trace, "# STO: enable input off at SYNC %u%s%s\n", (unsigned)S->d.sync_count,
+                    mm.text[0] ? ": " : "", mm.text);
+        ef_codrive_fault(&S->d, EF_DRV_FAULT_STO);
+        /* The alarm at once, not a round later. */
+        (void)ef_drvio_process(&S->io, 1, NULL);
+    }
+}
 
 /* Defaults documented in ef_canhost.h. */
 void ef_can_sim_cfg_default(ef_can_sim_cfg_t *c)
@@ -175,6 +198,7 @@ static int csim_rx(void *obj, const ef_can_frame_t *f, uint32_t ts_us)
     csim_trace_accepted(S);
     if (S->d.sync_count != syncs)
         csim_after_sync(S);
+    csim_io(S); /* also after a controlword that enabled the power stage */
     return rc;
 }
 
@@ -185,6 +209,7 @@ static int csim_process(void *obj, uint32_t dt_us, uint32_t *next_us)
     float cmd0 = S->d.drv.cmd.x, act0 = S->d.drv.act.x;
     uint16_t sw0 = S->d.statusword;
     int rc = ef_codrive_process(&S->d, dt_us, next_us); /* a bus error: the drive keeps trying */
+    csim_io(S);
     /* The drive stepped on its own clock (the SYNC-loss watchdog's stop): trace it too. */
     if (S->d.drv.cmd.x != cmd0 || S->d.drv.act.x != act0 || S->d.statusword != sw0)
         csim_trace_p(S);
@@ -245,6 +270,10 @@ static int csim_open(csim_t *S, ef_msg_t *m)
                        (unsigned)c->node, (double)c->home);
     if (c->sync_timeout_ms >= 0) /* as the power-up value of 0x2003 (a reset node restores 500) */
         S->d.sync_timeout_ms = (uint16_t)c->sync_timeout_ms;
+    rc = ef_drvio_open(&S->io, c->sto_line, c->alarm_line, m);
+    if (rc != EF_OK)
+        return rc; /* before the ready line: the drive never appears on the bus */
+    csim_io(S);
     FILE *ready = c->ready ? c->ready : stdout;
     fprintf(ready, "ready can %u %s\n", (unsigned)c->node, c->iface);
     fflush(ready);
@@ -286,6 +315,7 @@ int ef_can_sim_run(const ef_can_sim_cfg_t *c, ef_msg_t *m)
         fclose(S->trace);
     }
     ef_canif_close(&S->ci);
+    ef_drvio_close(&S->io);
     free(S);
     return rc;
 }

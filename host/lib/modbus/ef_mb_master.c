@@ -150,6 +150,8 @@ static const char *mbm_fault_name(int code)
         return "external fault";
     case EF_DRV_FAULT_SEGMENT:
         return "segment refused";
+    case EF_DRV_FAULT_STO:
+        return "safe torque off: the drive's enable input dropped";
     default:
         return "unknown fault";
     }

@@ -12,6 +12,7 @@
 #include <time.h>
 #include <unistd.h>
 #include "evenfeed/host/modbus/ef_mb.h"
+#include "evenfeed/host/io/ef_drvio.h"
 
 #define SRV_MAX_CLIENTS 8
 
@@ -28,7 +29,30 @@ typedef struct {
     int fault_done, exception_done, drop_done, disconnect_done;
     double bits_per_char;
     int prev_state; /* the trace also records the period a drive becomes DISABLED */
+    ef_drvio_t io;  /* STO input, alarm output (ef_drvio.h) */
 } srv_t;
+
+/* The drive's own I/O, every loop round: no torque without the enable input (a power stage
+ * on then is an STO fault), the alarm output follows the fault. */
+static void srv_io(srv_t *s)
+{
+    if (!s->io.open)
+        return;
+    ef_drive_t *d = &s->dev->drv;
+    ef_msg_t mm = {{0}};
+    int fault = d->state == EF_DRV_FAULT || d->fault != EF_DRV_FAULT_NONE;
+    int ok = ef_drvio_process(&s->io, fault, &mm);
+    int powered =
+        d->state == EF_DRV_ENABLED || d->state == EF_DRV_RUNNING || d->state == EF_DRV_STOPPING;
+    if (!ok && powered && !fault) {
+        s->io.sto_drops++;
+        if (s->trace)
+            fprintf(s->trace, "# STO: enable input off at %.6f%s%s\n", s->drive_t,
+                    mm.text[0] ? ": " : "", mm.text);
+        ef_drive_fault(d, EF_DRV_FAULT_STO);
+        (void)ef_drvio_process(&s->io, 1, NULL); /* the alarm at once */
+    }
+}
 
 /* Fill the server defaults (documented in ef_mb.h). */
 void ef_mb_server_cfg_default(ef_mb_server_cfg_t *c)
@@ -281,7 +305,11 @@ int ef_mb_serve(const ef_mb_server_cfg_t *c, ef_msg_t *m)
         }
         fprintf(s.trace, "t,state,seq,moving,cmd_x,cmd_y,cmd_z,act_x,act_y,act_z,ferr\n");
     }
-    rc = srv_open(&s, m);
+    rc = ef_drvio_open(&s.io, c->sto_line, c->alarm_line, m); /* before the ready line */
+    if (rc == EF_OK) {
+        srv_io(&s);
+        rc = srv_open(&s, m);
+    }
     double last = ef_mb_now(), acc = 0.0;
     uint8_t q[MODBUS_TCP_MAX_ADU_LENGTH];
     while (rc == EF_OK && !(c->stop && *c->stop)) {
@@ -307,6 +335,7 @@ int ef_mb_serve(const ef_mb_server_cfg_t *c, ef_msg_t *m)
         struct timeval tv = {(time_t)wait, (long)((wait - floor(wait)) * 1e6)};
         int n = select(maxfd + 1, &rd, NULL, NULL, &tv);
         srv_tick(&s, &last, &acc);
+        srv_io(&s);
         if (s.trace)
             fflush(s.trace); /* a reader sees every period up to now, requests or not */
         if (n <= 0)
@@ -353,5 +382,6 @@ int ef_mb_serve(const ef_mb_server_cfg_t *c, ef_msg_t *m)
     modbus_mapping_free(s.map);
     if (s.trace)
         fclose(s.trace);
+    ef_drvio_close(&s.io);
     return rc;
 }

@@ -201,6 +201,7 @@ const char *ef_co_power_str(int state);
 #define EF_CO_EMCY_UNDERRUN  0xFF01u /**< segment queue ran dry while moving */
 #define EF_CO_EMCY_INJECTED  0xFF04u /**< fault injected (tests, external input) */
 #define EF_CO_EMCY_SEGMENT   0xFF05u /**< a segment was refused (bad data, not continuous) */
+#define EF_CO_EMCY_STO       0xFF06u /**< safe torque off: the enable input dropped */
 /** @brief EMCY code of an ::ef_drive_fault_t. */
 uint16_t ef_co_emcy_of_fault(int drive_fault);
 /** @brief Text of an EMCY error code. Never NULL. */

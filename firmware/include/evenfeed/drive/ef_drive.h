@@ -93,7 +93,12 @@ typedef enum {
     EF_DRV_FAULT_WATCHDOG = 3,  /**< the master went silent while running (transport) */
     EF_DRV_FAULT_INJECTED = 4,  /**< raised by ef_drive_fault() (tests, external input) */
     EF_DRV_FAULT_SEGMENT = 5,   /**< a queued segment was refused by the interpolator */
+    EF_DRV_FAULT_STO = 6,       /**< the hardware enable (safe torque off) input dropped while
+                                     the power stage was on (raised by the drive's I/O) */
 } ef_drive_fault_t;
+
+/** The largest ::ef_drive_fault_t. */
+#define EF_DRV_FAULT_LAST EF_DRV_FAULT_STO
 
 /** Servo model and stop parameters, per axis (all axes alike). */
 typedef struct {

@@ -167,8 +167,12 @@ typedef struct {
                                                  (RPDO2 of this node or the law COB-ID) that
                                                  are dropped */
     uint32_t n_drop;
-    long run_ms;                 /**< stop after this much wall time (-1: until *stop) */
-    long sync_timeout_ms;        /**< 0x2003 at power-up (-1: the drive's default, 500) */
+    long run_ms;          /**< stop after this much wall time (-1: until *stop) */
+    long sync_timeout_ms; /**< 0x2003 at power-up (-1: the drive's default, 500) */
+    /** The drive's own I/O (ef_drvio.h; NULL: none): its hardware enable (STO) input, read
+     *  every SYNC and loop round (0 while the power stage is on: EF_DRV_FAULT_STO, EMCY
+     *  0xFF06), and its alarm output (1 while in fault). CHIP:LINE or LINE. */
+    const char *sto_line, *alarm_line;
     volatile sig_atomic_t *stop; /**< set by a signal handler to end the loop (may be NULL) */
 } ef_can_sim_cfg_t;
 

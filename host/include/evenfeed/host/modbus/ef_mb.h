@@ -239,9 +239,13 @@ typedef struct {
     /* Fault injection; -1 disables each. */
     long exception_seq; /**< answer the first write of this slot seq with exception_code */
     int exception_code;
-    long drop_reply_seq;         /**< execute the first write of this seq but send no reply */
-    long disconnect_seq;         /**< execute the first write of this seq, then drop the client */
-    double fault_at_s;           /**< raise an injected fault at this drive time (s) */
+    long drop_reply_seq; /**< execute the first write of this seq but send no reply */
+    long disconnect_seq; /**< execute the first write of this seq, then drop the client */
+    double fault_at_s;   /**< raise an injected fault at this drive time (s) */
+    /** The drive's own I/O (ef_drvio.h; NULL: none): its hardware enable (STO) input, read
+     *  every loop round (0 while the power stage is on: ::EF_DRV_FAULT_STO), and its alarm
+     *  output (1 while in fault). CHIP:LINE or LINE. */
+    const char *sto_line, *alarm_line;
     volatile sig_atomic_t *stop; /**< set by a signal handler to end the server */
 } ef_mb_server_cfg_t;
 
