@@ -941,6 +941,13 @@ static int io_idle(void)
     return io_pull(IO_ESTOP, 1) | io_pull(IO_ALARM, 0) | io_pull(IO_HOLD, 0) | io_pull(IO_START, 0);
 }
 
+/* The simulated chip the guest script made (gpiochip0 when run elsewhere). */
+static const char *io_chip(void)
+{
+    const char *chip = getenv("EF_GSIM_CHIP");
+    return chip ? chip : "gpiochip0";
+}
+
 /* Write OUT/machine.ini for the simulated chip (hold: wire feed hold and cycle start); its
  * path into buf. The latch lives in OUT. */
 static const char *io_machine(char *buf, size_t n, int hold)
@@ -1307,9 +1314,7 @@ static void part_io_alarm(void)
 static int io_sto_drives(tm_proc_t d[4])
 {
     static char x1[300];
-    const char *chip = getenv("EF_GSIM_CHIP");
-    snprintf(x1, sizeof x1, "--sto %s:STO --alarm-out %s:ALMOUT", chip ? chip : "gpiochip0",
-             chip ? chip : "gpiochip0");
+    snprintf(x1, sizeof x1, "--sto %s:STO --alarm-out %s:ALMOUT", io_chip(), io_chip());
     hil_drives_t x = {{NULL}};
     x.extra[1] = x1;
     return hil_start(d, &x);
@@ -1383,7 +1388,7 @@ static void part_io_sto(void)
     snprintf(cmd, sizeof cmd,
              "%s sim-drive can --iface vcan0 --node 9 --sto %s:NOPE >%s/sto_bad.out "
              "2>%s/sto_bad.err",
-             g_ef, getenv("EF_GSIM_CHIP") ? getenv("EF_GSIM_CHIP") : "gpiochip0", g_out, g_out);
+             g_ef, io_chip(), g_out, g_out);
     int sr = system(cmd);
     EF_CHECK(WIFEXITED(sr) && WEXITSTATUS(sr) != 0);
     EF_CHECK(hil_err_has("sto_bad", "sto", "NOPE"));
@@ -1596,39 +1601,56 @@ static int io_mb_now(const char *trace, int *state, double *cmd, double *act)
     return ok;
 }
 
-/* E-stop mid-path on Modbus (TCP on the guest's loopback): the drive gets the stop command,
- * comes to rest within its stop ramp's distance, enable drops, the error names the input and
- * the program line. */
-static void part_io_modbus(void)
+/* The start the Modbus io_* parts share: the machine file (feed hold wired when hold) into
+ * mach, no latch, idle inputs, one Modbus drive (with drive_extra) tracing into trace, and
+ * `stream --modbus` of prog (with stream_opts) as st, output in OUT/NAME.out/.err; then a
+ * bounded wait until the drive's actual x passes 20 mm (checked). Returns 0 with both
+ * started, -1 when the drive did not start (checked). mach, trace: 512 and 600 bytes. */
+static int io_mb_begin(tm_proc_t *d, tm_proc_t *st, const char *name, int hold,
+                       const char *drive_extra, const char *stream_opts, const char *prog,
+                       char *mach, char *trace)
 {
-    char prog[512], mach[512], latch[600], trace[600];
-    snprintf(prog, sizeof prog, "%s/samples/profile.ngc", g_src);
-    io_machine(mach, sizeof mach, 0);
+    char latch[600];
+    io_machine(mach, 512, hold);
     snprintf(latch, sizeof latch, "%s/estop.latch", g_out);
-    snprintf(trace, sizeof trace, "%s/mbdrive.csv", g_out);
+    snprintf(trace, 600, "%s/mbdrive.csv", g_out);
     unlink(latch);
     EF_CHECK_EQ(io_idle(), 0);
-    tm_time_scale = "1"; /* the drive in real time: the stop ramp as a machine would run it */
-    tm_proc_t d, st;
     int port = 0;
-    if (tm_drive(&d, "--tcp", "127.0.0.1:0", trace, NULL, &port) != 0 || port <= 0) {
+    if (tm_drive(d, "--tcp", "127.0.0.1:0", trace, drive_extra, &port) != 0 || port <= 0) {
         EF_CHECK(0);
-        return;
+        return -1;
     }
     static char cmd[2048];
     snprintf(cmd, sizeof cmd,
-             "exec %s stream --modbus tcp://127.0.0.1:%d --machine %s %s >%s/mb.out 2>%s/mb.err",
-             g_ef, port, mach, prog, g_out, g_out);
+             "exec %s stream --modbus tcp://127.0.0.1:%d %s --machine %s %s >%s/%s.out "
+             "2>%s/%s.err",
+             g_ef, port, stream_opts, mach, prog, g_out, name, g_out, name);
     char *argv[] = {"/bin/sh", "-c", cmd, NULL};
-    EF_CHECK_EQ(tm_spawn(argv, 0, &st), 0);
+    EF_CHECK_EQ(tm_spawn(argv, 0, st), 0);
     int moving = 0, state = 0;
     double c = 0, a = 0;
-    for (int i = 0; i < 1200 && !moving && io_running(&st); i++) {
+    for (int i = 0; i < 1200 && !moving && io_running(st); i++) {
         moving = io_mb_now(trace, &state, &c, &a) && a > 20.0;
         if (!moving)
             usleep(50000);
     }
     EF_CHECK(moving);
+    return 0;
+}
+
+/* E-stop mid-path on Modbus (TCP on the guest's loopback): the drive gets the stop command,
+ * comes to rest within its stop ramp's distance, enable drops, the error names the input and
+ * the program line. */
+static void part_io_modbus(void)
+{
+    char prog[512], mach[512], trace[600], latch[600];
+    snprintf(prog, sizeof prog, "%s/samples/profile.ngc", g_src);
+    snprintf(latch, sizeof latch, "%s/estop.latch", g_out);
+    tm_time_scale = "1"; /* the drive in real time: the stop ramp as a machine would run it */
+    tm_proc_t d, st;
+    if (io_mb_begin(&d, &st, "mb", 0, NULL, "", prog, mach, trace) != 0)
+        return;
     EF_CHECK_EQ(io_level(IO_ENABLE), 1);
     /* 100 ms: this part is about the Modbus stop; the 5 ms press is io_estop's (a host that
      * holds the guest back during a 5 ms press leaves the guest less than the debounce). */
@@ -1689,35 +1711,15 @@ static void part_io_modbus(void)
 static void io_modbus_hold_in(const char *mode)
 {
     int seg = !strcmp(mode, "segment");
-    char prog[512], mach[512], latch[600], trace[600];
+    char prog[512], mach[512], trace[600], opts[64];
     snprintf(prog, sizeof prog, "%s/samples/profile.ngc", g_src);
-    io_machine(mach, sizeof mach, 1);
-    snprintf(latch, sizeof latch, "%s/estop.latch", g_out);
-    snprintf(trace, sizeof trace, "%s/mbdrive.csv", g_out);
-    unlink(latch);
-    EF_CHECK_EQ(io_idle(), 0);
+    snprintf(opts, sizeof opts, "--mode %s --timeout 1000", mode);
     EF_CHECK_EQ(hil_reference(prog), 0);
     tm_proc_t d, st;
-    int port = 0;
-    if (tm_drive(&d, "--tcp", "127.0.0.1:0", trace, NULL, &port) != 0 || port <= 0) {
-        EF_CHECK(0);
+    if (io_mb_begin(&d, &st, "mbh", 1, NULL, opts, prog, mach, trace) != 0)
         return;
-    }
-    static char cmd[2048];
-    snprintf(cmd, sizeof cmd,
-             "exec %s stream --modbus tcp://127.0.0.1:%d --mode %s --timeout 1000 --machine %s %s"
-             " >%s/mbh.out 2>%s/mbh.err",
-             g_ef, port, mode, mach, prog, g_out, g_out);
-    char *argv[] = {"/bin/sh", "-c", cmd, NULL};
-    EF_CHECK_EQ(tm_spawn(argv, 0, &st), 0);
-    int state = 0, moving = 0;
-    double c = 0, a = 0;
-    for (int i = 0; i < 1200 && !moving && io_running(&st); i++) {
-        moving = io_mb_now(trace, &state, &c, &a) && a > 20.0;
-        if (!moving)
-            usleep(50000);
-    }
-    EF_CHECK(moving);
+    int state = 0;
+    double a = 0;
     io_pull(IO_HOLD, 1);
     int rest = 0;
     double c0 = 0, c1 = 0;
@@ -1794,38 +1796,16 @@ static void part_io_modbus_hold_direct(void)
  * naming the fault, enable drops. */
 static void part_io_modbus_sto(void)
 {
-    char prog[512], mach[512], latch[600], trace[600], x[200];
+    char prog[512], mach[512], trace[600], x[200];
     snprintf(prog, sizeof prog, "%s/samples/profile.ngc", g_src);
-    io_machine(mach, sizeof mach, 0);
-    snprintf(latch, sizeof latch, "%s/estop.latch", g_out);
-    snprintf(trace, sizeof trace, "%s/mbdrive.csv", g_out);
-    unlink(latch);
-    EF_CHECK_EQ(io_idle(), 0);
     EF_CHECK_EQ(io_pull(IO_STO, 1), 0);
-    const char *chip = getenv("EF_GSIM_CHIP") ? getenv("EF_GSIM_CHIP") : "gpiochip0";
-    snprintf(x, sizeof x, "--sto %s:STO --alarm-out %s:ALMOUT", chip, chip);
+    snprintf(x, sizeof x, "--sto %s:STO --alarm-out %s:ALMOUT", io_chip(), io_chip());
     tm_proc_t d, st;
-    int port = 0;
-    if (tm_drive(&d, "--tcp", "127.0.0.1:0", trace, x, &port) != 0 || port <= 0) {
-        EF_CHECK(0);
+    if (io_mb_begin(&d, &st, "mbs", 0, x, "--timeout 1000", prog, mach, trace) != 0)
         return;
-    }
-    EF_CHECK_EQ(io_level(IO_ALMOUT), 0);
-    static char cmd[2048];
-    snprintf(cmd, sizeof cmd,
-             "exec %s stream --modbus tcp://127.0.0.1:%d --timeout 1000 --machine %s %s"
-             " >%s/mbs.out 2>%s/mbs.err",
-             g_ef, port, mach, prog, g_out, g_out);
-    char *argv[] = {"/bin/sh", "-c", cmd, NULL};
-    EF_CHECK_EQ(tm_spawn(argv, 0, &st), 0);
-    int state = 0, moving = 0;
+    EF_CHECK_EQ(io_level(IO_ALMOUT), 0); /* moving, no fault: no alarm */
+    int state = 0;
     double c = 0, a = 0;
-    for (int i = 0; i < 1200 && !moving && io_running(&st); i++) {
-        moving = io_mb_now(trace, &state, &c, &a) && a > 20.0;
-        if (!moving)
-            usleep(50000);
-    }
-    EF_CHECK(moving);
     io_pull(IO_STO, 0);
     int rc = io_wait(&st, "mbs", 30000);
     EF_CHECK_EQ(rc, -EF_ERR_DRIVE);

@@ -194,11 +194,16 @@ static int csim_rx(void *obj, const ef_can_frame_t *f, uint32_t ts_us)
         }
     }
     uint32_t syncs = S->d.sync_count;
+    uint8_t power = S->d.power;
     int rc = ef_codrive_rx(&S->d, f); /* a fault it raises is traced by its EMCY */
     csim_trace_accepted(S);
     if (S->d.sync_count != syncs)
         csim_after_sync(S);
-    csim_io(S); /* also after a controlword that enabled the power stage */
+    /* The lines are read every loop round (csim_process); here only when this frame changed
+     * the power state (a controlword that switched the power stage on must meet the STO at
+     * once), not for every segment chunk: a line read is a system call. */
+    if (S->d.power != power)
+        csim_io(S);
     return rc;
 }
 

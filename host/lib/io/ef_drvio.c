@@ -7,14 +7,8 @@
 /* CHIP:LINE, or LINE on gpiochip0, into a line's configuration. */
 static int drvio_spec(ef_gpio_line_cfg_t *l, const char *spec, ef_msg_t *m)
 {
-    const char *colon = strrchr(spec, ':');
-    const char *chip = colon ? spec : "gpiochip0", *line = colon ? colon + 1 : spec;
-    size_t nc = colon ? (size_t)(colon - spec) : strlen(chip);
-    if (nc == 0 || nc >= sizeof l->chip || !line[0] || strlen(line) >= sizeof l->line)
+    if (ef_gpio_spec(l, spec, "gpiochip0") != EF_GPIO_SPEC_OK)
         return ef_fail(m, EF_ERR_ARG, "sim-drive: line '%s': want CHIP:LINE or LINE", spec);
-    memcpy(l->chip, chip, nc);
-    l->chip[nc] = 0;
-    strcpy(l->line, line);
     return EF_OK;
 }
 

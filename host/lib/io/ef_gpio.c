@@ -576,6 +576,27 @@ int ef_gpio_safe(ef_gpio_t *g, ef_msg_t *m)
     return rc;
 }
 
+int ef_gpio_spec(ef_gpio_line_cfg_t *l, const char *spec, const char *chip)
+{
+    const char *colon = strchr(spec, ':');
+    if (colon) {
+        size_t n = (size_t)(colon - spec);
+        if (n == 0 || n >= sizeof l->chip || !colon[1] || strlen(colon + 1) >= sizeof l->line)
+            return EF_GPIO_SPEC_PARTS;
+        memcpy(l->chip, spec, n);
+        l->chip[n] = 0;
+        snprintf(l->line, sizeof l->line, "%s", colon + 1);
+        return EF_GPIO_SPEC_OK;
+    }
+    if (!chip || !chip[0])
+        return EF_GPIO_SPEC_NOCHIP;
+    if (!spec[0] || strlen(spec) >= sizeof l->line || strlen(chip) >= sizeof l->chip)
+        return EF_GPIO_SPEC_LONG;
+    snprintf(l->chip, sizeof l->chip, "%s", chip);
+    snprintf(l->line, sizeof l->line, "%s", spec);
+    return EF_GPIO_SPEC_OK;
+}
+
 int ef_gpio_find(const ef_gpio_t *g, const char *what)
 {
     if (!g || !what)

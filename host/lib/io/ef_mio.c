@@ -87,21 +87,16 @@ static int mio_add(ef_mio_cfg_t *c, mio_parse_t *P, const char *spec, const char
 {
     ef_gpio_line_cfg_t L;
     memset(&L, 0, sizeof L);
-    const char *colon = strchr(spec, ':');
-    if (colon) {
-        size_t n = (size_t)(colon - spec);
-        if (n == 0 || n >= sizeof L.chip || !colon[1] || strlen(colon + 1) >= sizeof L.line)
-            return mio_err(m, P, "line '%s': CHIP:LINE, both parts non-empty", spec);
-        memcpy(L.chip, spec, n);
-        snprintf(L.line, sizeof L.line, "%s", colon + 1);
-    } else {
-        if (!P->chip[0])
-            return mio_err(m, P, "line '%s' names no chip: write CHIP:%s or set chip in [gpio]",
-                           spec, spec);
-        if (strlen(spec) >= sizeof L.line)
-            return mio_err(m, P, "line '%s': name too long", spec);
-        snprintf(L.chip, sizeof L.chip, "%s", P->chip);
-        snprintf(L.line, sizeof L.line, "%s", spec);
+    switch (ef_gpio_spec(&L, spec, P->chip)) {
+    case EF_GPIO_SPEC_PARTS:
+        return mio_err(m, P, "line '%s': CHIP:LINE, both parts non-empty", spec);
+    case EF_GPIO_SPEC_NOCHIP:
+        return mio_err(m, P, "line '%s' names no chip: write CHIP:%s or set chip in [gpio]", spec,
+                       spec);
+    case EF_GPIO_SPEC_LONG:
+        return mio_err(m, P, "line '%s': name too long", spec);
+    default:
+        break;
     }
     L.dir = (uint8_t)dir;
     L.active_low = (uint8_t)active_low;

@@ -213,6 +213,21 @@ int ef_gpio_set(ef_gpio_t *g, unsigned k, uint8_t value, ef_msg_t *m);
  */
 int ef_gpio_safe(ef_gpio_t *g, ef_msg_t *m);
 
+/** Why ef_gpio_spec() refused a line spec. */
+typedef enum {
+    EF_GPIO_SPEC_OK = 0,
+    EF_GPIO_SPEC_PARTS = 1,  /**< CHIP:LINE with an empty or too long part */
+    EF_GPIO_SPEC_NOCHIP = 2, /**< LINE alone and no default chip */
+    EF_GPIO_SPEC_LONG = 3,   /**< LINE alone, too long */
+} ef_gpio_spec_t;
+
+/**
+ * @brief Fill l->chip and l->line from "CHIP:LINE" (split at the first ':'), or from "LINE"
+ * on `chip` (NULL or "": none). Nothing else of l is touched.
+ * @return ::ef_gpio_spec_t (0: done)
+ */
+int ef_gpio_spec(ef_gpio_line_cfg_t *l, const char *spec, const char *chip);
+
 /** @brief Index of the line whose cfg.what is `what`, or -1. */
 int ef_gpio_find(const ef_gpio_t *g, const char *what);
 
