@@ -1,14 +1,14 @@
 #!/bin/sh
 # SPDX-License-Identifier: Apache-2.0
 # Fuzz the table parser, the G-code reader, the runtime chain (smoother, planner,
-# interpolator) and the CANopen frame handling (drive and master) with libFuzzer for a
-# fixed time.
+# interpolator), the CANopen frame handling (drive and master) and what a USB-CAN adapter
+# sends (gs_usb frames and replies) with libFuzzer for a fixed time.
 #
 #   tests/fuzz/run.sh [SECONDS [BUILD_DIR]]     default 60 s, build-fuzz
 #
 # Configures its own clang build directory (BUILD_DIR, or $EF_FUZZ_BUILD), builds
-# fuzz_table_parse, fuzz_gcode, fuzz_smooth and fuzz_canopen (-fsanitize=fuzzer,address,undefined), and
-# fuzzes each for an equal share of SECONDS (EF_FUZZ_TARGETS="table", "gcode", "smooth" or "can" picks
+# fuzz_table_parse, fuzz_gcode, fuzz_smooth, fuzz_canopen and fuzz_gsusb (-fsanitize=fuzzer,address,undefined), and
+# fuzzes each for an equal share of SECONDS (EF_FUZZ_TARGETS="table", "gcode", "smooth", "can" or "gsusb" picks
 # some, which then share all of it), on a working copy of its seed corpus kept in that build directory, so coverage
 # accumulates across runs while the checked-in corpora stay as they are. Crash reproducers
 # go to $EF_FUZZ_BUILD/artifacts/; the script exits nonzero when a fuzzer finds one.
@@ -32,11 +32,11 @@ jobs=${EF_FUZZ_JOBS:-1}
 runs=${EF_FUZZ_RUNS:-}
 seed=${EF_FUZZ_SEED:-}
 cc=${CC:-clang}
-targets=${EF_FUZZ_TARGETS:-table gcode smooth can}
+targets=${EF_FUZZ_TARGETS:-table gcode smooth can gsusb}
 
 cmake -S "$root" -B "$build" -G Ninja -DCMAKE_C_COMPILER="$cc" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     -DEF_FUZZ=ON -DEF_WERROR=ON >/dev/null
-ninja -C "$build" fuzz_table_parse fuzz_gcode fuzz_smooth fuzz_canopen
+ninja -C "$build" fuzz_table_parse fuzz_gcode fuzz_smooth fuzz_canopen fuzz_gsusb
 mkdir -p "$build/artifacts"
 n=0
 for t in $targets; do n=$((n + 1)); done
@@ -107,7 +107,8 @@ for t in $targets; do
         "$root/tests/data/gcode" || status=$? ;;
     smooth) fuzz fuzz_smooth "$root/tests/fuzz/corpus_smooth" "$build/fuzz-corpus-smooth" || status=$? ;;
     can) fuzz fuzz_canopen "$root/tests/fuzz/corpus_canopen" "$build/fuzz-corpus-canopen" || status=$? ;;
-    *) echo "unknown fuzz target '$t' (table, gcode, smooth, can)" >&2; exit 2 ;;
+    gsusb) fuzz fuzz_gsusb "$root/tests/fuzz/corpus_gsusb" "$build/fuzz-corpus-gsusb" || status=$? ;;
+    *) echo "unknown fuzz target '$t' (table, gcode, smooth, can, gsusb)" >&2; exit 2 ;;
     esac
 done
 exit "$status"
