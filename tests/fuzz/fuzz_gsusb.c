@@ -90,7 +90,7 @@ static int fz_btconst(const uint8_t *b, size_t n, ef_msg_t *m)
         fz_fail("bit timing outside the device's ranges", (long)bt.brp);
     double tq = 1.0 + bt.prop_seg + bt.phase_seg1 + bt.phase_seg2;
     double got = (double)c.fclk / (tq * bt.brp);
-    if (got < rate * 0.995 || got > rate * 1.005)
+    if (got < rate * (0.995 - 1e-12) || got > rate * (1.005 + 1e-12))
         fz_fail("bit timing off the bitrate by more than 0.5 %", (long)got);
     if (sp == 0 || sp >= 1000)
         fz_fail("sample point", sp);

@@ -299,7 +299,9 @@ int ef_gsusb_bittiming_calc(const ef_gsusb_btconst_t *bc, uint32_t bitrate,
     ef_gsusb_bittiming_t best = {0, 0, 0, 0, 0};
     /* Most quanta first: finer resolution of the sample point and of resynchronization. */
     for (uint32_t tq = GSW_TQ_MAX; tq >= GSW_TQ_MIN; tq--) {
-        if (tq - 1u < bc->tseg1_min + bc->tseg2_min || tq - 1u > bc->tseg1_max + bc->tseg2_max)
+        /* In 64 bits: a device may report ranges up to 2^32 - 1, whose sums wrap in 32. */
+        if ((uint64_t)tq - 1u < (uint64_t)bc->tseg1_min + bc->tseg2_min ||
+            (uint64_t)tq - 1u > (uint64_t)bc->tseg1_max + bc->tseg2_max)
             continue;
         /* The prescaler nearest to the exact one, rounded to the device's step, and the one
          * step either side (rounding the quotient can land on the wrong side). */
@@ -317,7 +319,13 @@ int ef_gsusb_bittiming_calc(const ef_gsusb_btconst_t *bc, uint32_t bitrate,
             uint64_t rate = (uint64_t)bc->fclk / ((uint64_t)tq * (uint64_t)b);
             uint64_t num = (uint64_t)bc->fclk, den = (uint64_t)tq * (uint64_t)b * bitrate;
             /* |fclk / (tq b) - bitrate| / bitrate in ppm, exactly. */
-            uint64_t err = num > den ? (num - den) * 1000000u / den : (den - num) * 1000000u / den;
+            /* In double: diff * 10^6 overflows 64 bits for the prescalers a device may claim
+             * (up to 2^32); ppm as an integer keeps the comparisons exact. */
+            uint64_t diff = num > den ? num - den : den - num;
+            double x = (double)diff * 1e6 / (double)den;
+            uint64_t err = diff >= den ? 1000000u : (uint64_t)x;
+            if ((double)err < x)
+                err++; /* rounded up: within GSW_MAX_ERR_PPM means truly within it */
             if (err < near_err) {
                 near_err = err;
                 near_rate = (uint32_t)rate;
@@ -366,9 +374,10 @@ int ef_gsusb_bittiming_calc(const ef_gsusb_btconst_t *bc, uint32_t bitrate,
                            (double)near_err / 1e4);
         return ef_fail(m, EF_ERR_IO,
                        "gs_usb: the adapter cannot make %u bit/s (clock %u Hz, prescaler "
-                       "%u..%u, %u..%u quanta a bit)",
+                       "%u..%u, %llu..%llu quanta a bit)",
                        bitrate, bc->fclk, bc->brp_min, bc->brp_max,
-                       1u + bc->tseg1_min + bc->tseg2_min, 1u + bc->tseg1_max + bc->tseg2_max);
+                       (unsigned long long)(1u + (uint64_t)bc->tseg1_min + bc->tseg2_min),
+                       (unsigned long long)(1u + (uint64_t)bc->tseg1_max + bc->tseg2_max));
     }
     *bt = best;
     if (actual)
