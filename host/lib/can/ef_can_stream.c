@@ -137,6 +137,8 @@ static void cs_bus_text(uint32_t bits, char *buf, size_t n)
         snprintf(buf + strlen(buf), n - strlen(buf), "%serror-passive", buf[0] ? ", " : "");
     if (bits & EF_SOCKCAN_DOWN)
         snprintf(buf + strlen(buf), n - strlen(buf), "%sinterface down", buf[0] ? ", " : "");
+    if (bits & EF_CANIF_FAULT)
+        snprintf(buf + strlen(buf), n - strlen(buf), "%sadapter fault", buf[0] ? ", " : "");
     if (!buf[0])
         snprintf(buf, n, "bus error (0x%x)", (unsigned)bits);
 }
@@ -229,7 +231,15 @@ static int cs_node_index(const cs_t *S, uint32_t id)
 /* The master's error as text. */
 static void cs_error_text(const cs_t *S, char *buf, size_t n)
 {
-    ef_can_error_text(ef_comaster_error(&S->ms), &S->mc, S->c->iface, buf, n);
+    const ef_com_error_t *e = ef_comaster_error(&S->ms);
+    ef_can_error_text(e, &S->mc, S->c->iface, buf, n);
+    /* "interface down" or "adapter fault" alone hides why: the transport knows (a USB
+     * adapter unplugged, a malformed frame from it). */
+    const char *why = ef_canif_error(&S->ci);
+    size_t k = strlen(buf);
+    if (e->what == EF_COM_WHAT_BUS && (e->value & (EF_CANIF_DOWN | EF_CANIF_FAULT)) && why[0] &&
+        k + 4 < n)
+        snprintf(buf + k, n - k, " (%s)", why);
 }
 
 /* Every SYNC the master sends: timestamp, period statistics, trace of the actual positions. */
@@ -522,13 +532,15 @@ static int cs_move(void *user, const ef_move_t *mv, const ef_pipe_move_info_t *m
     }
     if (mv->duration > S->longest)
         S->longest = mv->duration;
-    if (S->c->mode != EF_COM_MODE_SEGMENT)
-        return EF_OK;
+    /* The first move's start is the path's, in both modes: CSP's first setpoint is one
+     * cycle into the path, a visible step away at a long cycle (0.026 mm at 20 ms). */
     if (!S->start_checked) {
         const float p[3] = {mv->b[0].x, mv->b[0].y, mv->b[0].z};
         if (cs_check_start(S, p) != EF_OK)
             return S->cb_rc;
     }
+    if (S->c->mode != EF_COM_MODE_SEGMENT)
+        return EF_OK;
     uint32_t seq = S->ms.next_seq;
     uint64_t t0 = cs_run_now(S);
     for (;;) {

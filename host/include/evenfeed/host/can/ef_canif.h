@@ -5,9 +5,10 @@
  * time (as libmodbus's backends and Zephyr's CAN driver API), so the one pump loop
  * (ef_canpump.h) and everything above it run unchanged on any transport.
  *
- * Implementations: SocketCAN (ef_sockcan_canif(), ef_sockcan.h) and the in-memory bus in
- * simulated time (ef_canmem_canif(), ef_canmem.h). A USB adapter (gs_usb over libusb) is
- * meant to be a third: it supplies the same ops over its own context.
+ * Implementations: SocketCAN (ef_sockcan_canif(), ef_sockcan.h), the in-memory bus in
+ * simulated time (ef_canmem_canif(), ef_canmem.h) and USB-CAN adapters speaking gs_usb
+ * through libusb (ef_gsusb_canif(), ef_gsusb.h), whose transfer completions run inside its
+ * own `recv` and only queue frames.
  *
  * Calling context, for every op: task context of one thread, the one that owns the
  * transport (the "bus thread"); never from a signal handler, never from an interrupt or a
@@ -50,8 +51,13 @@ extern "C" {
 #define EF_CANIF_ERROR_WARNING 4u
 #define EF_CANIF_RESTARTED     8u  /**< the controller restarted after bus-off */
 #define EF_CANIF_DOWN          16u /**< the interface is down or the device gone */
-/** The conditions that stop a CANopen master (bus-off, error-passive, down). */
-#define EF_CANIF_BAD (EF_CANIF_BUS_OFF | EF_CANIF_ERROR_PASSIVE | EF_CANIF_DOWN)
+/** The transport's device broke its own protocol (a USB adapter sent a malformed frame, or
+ *  stalled its receive endpoint): what it delivers cannot be trusted, but it may still
+ *  send, so a master stops the drives under control through it rather than go silent.
+ *  The transport's `error` says what it met. */
+#define EF_CANIF_FAULT 32u
+/** The conditions that stop a CANopen master (bus-off, error-passive, down, fault). */
+#define EF_CANIF_BAD (EF_CANIF_BUS_OFF | EF_CANIF_ERROR_PASSIVE | EF_CANIF_DOWN | EF_CANIF_FAULT)
 
 /** Controller state, the CAN fault-confinement states plus "down" and "not open". */
 typedef enum {
