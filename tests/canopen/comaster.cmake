@@ -6,7 +6,8 @@
 add_executable(test_comaster ${CMAKE_CURRENT_SOURCE_DIR}/canopen/test_comaster.c)
 target_link_libraries(test_comaster PRIVATE ef_host ef_fw m)
 foreach(part args fake_csp fake_seg boot abort devtype sdo_timeout malformed fault again bus
-             csp seg seg_hold gobackn resend_limit emcy heartbeat starved heartbeat_all node_dead
+             csp seg seg_hold gobackn gobackn_pending resend_limit emcy heartbeat starved
+             heartbeat_all node_dead
              sdo_segdl_fake sdo_user sdo_client)
   add_test(NAME fw_comaster_${part} COMMAND test_comaster ${part})
 endforeach()

@@ -1346,6 +1346,35 @@ static void t_gobackn(void)
     EF_CHECK(M.resends >= 1); /* both losses fall in one go-back-N window */
 }
 
+/* The port says it still holds frames (a slow USB adapter) for the first 200 ms of the
+ * stream: go-back-N waits though node 2 lost a chunk (what was sent may not have left);
+ * once the port is empty it resends as before, and every segment arrives once. */
+static uint32_t gp_resends_held;
+static void gp_mid(uint32_t t)
+{
+    EF_CHECK_EQ(ef_comaster_tx_pending(&M, t < 200000 ? 5u : 0u), EF_OK);
+    if (t == 199900)
+        gp_resends_held = M.resends + (drop_state & 1 ? 0u : 1000u); /* the loss came first */
+}
+
+static void t_gobackn_pending(void)
+{
+    seg_moves();
+    ef_com_cfg_t c = sim_cfg(EF_COM_MODE_SEGMENT);
+    sim_setup(&c);
+    drop_state = 0;
+    B.bus.drop = drop_some;
+    EF_CHECK_EQ(ef_comaster_tx_pending(NULL, 1), EF_ERR_ARG);
+    EF_CHECK_EQ(ef_canrig_run_until(&B, EF_COM_RUN, 3000000, 100), EF_COM_RUN);
+    gp_resends_held = 99;
+    EF_CHECK_EQ(seg_stream(SEG_MOVES, 30000000, gp_mid), EF_COM_DONE);
+    EF_CHECK_EQ(gp_resends_held, 0);
+    EF_CHECK_EQ(ef_comaster_error(&M)->code, 0);
+    EF_CHECK_EQ(drop_state, 3);
+    seg_check_end();
+    EF_CHECK(M.resends >= 1);
+}
+
 /* Drop hook: chunk 0 of the axis records of segments 8, 11, 14, 17 and 20 to node 2, the
  * first time each is sent (its bytes 1..2 are the record's sequence number): five losses
  * far enough apart to need five go-back-N rounds, each of which recovers. */
@@ -1713,6 +1742,7 @@ int main(int argc, char **argv)
         {"seg", t_seg},
         {"seg_hold", t_seg_hold},
         {"gobackn", t_gobackn},
+        {"gobackn_pending", t_gobackn_pending},
         {"resend_limit", t_resend_limit},
         {"emcy", t_emcy},
         {"heartbeat", t_heartbeat},

@@ -690,6 +690,12 @@ static void com_seg_send(ef_comaster_t *m, const ef_move_t *mv)
 /* Segment mode: go-back-N when a node has not advanced for resend_cycles SYNCs. */
 static void com_gobackn(ef_comaster_t *m)
 {
+    if (m->port_pending > 0 || ef_txq_count(&m->txq) > 0) {
+        /* Frames still on their way out: no progress is no sign of a loss yet. */
+        for (int k = 0; k < m->cfg.n_nodes; k++)
+            m->last_progress_sync[k] = m->sync_count;
+        return;
+    }
     int stalled = 0;
     for (int k = 0; k < m->cfg.n_nodes; k++) {
         ef_com_node_t *q = &m->node[k];
@@ -1301,6 +1307,14 @@ int ef_comaster_stop(ef_comaster_t *m)
 }
 
 /* The port reports a bus error. */
+int ef_comaster_tx_pending(ef_comaster_t *m, uint32_t frames)
+{
+    if (!m)
+        return EF_ERR_ARG;
+    m->port_pending = frames;
+    return EF_OK;
+}
+
 int ef_comaster_bus_error(ef_comaster_t *m, uint32_t detail)
 {
     if (!m)

@@ -335,6 +335,10 @@ static int cs_rx(void *obj, const ef_can_frame_t *f, uint32_t ts_us)
 static int cs_process(void *obj, uint32_t dt_us, uint32_t *next_us)
 {
     cs_t *S = obj;
+    /* What the transport still holds is not lost: go-back-N waits for it (ef_comaster.h). */
+    ef_canif_status_t st;
+    ef_canif_status(&S->ci, 0, &st);
+    ef_comaster_tx_pending(&S->ms, st.tx_pending + st.tx_unconfirmed);
     int rc = ef_comaster_process(&S->ms, dt_us, next_us); /* errors are kept by the master */
     cs_note_error(S);
     return rc;

@@ -75,8 +75,11 @@
  * node has room (credit = free places the node reported minus records in flight), at most
  * cfg.seg_per_cycle segments per SYNC; a node whose next expected sequence number has not
  * advanced for resend_cycles SYNCs after a send gets everything from that number again
- * (go-back-N; the drive ignores duplicates). Execution starts (controlword bit 4 to every
- * node in one SYNC) once cfg.prefill segments are acknowledged or finish() was called.
+ * (go-back-N; the drive ignores duplicates). SYNCs at which frames are still waiting to go
+ * out (the master's TX queue, or what the port reported with ef_comaster_tx_pending()) do
+ * not count: on a slow link (a USB adapter under load) what was sent may simply not have
+ * left yet, and resending it would only queue it twice. Execution starts (controlword bit 4 to
+ * every node in one SYNC) once cfg.prefill segments are acknowledged or finish() was called.
  *
  * ## SDO client (an ef_sdo_client_t, ef_sdo_client.h: its states and transition table)
  * One transfer at a time, to the node it names: expedited upload and download (up to 4
@@ -338,7 +341,9 @@ typedef struct {
     uint32_t resend_run[EF_COM_MAX_NODES]; /**< private: go-back-N rounds for a node since it
                                                 last advanced */
     uint32_t sync_late;                    /**< SYNC periods skipped by late process() calls */
-    uint32_t rx_other;                     /**< frames of no configured node (ignored) */
+    uint32_t port_pending; /**< frames the port took that are not on the bus yet (private:
+                                ef_comaster_tx_pending()) */
+    uint32_t rx_other;     /**< frames of no configured node (ignored) */
     char name[EF_COM_MAX_NODES][EF_COM_SDO_BUF + 1]; /**< 0x1008 of each node */
 } ef_comaster_t;
 
@@ -440,6 +445,16 @@ int ef_comaster_stop(ef_comaster_t *m);
  * @retval EF_ERR_ARG NULL
  */
 int ef_comaster_bus_error(ef_comaster_t *m, uint32_t detail);
+
+/**
+ * @brief The port holds `frames` that it took and has not yet put on the bus (a host
+ * transport's software queue and unconfirmed frames; 0 for a controller that says nothing).
+ * While frames are pending, segment mode's go-back-N does not count a node's lack of
+ * progress (what was sent may not have left). Task context, before ef_comaster_process().
+ * @retval EF_OK
+ * @retval EF_ERR_ARG NULL
+ */
+int ef_comaster_tx_pending(ef_comaster_t *m, uint32_t frames);
 
 /**
  * @brief Start an SDO download of len bytes to object index:sub of node k (0-based index

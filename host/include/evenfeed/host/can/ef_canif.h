@@ -99,17 +99,20 @@ typedef struct {
 
 /** Bus state and counters (ef_canif_status()). */
 typedef struct {
-    ef_canif_state_t state; /**< now, as far as the transport knows (SocketCAN: the worst
-                                 condition in `seen`; it reports the way into a state, not
-                                 always the way back) */
-    uint32_t seen;          /**< EF_CANIF_* conditions since they were last cleared */
-    uint32_t err_frames;    /**< error frames (or error events) received */
-    uint32_t tx_pending;    /**< frames `send` took that are not yet with the controller */
-    uint32_t tx_full;       /**< sends that met a full controller queue (ENOBUFS) */
-    uint32_t rx_overrun;    /**< frames lost because the receive queue was full */
-    int16_t tec, rec;       /**< transmit / receive error counters (-1: not known) */
-    uint64_t tx, rx;        /**< frames handed to the controller / received */
-    uint64_t tx_bits;       /**< ef_can_frame_bits() of the frames handed to the controller */
+    ef_canif_state_t state;  /**< now, as far as the transport knows (SocketCAN: the worst
+                                  condition in `seen`; it reports the way into a state, not
+                                  always the way back) */
+    uint32_t seen;           /**< EF_CANIF_* conditions since they were last cleared */
+    uint32_t err_frames;     /**< error frames (or error events) received */
+    uint32_t tx_pending;     /**< frames `send` took that are not yet with the controller */
+    uint32_t tx_unconfirmed; /**< frames with the controller whose transmission is not yet
+                                  confirmed (a USB adapter's echo; 0 where the transport
+                                  cannot tell) */
+    uint32_t tx_full;        /**< sends that met a full controller queue (ENOBUFS) */
+    uint32_t rx_overrun;     /**< frames lost because the receive queue was full */
+    int16_t tec, rec;        /**< transmit / receive error counters (-1: not known) */
+    uint64_t tx, rx;         /**< frames handed to the controller / received */
+    uint64_t tx_bits;        /**< ef_can_frame_bits() of the frames handed to the controller */
 } ef_canif_status_t;
 
 /** The operations of one transport. */
