@@ -40,6 +40,8 @@ int cli_cmd_smooth(int argc, char **argv);
 int cli_cmd_stream(int argc, char **argv);
 int cli_cmd_sim_drive(int argc, char **argv);
 int cli_cmd_io(int argc, char **argv);
+int cli_cmd_can(int argc, char **argv);
+int cli_cmd_sim_adapter(int argc, char **argv);
 
 struct ef_mio_s;
 /** Load a machine file and open its machine I/O (cmd_io.c); signals and exit() drive the

@@ -5,15 +5,18 @@
 #include <string.h>
 #include "cli.h"
 #include "evenfeed/host/can/ef_canhost.h"
+#include "evenfeed/host/can/ef_gsusb.h"
 #include "evenfeed/host/modbus/ef_mb.h"
 #include "evenfeed/host/io/ef_mio.h"
 
 static const char usage[] =
     "usage: evenfeed stream --modbus ADDRESS [options] PROGRAM.ngc\n"
     "       evenfeed stream --can IFACE [options] PROGRAM.ngc\n"
+    "       evenfeed stream --can gsusb[:SERIAL][@BITRATE] [options] PROGRAM.ngc\n"
     "\n"
     "Smooth PROGRAM and stream it to evenfeed drives: one Modbus drive (docs/modbus.md)\n"
-    "or up to three CANopen CiA 402 drives on a SocketCAN interface (docs/can.md).\n"
+    "or up to three CANopen CiA 402 drives on a SocketCAN interface or a USB-CAN adapter\n"
+    "speaking gs_usb, driven through libusb (docs/can.md).\n"
     "ADDRESS is tcp://HOST:PORT or rtu:DEVICE[,BAUD[,8N1]] (default 115200,8N1).\n"
     "\n"
     "Modbus:\n"
@@ -25,7 +28,13 @@ static const char usage[] =
     "  --retries N       further attempts per transaction (default 3)\n"
     "  --watchdog MS     the drive faults if the master is silent this long while\n"
     "                    running (default 1000; 0 off)\n"
-    "CAN (CANopen master on IFACE, e.g. vcan0):\n"
+    "CAN (CANopen master on IFACE, e.g. vcan0, or on a gs_usb adapter):\n"
+    "  --can gsusb...    a USB-CAN adapter (candleLight, CANable) instead of SocketCAN:\n"
+    "                    gsusb (the only one), gsusb:SERIAL or gsusb:BUS-PORT (as\n"
+    "                    `evenfeed can list` shows them), @BITRATE in bit/s (default\n"
+    "                    1000000; also used for the bus-load figure)\n"
+    "  --can-opts LIST   gs_usb channel options, comma-separated: loopback, listen-only,\n"
+    "                    one-shot, timestamps (required), no-timestamps, channel=N\n"
     "  --nodes A[,B[,C]] node ids 1..127 moving x, y, z (default 1,2,3)\n"
     "  --mode M          segment (default): segments as PDO chunks into each drive's ring;\n"
     "                    csp: cyclic synchronous position, one target per node per SYNC\n"
@@ -79,7 +88,8 @@ static int cstrm_nodes(const char *v, ef_can_stream_cfg_t *cc)
 }
 
 /* Stream over CAN with the parsed options; print the summary. */
-static int cstrm_run_can(const ef_can_stream_cfg_t *cc, const char *path, const cli_machine_t *mc)
+static int cstrm_run_can(const ef_can_stream_cfg_t *cc, const char *path, const cli_machine_t *mc,
+                         const ef_gsusb_t *gs)
 {
     static ef_gcode_t r; /* about 50 kB: not on the stack */
     ef_msg_t m = {{0}};
@@ -119,6 +129,20 @@ static int cstrm_run_can(const ef_can_stream_cfg_t *cc, const char *path, const 
         printf("e-stop: line %u, input edge to stop command %.3f ms, to all drives at rest "
                "%.3f ms\n",
                (unsigned)res.estop_line, res.estop_latency_s * 1e3, res.estop_rest_s * 1e3);
+    if (gs) {
+        ef_gsusb_stats_t st;
+        ef_gsusb_stats(gs, &st);
+        printf("gs_usb: %llu frames echoed, TX to echo mean %.0f us, min %u us, max %u us; "
+               "%u bad IN frames, %u unknown echoes, %u device overflows, %u transfer errors\n",
+               (unsigned long long)st.echo.n, ef_gsusb_lat_mean(&st.echo), (unsigned)st.echo.min_us,
+               (unsigned)st.echo.max_us, (unsigned)st.bad_frames, (unsigned)st.unknown_echo,
+               (unsigned)st.overflow, (unsigned)st.xfer_errors);
+        if (st.echo_dev.n)
+            printf("gs_usb: on the bus after (device timestamps) mean %.0f us, max %u us, over "
+                   "%llu frames\n",
+                   ef_gsusb_lat_mean(&st.echo_dev), (unsigned)st.echo_dev.max_us,
+                   (unsigned long long)st.echo_dev.n);
+    }
     printf("drives:");
     for (int k = 0; k < cc->n_nodes; k++)
         printf("%s node %u \"%s\"", k ? "," : "", (unsigned)cc->nodes[k], res.names[k]);
@@ -146,7 +170,8 @@ enum {
     O_WATCHDOG,
     O_FAULT_RESET,
     O_MACHINE,
-    O_SDO
+    O_SDO,
+    O_CAN_OPTS
 };
 
 /* Entry point of `evenfeed stream`. */
@@ -168,6 +193,7 @@ int cli_cmd_stream(int argc, char **argv)
                                          {"fault-reset", no_argument, NULL, O_FAULT_RESET},
                                          {"machine", required_argument, NULL, O_MACHINE},
                                          {"sdo-timeout", required_argument, NULL, O_SDO},
+                                         {"can-opts", required_argument, NULL, O_CAN_OPTS},
                                          CLI_PIPE_OPTIONS,
                                          CLI_MACHINE_OPTIONS,
                                          CLI_OPT_HELP,
@@ -178,6 +204,8 @@ int cli_cmd_stream(int argc, char **argv)
     ef_can_stream_cfg_t cc;
     ef_can_stream_cfg_default(&cc, c.pipe.g2, c.pipe.g1);
     const char *path = NULL, *addr = NULL, *iface = NULL, *mode = NULL, *machine = NULL;
+    const char *can_opts = NULL;
+    int gsusb = 0;
     char mb_only[48] = "", can_only[48] = ""; /* an option of one transport, given */
     ef_msg_t m = {{0}};
     cli_machine_t mc = {0};
@@ -198,7 +226,15 @@ int cli_cmd_stream(int argc, char **argv)
         case O_CAN:
             if (!*g.val || *g.val == '-')
                 return cli_error(EF_ERR_ARG, "stream: --can needs an interface, e.g. vcan0");
-            if (strlen(g.val) >= 16) /* IFNAMSIZ */
+            gsusb = ef_gsusb_spec_is(g.val);
+            if (gsusb) {
+                char who[64];
+                uint32_t rate = 0;
+                if (ef_gsusb_spec_parse(g.val, who, sizeof who, &rate, &m) != EF_OK)
+                    return cli_error(EF_ERR_ARG, "stream: --can %s", m.text);
+                if (rate)
+                    cc.bitrate = rate;
+            } else if (strlen(g.val) >= 16) /* IFNAMSIZ */
                 return cli_error(EF_ERR_ARG, "stream: --can '%s': interface name too long", g.val);
             iface = g.val;
             break;
@@ -208,6 +244,9 @@ int cli_cmd_stream(int argc, char **argv)
         case O_CYCLE:
             if ((rc = cli_opt_int(&g, 100, 1000000, &x)) == EF_OK)
                 cc.cycle_us = (uint32_t)x;
+            break;
+        case O_CAN_OPTS:
+            can_opts = g.val;
             break;
         case O_SDO:
             if ((rc = cli_opt_int(&g, 10, 60000, &x)) == EF_OK)
@@ -270,7 +309,8 @@ int cli_cmd_stream(int argc, char **argv)
         }
         if (rc != EF_OK)
             return rc;
-        if (k == O_NODES || k == O_CYCLE || k == O_HB || k == O_LOG || k == O_TRACE || k == O_SDO)
+        if (k == O_NODES || k == O_CYCLE || k == O_HB || k == O_LOG || k == O_TRACE || k == O_SDO ||
+            k == O_CAN_OPTS)
             snprintf(can_only, sizeof can_only, "%s", g.opt);
         else if (k == O_SLAVE || k == O_DIRECT_HZ || k == O_TIMEOUT || k == O_RETRIES ||
                  k == O_WATCHDOG)
@@ -302,15 +342,31 @@ int cli_cmd_stream(int argc, char **argv)
         cc.mio = &mio;
         c.mio = &mio;
     }
+    static ef_gsusb_t gs; /* the rings: not on the stack */
+    static ef_canif_t gs_ci;
+    if (can_opts && !gsusb)
+        return cli_error(EF_ERR_ARG, "stream: --can-opts is for gs_usb adapters (--can gsusb...)");
+    if (gsusb) {
+        ef_gsusb_opts_t go;
+        ef_gsusb_init(&gs);
+        ef_gsusb_opts_default(&go);
+        if (can_opts && ef_gsusb_opts_parse(can_opts, &go, &m) != EF_OK)
+            return cli_error(EF_ERR_ARG, "stream: --can-opts: %s", m.text);
+        if (ef_gsusb_set_opts(&gs, &go, &m) != EF_OK)
+            return cli_error(EF_ERR_ARG, "stream: --can-opts: %s", m.text);
+        gs_ci = ef_gsusb_canif(&gs);
+        cc.canif = &gs_ci; /* the stream opens it with iface as the name: the whole spec */
+    }
     if (iface) {
-        if (if_nametoindex(iface) == 0) /* before the program: name the interface first */
+        /* before the program: name the interface first */
+        if (!gsusb && if_nametoindex(iface) == 0)
             return cli_error(EF_ERR_IO, "stream: --can %s: no such network interface", iface);
         cc.iface = iface;
         cc.pipe = c.pipe;
         cc.mode = mode && !strcmp(mode, "csp") ? EF_COM_MODE_CSP : EF_COM_MODE_SEGMENT;
         cc.fault_reset = (uint8_t)c.fault_reset;
         cc.verbose = (uint8_t)c.verbose;
-        int rc = cstrm_run_can(&cc, path, &mc);
+        int rc = cstrm_run_can(&cc, path, &mc, gsusb ? &gs : NULL);
         if (machine)
             ef_mio_close(&mio);
         return rc;

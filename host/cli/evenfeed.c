@@ -16,6 +16,9 @@ static const cli_cmd_t cmain_cmds[] = {
     {"stream", cli_cmd_stream, "smooth a part program and stream it to drives (--modbus, --can)"},
     {"sim-drive", cli_cmd_sim_drive, "a simulated drive (modbus, can) for tests and demos"},
     {"io", cli_cmd_io, "machine I/O on GPIO: line status, e-stop reset (docs/io.md)"},
+    {"can", cli_cmd_can, "CAN adapters: list the USB-CAN (gs_usb) adapters found"},
+    {"sim-adapter", cli_cmd_sim_adapter,
+     "a simulated USB-CAN adapter (gs_usb on a USB gadget) bridged to a CAN interface"},
     {NULL, NULL, NULL}};
 
 /* The usage text, from the command table. */
@@ -23,7 +26,7 @@ static void cmain_usage(FILE *f)
 {
     fputs("usage: evenfeed COMMAND [options]\n\ncommands:\n", f);
     for (const cli_cmd_t *c = cmain_cmds; c->name; c++)
-        fprintf(f, "  %-9s %s\n", c->name, c->summary);
+        fprintf(f, "  %-11s %s\n", c->name, c->summary);
     fputs("\nRun 'evenfeed COMMAND --help' for a command's options. Exit status: 0 on success,\n"
           "otherwise the negated evenfeed error code (1 = usage or invalid argument).\n",
           f);

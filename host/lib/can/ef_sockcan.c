@@ -51,10 +51,12 @@ static int sc_errno_full(int e)
     return e == ENOBUFS || e == EAGAIN || e == EWOULDBLOCK;
 }
 
-/* Write one line of candump's log format from a raw SocketCAN id (flags included). */
-static void sc_log_raw(FILE *log, const char *ifname, uint32_t can_id, uint8_t dlc,
-                       const uint8_t *data)
+/* One line of candump's log format from a raw SocketCAN id (flags included). */
+void ef_sockcan_log_raw(FILE *log, const char *ifname, uint32_t can_id, uint8_t dlc,
+                        const uint8_t *data)
 {
+    if (!log || !data)
+        return;
     struct timespec ts;
     char buf[64];
     int n;
@@ -95,7 +97,7 @@ void ef_sockcan_log_frame(FILE *log, const char *ifname, const ef_can_frame_t *f
 {
     if (!log || !f)
         return;
-    sc_log_raw(log, ifname ? ifname : "can?", sc_raw_id(f), f->dlc, f->data);
+    ef_sockcan_log_raw(log, ifname ? ifname : "can?", sc_raw_id(f), f->dlc, f->data);
 }
 
 /* Open, configure and bind the raw socket; see ef_sockcan.h. */
@@ -214,7 +216,7 @@ static int sc_write(ef_sockcan_t *s, const ef_can_frame_t *f)
     s->bus &= ~EF_SOCKCAN_DOWN;
     s->backoff_us = EF_SC_BACKOFF_MIN_US;
     if (s->log)
-        sc_log_raw(s->log, s->ifname, cf.can_id, cf.can_dlc, cf.data);
+        ef_sockcan_log_raw(s->log, s->ifname, cf.can_id, cf.can_dlc, cf.data);
     return 0;
 }
 
@@ -383,7 +385,7 @@ static int sc_recv(ef_sockcan_t *s, ef_can_frame_t *f, uint32_t timeout_us, uint
         if (cf.can_dlc > CAN_MAX_DLEN)
             cf.can_dlc = CAN_MAX_DLEN;
         if (s->log)
-            sc_log_raw(s->log, s->ifname, cf.can_id, cf.can_dlc, cf.data);
+            ef_sockcan_log_raw(s->log, s->ifname, cf.can_id, cf.can_dlc, cf.data);
         if (cf.can_id & CAN_ERR_FLAG) {
             sc_error_frame(s, &cf);
             saw_error = 1;

@@ -122,6 +122,12 @@ ef_can_port_t ef_sockcan_port(ef_sockcan_t *s);
  */
 void ef_sockcan_log_frame(FILE *log, const char *ifname, const ef_can_frame_t *f);
 
+/** @brief One candump log line (`candump -L` format, the host's real-time clock) of a raw
+ *  SocketCAN identifier with its flags (CAN_EFF_FLAG, CAN_RTR_FLAG, CAN_ERR_FLAG: error
+ *  frames too) and dlc bytes of data (at most 8 written). NULL log or data: nothing. */
+void ef_sockcan_log_raw(FILE *log, const char *ifname, uint32_t can_id, uint8_t dlc,
+                        const uint8_t *data);
+
 /** @brief Monotonic microseconds (CLOCK_MONOTONIC, wraps at 2^32). */
 uint32_t ef_sockcan_now_us(void);
 
