@@ -104,3 +104,16 @@ if [ -x "$b/tests/test_can_hil" ]; then
 else
     echo "(not built: test_can_hil needs the default tables)"
 fi
+
+echo
+echo "== USB-CAN adapter (gs_usb over libusb) against SocketCAN, in the same User-Mode Linux"
+echo "   guest: TX -> echo latency, burst rate, and the sample profile (half feed) to three drives with"
+echo "   canbusload's bus load beside evenfeed's (the adapter is simulated on dummy_hcd, paced"
+echo "   at 1 Mbit/s, and bridged to vcan0; docs/benchmarks-can.md)"
+if [ -x "$b/tests/test_can_hil" ]; then
+    bash tests/hil/uml_run.sh tests/hil/can.sh "$b/tests/bench_gsusb/verdict" 600 \
+        "$b/tests/test_can_hil" "$ef" "$PWD" "$b/tests/bench_gsusb/out" gsusb_bench |
+        grep -E '^  |TX latency|sample profile|adapter:|check failed|^(PASS|FAIL|SKIP)' || true
+else
+    echo "(not built: test_can_hil needs the default tables)"
+fi

@@ -68,11 +68,13 @@ if(NOT EF_SANITIZE AND TARGET ef_tables_default)
   target_include_directories(test_can_hil PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
   target_link_libraries(test_can_hil PRIVATE ef_host ef_tables_default m)
   # hil_can_*: streaming and faults; hil_io_*: the machine I/O (docs/io.md) on a gpio-sim
-  # chip the guest script makes.
+  # chip the guest script makes; hil_gsusb_*: the same drives through a USB-CAN adapter
+  # (gs_usb over libusb) that the part simulates on the guest's USB bus (dummy_hcd).
   foreach(part csp segment drop emcy heartbeat busoff boot start masterdeath
                io_estop io_start io_alarm io_pump io_hold io_hold_seg io_outputs io_modbus
-               io_modbus_hold io_modbus_hold_direct io_gpioerr io_sto io_modbus_sto)
-    if(part MATCHES "^io_")
+               io_modbus_hold io_modbus_hold_direct io_gpioerr io_sto io_modbus_sto
+               gsusb_csp gsusb_segment gsusb_unplug gsusb_bitrate gsusb_claimed gsusb_faults)
+    if(part MATCHES "^(io|gsusb)_")
       set(name hil_${part})
     else()
       set(name hil_can_${part})
