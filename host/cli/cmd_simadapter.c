@@ -34,7 +34,9 @@ static const char usage[] =
     "  --fault stall-in[=N] halt the IN endpoint once after N frames (default 10)\n"
     "  --fault no-echo      never echo sent frames (the host's TX window fills)\n"
     "  --fault no-answer    never answer control requests (the host times out)\n"
-    "  --fault bitrate-max=N  refuse bit timings above N bit/s\n";
+    "  --fault bitrate-max=N  refuse bit timings above N bit/s\n"
+    "  --fault bus-off      report bus-off (an error frame) after 300 received frames\n"
+    "  --fault overflow     flag every 300th received frame OVERFLOW (frames lost)\n";
 
 static volatile sig_atomic_t csa_stop;
 

@@ -50,6 +50,7 @@ typedef struct {
     ef_sockcan_t sk; /* the default transport's context (cfg canif NULL) */
     ef_canif_t ci;
     ef_canpump_t pump; /* its clock starts when the socket opens */
+    uint32_t bus_seen; /* EF_CANIF_BAD conditions the transport has reported */
     FILE *trace;
     uint64_t t_run; /* pump time when RUN was reached */
     /* SYNC periods. */
@@ -231,7 +232,13 @@ static int cs_node_index(const cs_t *S, uint32_t id)
 /* The master's error as text. */
 static void cs_error_text(const cs_t *S, char *buf, size_t n)
 {
-    const ef_com_error_t *e = ef_comaster_error(&S->ms);
+    ef_com_error_t e0 = *ef_comaster_error(&S->ms);
+    const ef_com_error_t *e = &e0;
+    /* A send the transport refused (bus-off) can reach the master before the condition the
+     * pump passes on: a bus error without detail. The conditions the transport reported
+     * say which it was. */
+    if (e0.what == EF_COM_WHAT_BUS && e0.value == 0)
+        e0.value = S->bus_seen;
     ef_can_error_text(e, &S->mc, S->c->iface, buf, n);
     /* "interface down" or "adapter fault" alone hides why: the transport knows (a USB
      * adapter unplugged, a malformed frame from it). */
@@ -339,6 +346,7 @@ static int cs_process(void *obj, uint32_t dt_us, uint32_t *next_us)
     ef_canif_status_t st;
     ef_canif_status(&S->ci, 0, &st);
     ef_comaster_tx_pending(&S->ms, st.tx_pending + st.tx_unconfirmed);
+    S->bus_seen |= st.seen & EF_CANIF_BAD;
     int rc = ef_comaster_process(&S->ms, dt_us, next_us); /* errors are kept by the master */
     cs_note_error(S);
     return rc;

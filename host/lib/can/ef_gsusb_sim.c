@@ -94,6 +94,8 @@ typedef struct {
     int bt_refused; /* a BITTIMING was refused: stall the next MODE */
     int berr;
     int overflow;         /* the next received frame carries EF_GSUSB_FLAG_OVERFLOW */
+    uint32_t rx_n;        /* frames received from the bus (the bus-off and overflow faults) */
+    int bus_off;          /* the bus-off fault happened: GET_STATE says so */
     uint64_t bus_free_ns; /* when the last frame sent left the bus (ep2 thread only) */
 } gss_chan_t;
 
@@ -451,6 +453,22 @@ static void gss_push_rx(struct ef_gsusb_sim_s *s, gss_chan_t *c, ef_gsusb_frame_
     f->flags = c->overflow ? EF_GSUSB_FLAG_OVERFLOW : 0;
     if (s->cfg.faults & EF_GSUSB_SIM_F_BAD_CHANNEL)
         f->channel = 5;
+    c->rx_n++;
+    if ((s->cfg.faults & EF_GSUSB_SIM_F_OVERFLOW) && c->rx_n % EF_GSUSB_SIM_FAULT_AFTER == 0)
+        f->flags |= EF_GSUSB_FLAG_OVERFLOW;
+    if ((s->cfg.faults & EF_GSUSB_SIM_F_BUS_OFF) && c->rx_n == EF_GSUSB_SIM_FAULT_AFTER) {
+        /* SocketCAN's error frame for bus-off, which gs_usb carries unchanged. */
+        ef_gsusb_frame_t e;
+        memset(&e, 0, sizeof e);
+        e.echo_id = EF_GSUSB_ECHO_RX;
+        e.can_id = EF_GSUSB_ID_ERR | CAN_ERR_BUSOFF;
+        e.dlc = CAN_ERR_DLC;
+        e.channel = f->channel;
+        c->bus_off = 1;
+        gss_say("fault bus-off: channel %u reports bus-off after %u received frames", c->idx,
+                c->rx_n);
+        (void)gss_push(s, c, &e);
+    }
     if (!gss_push(s, c, f)) {
         c->overflow = 1;
         if (gss_report(++s->st.rx_overflow))
@@ -885,7 +903,10 @@ static size_t gss_in(struct ef_gsusb_sim_s *s, unsigned req, const gss_chan_t *c
         n = EF_GSUSB_U32_LEN;
         break;
     case EF_GSUSB_BREQ_GET_STATE: {
-        ef_gsusb_state_t st = {c->started ? EF_GSUSB_STATE_ACTIVE : EF_GSUSB_STATE_STOPPED, 0, 0};
+        ef_gsusb_state_t st = {c->bus_off   ? EF_GSUSB_STATE_BUS_OFF
+                               : c->started ? EF_GSUSB_STATE_ACTIVE
+                                            : EF_GSUSB_STATE_STOPPED,
+                               0, c->bus_off ? 256u : 0u};
         n = ef_gsusb_state_encode(&st, b);
         break;
     }
@@ -1165,7 +1186,8 @@ int ef_gsusb_sim_fault(ef_gsusb_sim_cfg_t *c, const char *kind, ef_msg_t *m)
     } plain[] = {
         {"short-reply", EF_GSUSB_SIM_F_SHORT_REPLY}, {"long-reply", EF_GSUSB_SIM_F_LONG_REPLY},
         {"bad-frame", EF_GSUSB_SIM_F_BAD_FRAME},     {"bad-channel", EF_GSUSB_SIM_F_BAD_CHANNEL},
-        {"no-echo", EF_GSUSB_SIM_F_NO_ECHO},         {"no-answer", EF_GSUSB_SIM_F_NO_ANSWER}};
+        {"no-echo", EF_GSUSB_SIM_F_NO_ECHO},         {"no-answer", EF_GSUSB_SIM_F_NO_ANSWER},
+        {"bus-off", EF_GSUSB_SIM_F_BUS_OFF},         {"overflow", EF_GSUSB_SIM_F_OVERFLOW}};
     if (!c || !kind)
         return ef_fail(m, EF_ERR_ARG, "fault: NULL");
     for (size_t i = 0; i < sizeof plain / sizeof plain[0]; i++) {
@@ -1201,7 +1223,7 @@ int ef_gsusb_sim_fault(ef_gsusb_sim_cfg_t *c, const char *kind, ef_msg_t *m)
     }
     return ef_fail(m, EF_ERR_ARG,
                    "unknown fault '%s' (short-reply, long-reply, bad-frame, bad-channel, "
-                   "stall-in[=N], no-echo, no-answer, bitrate-max=N)",
+                   "stall-in[=N], no-echo, no-answer, bitrate-max=N, bus-off, overflow)",
                    kind);
 }
 

@@ -81,6 +81,12 @@ extern "C" {
  *   again: every control request times out on the host (the kernel's probe fails).
  * - EF_GSUSB_SIM_F_BITRATE_MAX: a BITTIMING above bitrate_max bit/s is refused (as a
  *   timing out of range: the next MODE is stalled).
+ * - EF_GSUSB_SIM_F_BUS_OFF: after ::EF_GSUSB_SIM_FAULT_AFTER frames received from the bus,
+ *   the channel reports bus-off once: an error frame (EF_GSUSB_ID_ERR | CAN_ERR_BUSOFF,
+ *   8 bytes), as candleLight does when its controller leaves the bus; GET_STATE says
+ *   bus-off from then on.
+ * - EF_GSUSB_SIM_F_OVERFLOW: every ::EF_GSUSB_SIM_FAULT_AFTER-th frame received from the
+ *   bus carries EF_GSUSB_FLAG_OVERFLOW, as after frames the adapter had to drop.
  */
 enum {
     EF_GSUSB_SIM_F_SHORT_REPLY = 1u << 0,
@@ -91,7 +97,12 @@ enum {
     EF_GSUSB_SIM_F_NO_ECHO = 1u << 5,
     EF_GSUSB_SIM_F_NO_ANSWER = 1u << 6,
     EF_GSUSB_SIM_F_BITRATE_MAX = 1u << 7,
+    EF_GSUSB_SIM_F_BUS_OFF = 1u << 8,
+    EF_GSUSB_SIM_F_OVERFLOW = 1u << 9,
 };
+
+/** Received frames before the bus-off fault, and the overflow fault's period. */
+#define EF_GSUSB_SIM_FAULT_AFTER 300u
 
 /** Interfaces the adapter may bridge to (one per channel at most). */
 #define EF_GSUSB_SIM_MAX_IFACES EF_GSUSB_MAX_CHANNELS
