@@ -323,6 +323,7 @@ static void cs_note_error(cs_t *S)
 static void cs_bus(void *obj, uint32_t bad)
 {
     cs_t *S = obj;
+    S->bus_seen |= bad;
     ef_comaster_bus_error(&S->ms, bad);
     cs_note_error(S);
 }

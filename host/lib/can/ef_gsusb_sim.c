@@ -96,6 +96,7 @@ typedef struct {
     int overflow;         /* the next received frame carries EF_GSUSB_FLAG_OVERFLOW */
     uint32_t rx_n;        /* frames received from the bus (the bus-off and overflow faults) */
     int bus_off;          /* the bus-off fault happened: GET_STATE says so */
+    int mode_pending;     /* a MODE request's data is being read and applied (ep0 thread) */
     uint64_t bus_free_ns; /* when the last frame sent left the bus (ep2 thread only) */
 } gss_chan_t;
 
@@ -640,6 +641,8 @@ static void gss_host_frame(struct ef_gsusb_sim_s *s, const uint8_t *buf, size_t 
         return;
     }
     gss_chan_t *c = &s->ch[f.channel];
+    while (c->mode_pending && !s->stop) /* the MODE that starts it is being applied */
+        pthread_cond_wait(&s->cv, &s->lk);
     uint32_t flags = c->flags, bitrate = c->bitrate;
     if (!c->started || (flags & EF_GSUSB_MODE_LISTEN_ONLY)) {
         if (gss_report(++s->st.dropped))
@@ -994,12 +997,26 @@ static void gss_setup(struct ef_gsusb_sim_s *s, const struct usb_ctrlrequest *r,
             gss_say("reply to %s: %s", ef_gsusb_req_name(req), strerror(errno));
         return;
     }
-    ssize_t got = read(s->ep0, buf, len);
-    if (got != (ssize_t)len) {
-        gss_say("data of %s: %s", ef_gsusb_req_name(req), got < 0 ? strerror(errno) : "short");
-        return;
+    /* The host has its MODE answered as soon as ep0's data is read (FunctionFS ends the status
+     * stage with it) and may send its first frame at once, before gss_out() has started the
+     * channel: a real adapter starts it before the status stage. The ep2 thread holds a frame
+     * for a stopped channel while a MODE is in progress (gss_host_frame()). */
+    if (req == EF_GSUSB_BREQ_MODE) {
+        pthread_mutex_lock(&s->lk);
+        c->mode_pending = 1;
+        pthread_mutex_unlock(&s->lk);
     }
-    gss_out(s, req, c, buf, len);
+    ssize_t got = read(s->ep0, buf, len);
+    if (got != (ssize_t)len)
+        gss_say("data of %s: %s", ef_gsusb_req_name(req), got < 0 ? strerror(errno) : "short");
+    else
+        gss_out(s, req, c, buf, len);
+    if (req == EF_GSUSB_BREQ_MODE) {
+        pthread_mutex_lock(&s->lk);
+        c->mode_pending = 0;
+        pthread_cond_broadcast(&s->cv);
+        pthread_mutex_unlock(&s->lk);
+    }
 }
 
 /* The host deconfigured the adapter: every channel stops and what was queued is lost. */
