@@ -4,8 +4,8 @@
 #include "ef_m4.h"
 
 /* Semihosting operations (Arm "Semihosting for AArch32 and AArch64"). */
-#define SH_SYS_WRITE0 0x04u
-#define SH_SYS_EXIT_EXTENDED 0x20u
+#define SH_SYS_WRITE0                   0x04u
+#define SH_SYS_EXIT_EXTENDED            0x20u
 #define SH_ADP_STOPPED_APPLICATION_EXIT 0x20026u
 
 /* The BKPT 0xAB trap: QEMU (-semihosting-config enable=on) carries out the operation in r0
@@ -70,8 +70,8 @@ void ef_m4_exit(int status)
 }
 
 /* CMSDK APB timer 0 of the MPS2 board, clocked at 25 MHz. */
-#define M4_TIMER0_CTRL (*(volatile uint32_t *)0x40000000u)
-#define M4_TIMER0_VALUE (*(volatile uint32_t *)0x40000004u)
+#define M4_TIMER0_CTRL   (*(volatile uint32_t *)0x40000000u)
+#define M4_TIMER0_VALUE  (*(volatile uint32_t *)0x40000004u)
 #define M4_TIMER0_RELOAD (*(volatile uint32_t *)0x40000008u)
 
 static uint32_t m4_icount_overhead;
