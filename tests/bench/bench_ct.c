@@ -9,7 +9,9 @@
  * ct_bench.sh runs it and reduces the dumps to min / median / max. Outside valgrind the
  * client requests are no-ops and the program only checks that every call succeeds.
  *
- * Usage: bench_ct g1|g2|blend N [dump|nodump] [seed]
+ * Usage: bench_ct g1|g1p|g1_3d|g2|blend N [dump|nodump] [seed]
+ *   g1p / g1_3d: only the coplanar configuration kinds (ef_seg_g1_cubic's planar path), only
+ *   the twisted and general 3-D ones clearly off a plane (its general path)
  *   nodump leaves out the client requests, so a single end-of-run dump holds the sum over
  *   all calls: ct_bench.sh --verify compares it with the sum of the per-call dumps.
  *
@@ -21,6 +23,9 @@
  *   smooth    a stream of N CAM-like primitives through ef_smooth_push / ef_smooth_pull; every
  *             push and every pull is one dump, and stdout lists them in order ("call push",
  *             "call pull" for a pulled move, "call pull0" for an empty pull)
+ *   interp    the same stream, its moves through ef_interp (uniform stepping, 1 ms period):
+ *             every ef_interp_process call is one dump ("call period"), to the end at rest
+ *   interp_c  the same with corrected stepping
  *
  * The configurations cover everything the firmware accepts: planar data (in z = 0 and in
  * rotated planes), twisted 3-D tangents, tangents exactly and nearly along the chord,
@@ -50,6 +55,7 @@
 #include "evenfeed/table/ef_table.h"
 #ifdef EF_BENCH_PATH
 #include "evenfeed/path/ef_path.h"
+#include "evenfeed/motion/ef_interp.h"
 #include "evenfeed/motion/ef_smooth.h"
 #endif
 
@@ -520,9 +526,45 @@ static int run_measure(long n, int dump, unsigned long long *rs)
 static ef_smooth_t bench_sm;
 
 /* One pull, dumped; prints which kind of call it was. Returns 1 when a move came out. */
+/* Kinds interp / interp_c: pulled moves go through the interpolator (uniform / corrected
+ * stepping, 1 ms period) and only ef_interp_process is dumped, one dump per period. */
+static int bench_interp = -1;
+static ef_interp_t bench_ip;
+static long bench_periods;
+
+/* One servo period, dumped; "call period" in the log. */
+static int interp_period(void)
+{
+    uint32_t next;
+    ef_setpoint_t sp;
+    CALLGRIND_ZERO_STATS;
+    int rc = ef_interp_process(&bench_ip, 1000u, &next, &sp);
+    CALLGRIND_DUMP_STATS;
+    printf("call period\n");
+    bench_periods++;
+    if (rc != EF_OK && rc != EF_ERR_UNDERRUN) {
+        fprintf(stderr, "bench_ct: ef_interp_process: %s\n", ef_err_str(rc));
+        exit(1);
+    }
+    return sp.moving;
+}
+
 static int smooth_pull(int dump, long *moves)
 {
     ef_move_t m;
+    if (bench_interp >= 0) {
+        int rc = ef_smooth_pull(&bench_sm, &m);
+        if (rc != EF_OK)
+            return 0;
+        while (ef_interp_space(&bench_ip) == 0)
+            interp_period();
+        if (ef_interp_push(&bench_ip, &m) != EF_OK) {
+            fprintf(stderr, "bench_ct: ef_interp_push refused a move\n");
+            exit(1);
+        }
+        ++*moves;
+        return 1;
+    }
     if (dump)
         CALLGRIND_ZERO_STATS;
     int rc = ef_smooth_pull(&bench_sm, &m);
@@ -596,12 +638,14 @@ static int run_smooth(const ef_table_t *tbl, long n, int dump, unsigned long lon
         if (i == 0)
             pr.flags = EF_PRIM_STOP_BEFORE;
         for (;;) {
-            if (dump)
+            int dp = dump && bench_interp < 0;
+            if (dp)
                 CALLGRIND_ZERO_STATS;
             rc = ef_smooth_push(&bench_sm, &pr);
-            if (dump)
+            if (dp)
                 CALLGRIND_DUMP_STATS;
-            printf("call push\n");
+            if (bench_interp < 0)
+                printf("call push\n");
             pushes++;
             if (rc != EF_ERR_FULL)
                 break;
@@ -618,31 +662,60 @@ static int run_smooth(const ef_table_t *tbl, long n, int dump, unsigned long lon
     ef_smooth_finish(&bench_sm);
     while (smooth_pull(dump, &moves))
         ;
+    if (bench_interp >= 0) {
+        long guard = 0;
+        while ((interp_period() || ef_interp_space(&bench_ip) < EF_INTERP_QUEUE) &&
+               ++guard < 100000000L)
+            ;
+        printf("bench_ct interp: %ld primitives, %ld moves, %ld periods\n", n, moves,
+               bench_periods);
+        return 0;
+    }
     printf("bench_ct smooth: %ld primitives, %ld pushes, %ld moves\n", n, pushes, moves);
     return 0;
 }
 #endif
+
+/* |d . (t0 x t1)| in double over the limit below which ef_seg_g1_cubic takes its planar path
+ * (EF_SEG_PLANAR_EPS |d| + 8 ulps of the largest coordinate): above 1 is the general path. */
+static double g1_coplanarity(const ef_endpoint_t *e0, const ef_endpoint_t *e1)
+{
+    double d[3] = {(double)e1->p.x - e0->p.x, (double)e1->p.y - e0->p.y, (double)e1->p.z - e0->p.z};
+    double a[3] = {e0->t.x, e0->t.y, e0->t.z}, b[3] = {e1->t.x, e1->t.y, e1->t.z};
+    double c[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+    double scale = 0;
+    const ef_vec3_t *p[2] = {&e0->p, &e1->p};
+    for (int k = 0; k < 2; k++)
+        scale = fmax(scale, fmax(fabs(p[k]->x), fmax(fabs(p[k]->y), fabs(p[k]->z))));
+    return fabs(d[0] * c[0] + d[1] * c[1] + d[2] * c[2]) /
+           (EF_SEG_PLANAR_EPS * sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) +
+            8.0 * 1.1920929e-7 * scale);
+}
 
 /* Parse "g1"/"g2"/"blend" and N, build the table, run the calls, report how many of each kind. */
 int main(int argc, char **argv)
 {
     int path_kind = -1;
 #ifdef EF_BENCH_PATH
-    static const char *const path_kinds[5] = {"bprim_la", "bprim_aa", "arcpiece", "measure",
-                                              "smooth"};
-    for (int k = 0; k < 5; k++)
+    static const char *const path_kinds[7] = {"bprim_la", "bprim_aa", "arcpiece", "measure",
+                                              "smooth",   "interp",   "interp_c"};
+    for (int k = 0; k < 7; k++)
         if (argc > 1 && strcmp(argv[1], path_kinds[k]) == 0)
             path_kind = k;
 #endif
-    if (argc < 3 || (path_kind < 0 && strcmp(argv[1], "g1") != 0 && strcmp(argv[1], "g2") != 0 &&
-                     strcmp(argv[1], "blend") != 0)) {
+    /* g1p / g1_3d: the planar and the general path of ef_seg_g1_cubic on their own. */
+    int g1_path =
+        argc > 1 ? (strcmp(argv[1], "g1p") == 0) + 2 * (strcmp(argv[1], "g1_3d") == 0) : 0;
+    if (argc < 3 || (path_kind < 0 && g1_path == 0 && strcmp(argv[1], "g1") != 0 &&
+                     strcmp(argv[1], "g2") != 0 && strcmp(argv[1], "blend") != 0)) {
 #ifdef EF_BENCH_PATH
         fprintf(stderr,
-                "usage: %s g1|g2|blend|bprim_la|bprim_aa|arcpiece|measure|smooth N "
+                "usage: %s "
+                "g1|g1p|g1_3d|g2|blend|bprim_la|bprim_aa|arcpiece|measure|smooth|interp|interp_c N "
                 "[dump|nodump] [seed]\n",
                 argv[0]);
 #else
-        fprintf(stderr, "usage: %s g1|g2|blend N [dump|nodump] [seed]\n", argv[0]);
+        fprintf(stderr, "usage: %s g1|g1p|g1_3d|g2|blend N [dump|nodump] [seed]\n", argv[0]);
 #endif
         return 2;
     }
@@ -678,6 +751,12 @@ int main(int argc, char **argv)
         return run_measure(n, dump, &rs);
     case 4:
         return run_smooth(tbl, n, dump, &rs);
+    case 5:
+    case 6:
+        bench_interp = path_kind == 5 ? EF_STEP_UNIFORM : EF_STEP_CORRECTED;
+        if (ef_interp_init(&bench_ip, ef_v3(0.0f, 0.0f, 0.0f), 1000u, bench_interp) != EF_OK)
+            return 1;
+        return run_smooth(tbl, n, dump, &rs);
     default:
         break;
     }
@@ -688,7 +767,13 @@ int main(int argc, char **argv)
         ef_endpoint_t e0, e1;
         ef_seg_t seg;
         int kind = (int)(i % BC_COUNT);
+        if (g1_path == 1) /* the six coplanar kinds */
+            kind = (int)(i % 6) + ((int)(i % 6) >= BC_TWISTED) * 2;
+        else if (g1_path == 2)
+            kind = BC_TWISTED + (int)(i % 2);
         make_config(&rs, kind, g2, &e0, &e1);
+        while (g1_path == 2 && g1_coplanarity(&e0, &e1) < 4.0) /* clearly off the plane */
+            make_config(&rs, kind, g2, &e0, &e1);
         /* Only the call sits between zero and dump; with --toggle-collect on the function,
          * nothing of this loop is counted either way. */
         if (dump)
@@ -703,7 +788,7 @@ int main(int argc, char **argv)
         per_kind[kind]++;
         clamped += (seg.flags & EF_SEG_CLAMPED) != 0;
     }
-    printf("bench_ct %s: %ld calls OK (%ld clamped); per kind:", g2 ? "g2" : "g1", n, clamped);
+    printf("bench_ct %s: %ld calls OK (%ld clamped); per kind:", argv[1], n, clamped);
     for (int k = 0; k < BC_COUNT; k++)
         printf(" %ld", per_kind[k]);
     printf("\n");

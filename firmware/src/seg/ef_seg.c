@@ -1,6 +1,7 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* Bézier segments from end data: DOFs from a table (or given), then control points. */
 #include "evenfeed/seg/ef_seg.h"
+#include "evenfeed/core/ef_config.h"
 #include "evenfeed/core/ef_err.h"
 #include "evenfeed/geom/ef_bezier.h"
 
@@ -48,6 +49,184 @@ static void seg_quintic(const ef_endpoint_t *e0, const ef_endpoint_t *e1, const 
     out->norm = *nm;
 }
 
+/* float32's 2^-23: a coordinate's ulp is at most this times its magnitude. */
+#define EF_FLT_EPS 1.1920929e-7f
+
+/* Hide an integer from the optimizer (an empty asm, no code): a flag combined with & stays
+ * one test instead of being split back into short-circuit branches. */
+static inline int seg_ct_hidei(int x)
+{
+#ifdef __GNUC__
+    __asm__("" : "+r"(x));
+#endif
+    return x;
+}
+
+/* Hide a float from the optimizer (no code), so a clamp against a table bound stays a
+ * min/max instead of a branch (as in ef_table.c). */
+static inline float seg_ct_hidef(float x)
+{
+#if defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__))
+    __asm__("" : "+x"(x));
+#elif defined(__GNUC__) && defined(__arm__) && defined(__VFP_FP__) && !defined(__SOFTFP__)
+    __asm__("" : "+t"(x));
+#elif defined(__GNUC__)
+    __asm__("" : "+g"(x));
+#endif
+    return x;
+}
+
+/* min(max(x, lo), hi) with the bounds hidden: min/max instructions, no branch. */
+static inline float seg_ct_clampf(float x, float lo, float hi)
+{
+    return ef_minf(ef_maxf(x, seg_ct_hidef(lo)), seg_ct_hidef(hi));
+}
+
+/* floor(x) for |x| < 2^23, the 0/1 correction converted rather than branched on. */
+static inline float seg_ct_floorf(float x)
+{
+    float t = (float)(int)x;
+    return t - (float)seg_ct_hidei(t > x);
+}
+
+/* c ? a : b for c in {0, 1}, the value of ef_selectf() (exact for finite a, b). */
+static inline float seg_sel(float c, float a, float b)
+{
+    return c * a + (1.0f - c) * b;
+}
+
+/* The G1 fold lookup of ef_table_lookup_g1() (EF_SYM_G1_FOLD tables) for angles already in
+ * [-pi, pi]: the same operations in the same order, so the same DOFs, without its argument
+ * checks, the +-1e6 bound (a no-op on such angles) and the clamp flags (the fold never
+ * reports one). */
+static inline void seg_g1_fold_lookup(const ef_table_t *tbl, float alpha, float beta, float d[2])
+{
+    float uu = 0.5f * (alpha + beta), vv = 0.5f * (alpha - beta);
+    float k = seg_ct_floorf(uu * (1.0f / EF_PI_F) + 0.5f);
+    uu -= k * EF_PI_F;
+    vv -= k * EF_PI_F;
+    vv -= (2.0f * EF_PI_F) * seg_ct_floorf(vv * (1.0f / (2.0f * EF_PI_F)) + 0.5f);
+    float swap = (float)seg_ct_hidei((uu < 0.0f) ^ (vv < 0.0f));
+    float c[2] = {ef_fabsf(uu), ef_fabsf(vv)}, f[2];
+    uint32_t i[2];
+    for (int a = 0; a < 2; a++) {
+        const ef_table_axis_t *ax = &tbl->axis[a];
+        float xc = seg_ct_clampf(c[a], ax->lo, ax->hi);
+        float g = (xc - ax->lo) * ax->inv_step;
+        uint32_t last = ax->nodes - 2u, ii = (uint32_t)g;
+        i[a] = ii < last ? ii : last;
+        f[a] = seg_ct_clampf(g - (float)i[a], 0.0f, 1.0f);
+    }
+    const float *p = tbl->data + 2u * (i[0] * tbl->axis[0].stride + i[1] * tbl->axis[1].stride);
+    const uint32_t s1 = 2u * tbl->axis[1].stride;
+    float w00 = (1.0f - f[0]) * (1.0f - f[1]), w10 = f[0] * (1.0f - f[1]);
+    float w01 = (1.0f - f[0]) * f[1], w11 = f[0] * f[1];
+    float d0 = w00 * p[0] + w10 * p[2] + w01 * p[s1] + w11 * p[s1 + 2];
+    float d1 = w00 * p[1] + w10 * p[3] + w01 * p[s1 + 1] + w11 * p[s1 + 3];
+    d[0] = seg_sel(swap, d1, d0);
+    d[1] = seg_sel(swap, d0, d1);
+}
+
+/* ef_atan2f()'s polynomial (ef_math.c), for the planar path's inline copy below; the
+ * planar/general comparison in test_seg_planar fails if the two ever differ. */
+static const float seg_atan_c[8] = {
+    9.999999545e-01f, -3.333228719e-01f, 1.997350213e-01f, -1.403925361e-01f,
+    9.965704541e-02f, -6.018953761e-02f, 2.473677233e-02f, -4.825772456e-03f,
+};
+
+/* ef_atan2f(y, x) for y >= 0 and x^2 + y^2 near 1 (a unit vector's sine and cosine): the
+ * same operations, less the selects that are identities there (a zero denominator, y < 0),
+ * and the two octant selects as exact sign flips (c in {0, 1}: c k + (1 - 2c) r is k - r or
+ * r, rounded as ef_selectf's). Inline: the planar path calls it twice. */
+static inline float seg_atan2_upper(float y, float x)
+{
+    float ax = ef_fabsf(x);
+    float steep = (float)seg_ct_hidei(y > ax), neg = (float)seg_ct_hidei(x < 0.0f);
+    float a = ef_minf(ax, y) / ef_maxf(ax, y);
+    float s = a * a;
+    float p = seg_atan_c[7];
+    p = p * s + seg_atan_c[6];
+    p = p * s + seg_atan_c[5];
+    p = p * s + seg_atan_c[4];
+    p = p * s + seg_atan_c[3];
+    p = p * s + seg_atan_c[2];
+    p = p * s + seg_atan_c[1];
+    p = p * s + seg_atan_c[0];
+    float r = a * p;
+    r = steep * (0.5f * EF_PI_F) + (1.0f - 2.0f * steep) * r;
+    return neg * EF_PI_F + (1.0f - 2.0f * neg) * r;
+}
+
+/*
+ * The planar path of ef_seg_g1_cubic(): 1 when out was built, 0 when the general path must
+ * decide (the data is not coplanar, or a check here fails: the general path then returns
+ * the same error ef_normalize() names). What it accepts the general path accepts too, and
+ * it computes every value the general path does with the same operations (ef_normalize():
+ * the unit chord and tangents, their sines and cosines to the chord, the plane's
+ * orientation), so the segments agree bit for bit; what it leaves out is what coplanar data
+ * and a fold table make unnecessary: the per-component checks (one sum says the positions
+ * are finite, the unit test says the tangents are), the zero-length guards (valid tangents
+ * and chords are not zero), and the lookup's generic argument and domain handling.
+ */
+static int seg_g1_planar(const ef_table_t *tbl, const ef_endpoint_t *e0, const ef_endpoint_t *e1,
+                         ef_seg_t *out)
+{
+    ef_vec3_t p0 = e0->p, p1 = e1->p, t0 = e0->t, t1 = e1->t;
+    /* NaN or inf anywhere makes the sum non-finite; finite coordinates beyond EF_MAX_COORD
+     * fail the largest magnitude, which is also the degeneracy test's scale. */
+    float sum = (p0.x + p0.y) + (p0.z + p1.x) + (p1.y + p1.z);
+    float scale = ef_maxf(
+        ef_maxf(ef_maxf(ef_fabsf(p0.x), ef_fabsf(p0.y)), ef_maxf(ef_fabsf(p0.z), ef_fabsf(p1.x))),
+        ef_maxf(ef_fabsf(p1.y), ef_fabsf(p1.z)));
+    float tt0 = ef_v3_dot(t0, t0), tt1 = ef_v3_dot(t1, t1);
+    ef_vec3_t d = ef_v3_sub(p1, p0);
+    float s = ef_v3_norm(d);
+    int ok = ef_finitef(sum) & (scale <= EF_MAX_COORD) &
+             (ef_fabsf(tt0 - 1.0f) <= 2.0f * EF_UNIT_TOL) &
+             (ef_fabsf(tt1 - 1.0f) <= 2.0f * EF_UNIT_TOL) & (s >= EF_MIN_CHORD) &
+             (s >= EF_MIN_CHORD_REL * scale);
+    /* Coplanar chord and tangents: d . (t0 x t1) is |d| times the sine of t1's angle out of
+     * the plane (d, t0) times t0's sine to the chord (the tangents are unit within
+     * EF_UNIT_TOL), plus what rounding the positions leaves in d (a few ulps of the largest
+     * coordinate: far from the origin a short chord's direction is only that exact). Tested
+     * first so non-planar data pays little before the general path. */
+    int planar = ef_fabsf(ef_v3_dot(d, ef_v3_cross(t0, t1))) <=
+                 EF_SEG_PLANAR_EPS * s + (8.0f * EF_FLT_EPS) * scale;
+    if (!seg_ct_hidei(ok & planar))
+        return 0;
+    ef_vec3_t ex = ef_v3_scale(d, 1.0f / s);
+    t0 = ef_v3_scale(t0, 1.0f / ef_sqrtf(tt0));
+    t1 = ef_v3_scale(t1, 1.0f / ef_sqrtf(tt1));
+    ef_vec3_t m0 = ef_v3_cross(ex, t0), m1 = ef_v3_cross(ex, t1);
+    /* The signs as ef_normalize() sets them: sigma makes m1 agree with m0, and the side is
+     * that of the first nonzero of m.z, m.y, m.x, m = m0 + sigma m1. */
+    float sigma = 1.0f - 2.0f * (float)seg_ct_hidei(ef_v3_dot(m0, m1) < 0.0f);
+    ef_vec3_t m = ef_v3_axpy(m0, sigma, m1);
+    float a0 = seg_atan2_upper(ef_v3_norm(m0), ef_v3_dot(t0, ex));
+    float a1 = seg_atan2_upper(ef_v3_norm(m1), ef_v3_dot(t1, ex));
+    int nz = m.z != 0.0f, ny = m.y != 0.0f;
+    int neg = seg_ct_hidei((nz & (m.z < 0.0f)) | ((nz ^ 1) & ny & (m.y < 0.0f)) |
+                           ((nz ^ 1) & (ny ^ 1) & (m.x < 0.0f)));
+    float fs = 1.0f - 2.0f * (float)neg;
+    ef_norm_t nm;
+    nm.alpha = fs * a0;
+    nm.beta = fs * sigma * a1;
+    nm.k0 = nm.k1 = 0.0f;
+    nm.chord = s;
+    nm.e1 = ex;
+    nm.t0 = t0;
+    nm.t1 = t1;
+    float dd[2];
+    seg_g1_fold_lookup(tbl, nm.alpha, nm.beta, dd);
+    out->dof[0] = dd[0] * s;
+    out->dof[1] = dd[1] * s;
+    out->dof[2] = out->dof[3] = 0.0f;
+    out->clamp = 0; /* the fold covers every angle: no clamp */
+    out->flags = EF_SEG_PLANAR;
+    seg_cubic(e0, e1, &nm, out);
+    return 1;
+}
+
 /* Normalize, look up (alpha, beta), scale the per-unit-chord DOFs back by the chord. */
 int ef_seg_g1_cubic(const ef_table_t *tbl, const ef_endpoint_t *e0, const ef_endpoint_t *e1,
                     ef_seg_t *out)
@@ -58,6 +237,10 @@ int ef_seg_g1_cubic(const ef_table_t *tbl, const ef_endpoint_t *e0, const ef_end
         return seg_fail(out, EF_ERR_ARG);
     if (tbl->kind != EF_TABLE_G1_CUBIC)
         return seg_fail(out, EF_ERR_KIND);
+    /* The table's symmetry is fixed per firmware: this does not depend on the data. */
+    if (tbl->symmetry == EF_SYM_G1_FOLD && tbl->naxes == 2 && tbl->ndof == 2 && tbl->data &&
+        seg_g1_planar(tbl, e0, e1, out))
+        return EF_OK;
     ef_norm_t nm;
     int rc = ef_normalize(e0, e1, 0, &nm);
     if (rc != EF_OK)
