@@ -10,7 +10,8 @@ ef=$b/host/evenfeed
 
 echo "== Instructions per segment call (callgrind, x86-64, firmware at -O2), 10000 random"
 echo "   valid configurations each (planar, 3-D, near-reversal, out-of-domain), and ef_blend_corner on"
-echo "   10000 random corners; targets G1 <= 400, G2 <= 1500"
+echo "   10000 random corners; targets (issue 17) G1 planar path <= 400, G2 <= 1500, each path's"
+echo "   max/min <= 1.02; G1 reported per path (planar: coplanar chord and tangents; 3-D: the rest)"
 sh tests/bench/ct_bench.sh "$b/tests/bench_ct" 10000 g1 g2 blend
 
 echo
@@ -62,9 +63,10 @@ if [ -x "$b/tests/bench_smooth" ]; then
         rm -rf "$cg"
         echo
         echo "== Per-call instructions of the per-move functions (callgrind, firmware at -O2, default"
-        echo "   tables), 1000 random inputs each"
+        echo "   tables), 1000 random inputs each: min / median / max, max/min; ef_interp_process per"
+        echo "   1 ms period over the moves of 1000 CAM-like primitives (target <= 1000 per period)"
         sh tests/bench/ct_bench.sh "$b/tests/bench_ct_path" 1000 bprim_la bprim_aa arcpiece \
-            measure smooth
+            measure smooth interp interp_c
     fi
 else
     echo "(bench_smooth not built: EF_BENCH_SMOOTH off)"
