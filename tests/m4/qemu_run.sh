@@ -31,7 +31,8 @@ set -- "$qemu" -M mps2-an386 -nographic -monitor none -serial none \
     -semihosting-config enable=on,target=native -icount shift=10,sleep=off -kernel "$img"
 rc=0
 if [ -n "$out" ]; then
-    timeout -k 5 "$limit" "$@" >"$out" || rc=$?
+    # QEMU writes the semihosting console to its stderr.
+    timeout -k 5 "$limit" "$@" >"$out" 2>&1 || rc=$?
     cat "$out"
 else
     timeout -k 5 "$limit" "$@" || rc=$?
