@@ -7,12 +7,15 @@ set -euo pipefail
 b=$(cd "$1" && pwd)
 cd "$(dirname "$0")/../.."
 ef=$b/host/evenfeed
+# The per-call x86 figures, kept for the M4 side-by-side table at the end of that part.
+x86log=$(mktemp "${TMPDIR:-/tmp}/ef_x86ct.XXXXXX")
+trap 'rm -f "$x86log"' EXIT
 
 echo "== Instructions per segment call (callgrind, x86-64, firmware at -O2), 10000 random"
 echo "   valid configurations each (planar, 3-D, near-reversal, out-of-domain), and ef_blend_corner on"
 echo "   10000 random corners; targets (issue 17) G1 planar path <= 400, G2 <= 1500, each path's"
 echo "   max/min <= 1.02; G1 reported per path (planar: coplanar chord and tangents; 3-D: the rest)"
-sh tests/bench/ct_bench.sh "$b/tests/bench_ct" 10000 g1 g2 blend
+sh tests/bench/ct_bench.sh "$b/tests/bench_ct" 10000 g1 g2 blend | tee -a "$x86log"
 
 echo
 echo "== Default tables against the CPU reference optimum (accuracy harness)"
@@ -66,10 +69,27 @@ if [ -x "$b/tests/bench_smooth" ]; then
         echo "   tables), 1000 random inputs each: min / median / max, max/min; ef_interp_process per"
         echo "   1 ms period over the moves of 1000 CAM-like primitives (target <= 1000 per period)"
         sh tests/bench/ct_bench.sh "$b/tests/bench_ct_path" 1000 bprim_la bprim_aa arcpiece \
-            measure smooth interp interp_c
+            measure smooth interp interp_c | tee -a "$x86log"
     fi
 else
     echo "(bench_smooth not built: EF_BENCH_SMOOTH off)"
+fi
+
+echo
+echo "== Cortex-M4F (QEMU mps2-an386, -icount shift=10: exact instruction counts) against x86"
+echo "   (callgrind, above), worst case per call on the same generators (tests/bench/ct_cases.h),"
+echo "   1000 inputs each on the M4; the issue-17 targets; stack high-water against the static bound"
+echo "   (tests/m4/m4_costs.c, costs_check.sh); flash and RAM per layer (tests/m4/sizes.sh)"
+if [ -f "$b/m4-O2/m4_costs.elf" ] && command -v qemu-system-arm >/dev/null 2>&1; then
+    for opt in O2 Os; do
+        echo "-- -$opt: stack (bytes)"
+        sh tests/m4/costs_check.sh "$b/m4-$opt" | grep -E '^stack .* bound=|costs_check' || true
+    done
+    sh tests/m4/costs_table.sh "$x86log" "$b/m4-O2/m4_costs.out" "$b/m4-Os/m4_costs.out"
+    echo
+    sh tests/m4/sizes.sh "$b/m4-O2" "$b/m4-Os"
+else
+    echo "(not built: configure with -DEF_M4=ON, needs gcc-arm-none-eabi and qemu-system-arm)"
 fi
 
 echo
