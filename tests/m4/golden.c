@@ -137,8 +137,12 @@ static float gd_mag(int lo, int hi)
 static ef_vec3_t gd_unit(int planar)
 {
     for (;;) {
-        ef_vec3_t v =
-            ef_v3(gd_uni(-1.0f, 1.0f), gd_uni(-1.0f, 1.0f), planar ? 0.0f : gd_uni(-1.0f, 1.0f));
+        /* one draw per statement: the order in which function arguments are evaluated is
+         * unspecified, and x86-64 and Arm GCC do pick different orders */
+        float x = gd_uni(-1.0f, 1.0f);
+        float y = gd_uni(-1.0f, 1.0f);
+        float z = planar ? 0.0f : gd_uni(-1.0f, 1.0f);
+        ef_vec3_t v = ef_v3(x, y, z);
         float n2 = ef_v3_dot(v, v);
         if (n2 > 0.01f && n2 <= 1.0f)
             return ef_v3_scale(v, 1.0f / ef_sqrtf(n2));
@@ -147,7 +151,10 @@ static ef_vec3_t gd_unit(int planar)
 
 static ef_vec3_t gd_point(float scale)
 {
-    return ef_v3(gd_uni(-scale, scale), gd_uni(-scale, scale), gd_uni(-scale, scale));
+    float x = gd_uni(-scale, scale);
+    float y = gd_uni(-scale, scale);
+    float z = gd_uni(-scale, scale);
+    return ef_v3(x, y, z);
 }
 
 static float gd_nan(void)
@@ -339,6 +346,23 @@ static void gd_ends(uint32_t i, int g2, ef_endpoint_t *e0, ef_endpoint_t *e1)
     }
 }
 
+/* Debugging a mismatch: build both sides with -DGD_TRACE to print the running digest after
+ * every item of the segment and blend cases, then diff the two outputs. */
+static void gd_trace(uint32_t i)
+{
+#ifdef GD_TRACE
+    char buf[32];
+    char *p = gd_fmt_u(buf, i);
+    *p++ = ' ';
+    p = gd_fmt_u(p, gd_h);
+    *p++ = '\n';
+    *p = '\0';
+    ef_golden_puts(buf);
+#else
+    (void)i;
+#endif
+}
+
 static void gd_case_seg(void)
 {
     static ef_seg_t s;
@@ -348,6 +372,7 @@ static void gd_case_seg(void)
         gd_ends(i, 0, &e0, &e1);
         memset(&s, 0, sizeof s);
         gd_seg(ef_seg_g1_cubic(&ef_tbl_g1_default, &e0, &e1, &s), &s);
+        gd_trace(i);
     }
     memset(&s, 0, sizeof s);
     gd_seg(ef_seg_g1_cubic(&ef_tbl_g2_default, &e0, &e1, &s), &s);
@@ -358,6 +383,7 @@ static void gd_case_seg(void)
         gd_ends(i, 1, &e0, &e1);
         memset(&s, 0, sizeof s);
         gd_seg(ef_seg_g2_quintic(&ef_tbl_g2_default, &e0, &e1, &s), &s);
+        gd_trace(i);
     }
     memset(&s, 0, sizeof s);
     gd_seg(ef_seg_g2_quintic(&ef_tbl_g1_default, &e0, &e1, &s), &s);
@@ -377,12 +403,16 @@ static void gd_case_corner(void)
         ef_vec3_t v = gd_point(gd_mag(-1, 3));
         ef_vec3_t ui = gd_unit(planar), uo;
         uint32_t r = i % 10u;
-        if (r == 0u) /* nearly straight */
-            uo = ef_v3_add(ui, ef_v3_scale(gd_unit(planar), gd_mag(-4, -2)));
-        else if (r == 1u) /* nearly reversed */
-            uo = ef_v3_add(ef_v3_scale(ui, -1.0f), ef_v3_scale(gd_unit(planar), gd_mag(-4, -1)));
-        else
-            uo = gd_unit(planar);
+        ef_vec3_t w = gd_unit(planar);
+        if (r == 0u) { /* nearly straight */
+            float e = gd_mag(-4, -2);
+            uo = ef_v3_axpy(ui, e, w);
+        } else if (r == 1u) { /* nearly reversed */
+            float e = gd_mag(-4, -1);
+            uo = ef_v3_axpy(ef_v3_scale(ui, -1.0f), e, w);
+        } else {
+            uo = w;
+        }
         float un = ef_v3_norm(uo);
         uo = un > 0.0f ? ef_v3_scale(uo, 1.0f / un) : ui;
         float tol = gd_mag(-4, -1);
@@ -489,7 +519,8 @@ static void gd_case_prims(void)
             in.kind = EF_PRIM_LINE;
             in.end = v;
             in.feed = 50.0f;
-            start_in = ef_v3_axpy(v, -gd_mag(-1, 1), gd_unit(0));
+            float l = gd_mag(-1, 1);
+            start_in = ef_v3_axpy(v, -l, gd_unit(0));
         } else {
             gd_arc(v, 1, a0, r0, rise0, d0, &in, &start_in);
         }

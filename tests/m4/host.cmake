@@ -32,6 +32,8 @@ if(TARGET ef_host AND TARGET ef_tables_default)
                              ${CMAKE_CURRENT_LIST_DIR}/golden_host.c ${EF_GOLDEN_PROGS})
   target_include_directories(golden_host PRIVATE ${CMAKE_CURRENT_LIST_DIR})
   target_link_libraries(golden_host PRIVATE ef_fw ef_tables_default)
-  # As the firmware is built (firmware/README.md): ef_sqrtf() is the square-root instruction.
-  target_compile_options(golden_host PRIVATE -ffreestanding -fno-math-errno -Wdouble-promotion)
+  # As the firmware is built (firmware/README.md): ef_sqrtf() is the square-root instruction,
+  # nothing contracted into a fused multiply-add (the inline vector helpers compile here).
+  target_compile_options(golden_host PRIVATE -ffreestanding -fno-math-errno -ffp-contract=off
+                                             -Wdouble-promotion)
 endif()

@@ -8,7 +8,7 @@ if(EF_M4_GEN_DIR AND EXISTS ${EF_M4_GEN_DIR}/golden_progs.c)
               ${EF_M4_GEN_DIR}/golden_progs.c)
   target_include_directories(m4_golden PRIVATE ${EF_TOP}/tests/m4)
   target_link_libraries(m4_golden PRIVATE ef_m4_tables)
-  target_compile_options(m4_golden PRIVATE -ffreestanding -fno-math-errno)
+  target_compile_options(m4_golden PRIVATE -ffreestanding -fno-math-errno -ffp-contract=off)
 endif()
 
 # Costs (tests/m4/costs_images.cmake).
