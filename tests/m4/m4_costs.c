@@ -413,8 +413,11 @@ static uint32_t costs_prog_rec(uint32_t i, const ef_prim_t **pr)
 static void costs_progs(void)
 {
     for (uint32_t p = 0; p < ef_golden_nprogs; p++) {
+        char tag[48];
         costs_prog = &ef_golden_progs[p];
-        costs_stream(costs_prog->name, costs_prog_rec, costs_prog->n, 0);
+        /* "prog-NAME": the golden programs include a generated CAM one named cam too. */
+        costs_cat(costs_cat(tag, "prog-"), costs_prog->name);
+        costs_stream(tag, costs_prog_rec, costs_prog->n, 0);
     }
 }
 #endif
