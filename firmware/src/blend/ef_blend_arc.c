@@ -18,11 +18,8 @@
  * Empirical, not proven: tests/blend/test_prim.c's 1500 arc pieces (up to 4 turns) find the true
  * deviation at most 0.998 x the reported one with it, 2.8 x without. */
 #define EF_BA_ANGLE_ULP 2.0f
-/* Samples of a trial blend for its deviation, ends excluded (ba_try()); fewer than the
- * smoother's EF_BLEND_DEV_SAMPLES, the refinement of the worst interval makes up for it. */
-#define EF_BA_DEV_SAMPLES 8
 /* Extra samples per refined interval, plus one (ba_try()). */
-#define EF_BA_REFINE 4
+#define EF_BA_REFINE 8
 /* Points of each replaced piece checked for their distance to the blend (ba_try()). */
 #define EF_BA_PATH_PTS 3
 /* Relative allowance over the blend's bounded deviation: the between-sample term is an
@@ -292,79 +289,6 @@ int ef_blend_arc_piece(const ef_table_t *g2, ef_vec3_t start, const ef_prim_t *p
     return EF_OK;
 }
 
-/* Gauss-Legendre, 16 nodes on [0, 1]: offsets from 1/2 and weights of each pair's members
- * (the rule of ef_bezier_h4_length()). */
-static const float ba_gl16[8][2] = {
-    {4.750625492e-02f, 9.472530523e-02f}, {1.408017754e-01f, 9.130170752e-02f},
-    {2.290083888e-01f, 8.457825970e-02f}, {3.089381222e-01f, 7.479799441e-02f},
-    {3.777022042e-01f, 6.231448563e-02f}, {4.328156012e-01f, 4.757925584e-02f},
-    {4.722875115e-01f, 3.112676197e-02f}, {4.947004675e-01f, 1.357622971e-02f},
-};
-
-/* Control points of the G2 quintic with end speeds x (both ends) and tangential DOFs x20,
- * x21 (as ef_seg_from_dofs(), without its normalization: the end data are exact frames). */
-static void ba_build(const ef_frame_t *f0, const ef_frame_t *f1, float x, float x20, float x21,
-                     ef_vec3_t *b)
-{
-    ef_vec3_t d2a = ef_v3_axpy(ef_v3_scale(f0->t, x20), f0->kappa * x * x, f0->n);
-    ef_vec3_t d2b = ef_v3_axpy(ef_v3_scale(f1->t, x21), f1->kappa * x * x, f1->n);
-    b[0] = f0->p;
-    b[5] = f1->p;
-    b[1] = ef_v3_axpy(f0->p, 0.2f * x, f0->t);
-    b[4] = ef_v3_axpy(f1->p, -0.2f * x, f1->t);
-    b[2] = ef_v3_axpy(ef_v3_sub(ef_v3_scale(b[1], 2.0f), f0->p), 0.05f, d2a);
-    b[3] = ef_v3_axpy(ef_v3_sub(ef_v3_scale(b[4], 2.0f), f1->p), 0.05f, d2b);
-}
-
-/* g(x) = L(x) - x and g'(x) for the quintic of ba_build(): L by 16-node Gauss-Legendre on
- * |f'|, dL/dx = integral of <f', df'/dx> / |f'| at the same nodes (f' is linear in the
- * control points, which are quadratic in x). */
-static float ba_len_gap(const ef_frame_t *f0, const ef_frame_t *f1, float x, float x20, float x21,
-                        float *dg)
-{
-    ef_vec3_t b[6], db[6], h[5], dh[5];
-    ba_build(f0, f1, x, x20, x21, b);
-    db[0] = db[5] = ef_v3(0.0f, 0.0f, 0.0f);
-    db[1] = ef_v3_scale(f0->t, 0.2f);
-    db[4] = ef_v3_scale(f1->t, -0.2f);
-    db[2] = ef_v3_axpy(ef_v3_scale(f0->t, 0.4f), 0.1f * f0->kappa * x, f0->n);
-    db[3] = ef_v3_axpy(ef_v3_scale(f1->t, -0.4f), 0.1f * f1->kappa * x, f1->n);
-    for (int i = 0; i < 5; i++) {
-        h[i] = ef_v3_scale(ef_v3_sub(b[i + 1], b[i]), 5.0f);
-        dh[i] = ef_v3_scale(ef_v3_sub(db[i + 1], db[i]), 5.0f);
-    }
-    float len = 0.0f, dlen = 0.0f;
-    for (int i = 0; i < 16; i++) {
-        float t = 0.5f + ef_selectf(i & 1, ba_gl16[i >> 1][0], -ba_gl16[i >> 1][0]);
-        float w = ba_gl16[i >> 1][1];
-        ef_vec3_t d = ef_bezier_b4(h, t), dd = ef_bezier_b4(dh, t);
-        float sp = ef_v3_norm(d);
-        len += w * sp;
-        dlen += w * ef_v3_dot(d, dd) / ef_maxf(sp, 1e-30f);
-    }
-    *dg = dlen - 1.0f;
-    return len - x;
-}
-
-/* Even ends: end speeds x = L, the quintic's own arc length (see EF_SEG_END_SPEED_REL), with
- * the table's tangential DOFs. Two Newton steps on g(x) = L(x) - x from the table's mean
- * end speed (g' = L' - 1 is near -1: L moves little with x), the second one's result built
- * unmeasured; *uneven: |g| / L at the last measured x, an upper estimate of what is left. */
-static void ba_even(const ef_frame_t *f0, const ef_frame_t *f1, ef_seg_t *seg, float *uneven)
-{
-    float x20 = seg->dof[1], x21 = seg->dof[3];
-    float x = 0.5f * (seg->dof[0] + seg->dof[2]), g = 0.0f;
-    for (int it = 0; it < 2; it++) {
-        float dg;
-        g = ba_len_gap(f0, f1, x, x20, x21, &dg);
-        float xn = x - g / ef_selectf(dg < -0.1f, dg, -1.0f);
-        x = ef_selectf(xn > 0.0f, xn, x);
-    }
-    *uneven = ef_fabsf(g) / ef_maxf(x, 1e-30f);
-    ba_build(f0, f1, x, x20, x21, seg->b);
-    seg->dof[0] = seg->dof[2] = x;
-}
-
 /* One trial blend for trims (li, lo): end frames, the quintic, its measured deviation. */
 typedef struct {
     ef_seg_t seg;
@@ -433,7 +357,7 @@ static void ba_try(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in
     int rc = ef_seg_g2_quintic(g2, &e0, &e1, &tr->seg);
     float uneven = 0.0f;
     if (rc == EF_OK)
-        ba_even(&ga, &gb, &tr->seg, &uneven);
+        ef_seg_g2_even(&e0, &e1, &tr->seg, 0, &uneven);
     tr->pa = ga.p;
     tr->pb = gb.p;
     tr->li = li;
@@ -447,7 +371,7 @@ static void ba_try(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in
      * the two cross, not a sample. EF_BLEND_DEV_SAMPLES + 2 samples (ends included) and a
      * bound per interval (ba_interval_bounds()); then the interval with the largest bound
      * is sampled EF_BA_REFINE - 1 times more and its bound replaced by the finer one. */
-    enum { NS = EF_BA_DEV_SAMPLES + 2 };
+    enum { NS = EF_BLEND_DEV_SAMPLES + 2 };
     float fa[NS], fb[NS], bnd[NS - 1];
     ef_vec3_t cs[NS];
     const float h = 1.0f / (float)(NS - 1);

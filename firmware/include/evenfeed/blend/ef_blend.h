@@ -62,18 +62,17 @@
  * the outgoing one, with the primitives' tangents and curvature vectors there (an arc end
  * has curvature 1/r towards the centre), through the G2 table in its general,
  * asymmetric configuration. There is no closed form for the deviation, so it is measured:
- * the largest distance from the blend's points (10 of them, ends included) to the
+ * the largest distance from the blend's points (::EF_BLEND_DEV_SAMPLES of them) to the
  * replaced pieces of the two primitives, plus a bound for what lies between samples. The
  * trims start from the line–line estimate with the vertex tangents and are shrunk in a
  * fixed number of steps (::EF_BLEND_ITER) until the measured deviation is within
  * tol - q; if none is, the outcome is ::EF_BLEND_STOP. Trims are limited by max_in and
  * max_out separately (asymmetric trims: a short neighbour on one side shortens only that
- * side, the other keeps the trim the tolerance allows). Every trial's end speeds |f'(0)|,
- * |f'(1)| are set to its arc length L (the table's for a lopsided corner were up to 60 %
- * off), keeping the table's tangential DOFs: two Newton steps on L(x) - x, with L and dL/dx
- * by 16-node Gauss-Legendre; a trial whose last measured step left more than
- * EF_SEG_END_SPEED_REL is not a blend. A stepper that steps the parameter uniformly (the
- * drives' segment mode) would otherwise jump in feed at both junctions.
+ * side, the other keeps the trim the tolerance allows). Every trial's curve goes through
+ * ef_seg_g2_even(): its end speeds |f'(0)|, |f'(1)| are set to its arc length (the table's
+ * for a lopsided corner were up to 60 % off), and of the candidates that do, the most even
+ * is kept: a stepper that steps the parameter uniformly (the drives' segment mode) would
+ * otherwise jump in feed at both junctions.
  *
  * ## Tangent joins (ef_blend_prims())
  * A vertex whose tangents turn by less than ::EF_BLEND_MIN_TURN but whose curvature vectors
@@ -162,15 +161,13 @@ typedef struct {
 int ef_blend_corner(const ef_table_t *g2, ef_vec3_t v, ef_vec3_t u_in, ef_vec3_t u_out, float tol,
                     float max_in, float max_out, ef_blend_t *out);
 
-/** Samples per smooth section in the smoother's deviation measure (ef_smooth.c);
- *  ef_blend_prims() uses 8 plus its ends. */
+/** Samples of the blend used to measure its deviation (ef_blend_prims()). */
 #ifndef EF_BLEND_DEV_SAMPLES
 #define EF_BLEND_DEV_SAMPLES 16
 #endif
-/** Fixed number of trim trials in ef_blend_prims() (each a lookup, even ends and a measured
- *  deviation, about 20 k x86-64 instructions at -O2). */
+/** Fixed number of trim refinement steps in ef_blend_prims(). */
 #ifndef EF_BLEND_ITER
-#define EF_BLEND_ITER 3
+#define EF_BLEND_ITER 6
 #endif
 
 /**
@@ -194,19 +191,19 @@ int ef_blend_corner(const ef_table_t *g2, ef_vec3_t v, ef_vec3_t u_in, ef_vec3_t
  * - a trial is feasible if the table did not clamp its tangent angles (a lopsided hairpin,
  *   a tangent beyond 90 degrees from the chord, would; a clamped curvature is accepted) and
  *   its measured deviation is within tol - q. The deviation is two-sided:
- *   (a) blend to path: the distances of 8 + 2 blend points (ends included) to each
- *   replaced piece, in closed form: exact for lines and circles (for an arc the radial and
- *   axial offset when the point's angle about the axis is inside the piece, else the nearer
- *   end), for helices the distance to an actual point of the piece (an upper bound); on an
- *   arc plus 2 ulp of the arc's angle at the piece's far end times its radius (the float32
- *   frames place the blend's ends up to that far off the exact piece); per interval each
- *   distance is bounded by its linear interpolant plus (local max |second difference|) / 8,
- *   and the top of the smaller of the two bounds (at an end or at their crossing, the
- *   blend's middle) is the interval's bound; the interval with the largest bound is sampled
- *   3 times more and bounded again; times 1.02;
- *   (b) path to blend: the vertex and 3 points of each replaced piece to the blend
- *   (nearest sample plus one Newton step, an upper bound). Without (b) a blend between two
- *   nearly parallel pieces could cut a hairpin's tip short and still be close to the path;
+ *   (a) blend to path: the distances of EF_BLEND_DEV_SAMPLES + 2 blend points (ends
+ *   included) to each replaced piece, in closed form: exact for lines and circles (for an
+ *   arc the radial and axial offset when the point's angle about the axis is inside the
+ *   piece, else the nearer end), for helices the distance to an actual point of the piece
+ *   (an upper bound); on an arc plus 2 ulp of the arc's angle at the piece's far end times
+ *   its radius (the float32 frames place the blend's ends up to that far off the exact
+ *   piece); per interval each distance is bounded by its linear interpolant plus
+ *   (local max |second difference|) / 8, and the top of the smaller of the two bounds
+ *   (at an end or at their crossing, the blend's middle) is the interval's bound; the
+ *   interval with the largest bound is sampled 7 times more and bounded again; times 1.02;
+ *   (b) path to blend: the vertex and 3 points of each replaced piece to the blend (nearest
+ *   sample plus one Newton step, an upper bound). Without (b) a blend between two nearly
+ *   parallel pieces could cut a hairpin's tip short and still be close to the path;
  * - res->dev is that measured deviation, res->gain the line–line g(turn) of the vertex
  *   tangents (for information), EF_BLEND_CLAMPED when max_in, max_out or the arc cap
  *   limited a trim.
@@ -253,8 +250,9 @@ int ef_blend_prims(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in
  *               4 eps of the ends' largest coordinate (control point rounding);
  *               tests/blend/test_prim.c finds the true deviation (dense sampling in double)
  *               at most 0.97 of it (1500 pieces up to full sweep, helices included); at
- *               full sweep the bound is 1.04 x the true maximum (3.26e-4 r, 3.15e-4 r). On error m
- * is all zero. The primitive is checked again (ef_prim_check(); its codes are returned).
+ *               full sweep the bound is 1.04 x the true maximum (3.26e-4 r, 3.15e-4 r). On error m is all zero.
+ *               The primitive is checked again (ef_prim_check(); its codes are
+ *               returned).
  * @retval EF_OK
  * @retval EF_ERR_ARG  NULL pointer, not an arc, s0/s1 out of range or piece too long
  * @retval EF_ERR_KIND not a G2 quintic table
