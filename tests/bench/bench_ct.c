@@ -10,8 +10,9 @@
  * client requests are no-ops and the program only checks that every call succeeds.
  *
  * Usage: bench_ct g1|g1p|g1_3d|g2|blend N [dump|nodump] [seed]
- *   g1p / g1_3d: only the coplanar configuration kinds (ef_seg_g1_cubic's planar path), only
- *   the twisted and general 3-D ones clearly off a plane (its general path)
+ *   g1p: ef_seg_g1_cubic_xy (the XY fast path) on the coplanar kinds laid in planes z = const
+ *   (each segment also checked against ef_seg_g1_cubic's, bit for bit); g1_3d:
+ *   ef_seg_g1_cubic on the twisted and general 3-D kinds, clearly off a plane
  *   nodump leaves out the client requests, so a single end-of-run dump holds the sum over
  *   all calls: ct_bench.sh --verify compares it with the sum of the per-call dumps.
  *
@@ -229,6 +230,9 @@ static double near_axis_angle(unsigned long long *rs, int at_pi)
 }
 
 /* One random valid configuration of the given kind; g2 also fills n and kappa. */
+/* Set for g1p: make_config() lays every kind in a plane z = const. */
+static int bench_xy;
+
 static void make_config(unsigned long long *rs, int kind, int g2, ef_endpoint_t *e0,
                         ef_endpoint_t *e1)
 {
@@ -244,7 +248,9 @@ static void make_config(unsigned long long *rs, int kind, int g2, ef_endpoint_t 
     if (planar_xy)
         p0[2] = 0;
     ef_t_rot3_t r;
-    if (kind == BC_ALONG_AXIS)
+    if (bench_xy) /* g1p: every kind turned about z only, in the plane z = p0[2] */
+        r = rot_z(kind == BC_ALONG_AXIS ? 0 : ef_t_uniform(rs, -M_PI, M_PI));
+    else if (kind == BC_ALONG_AXIS)
         r = rot_z(0);
     else if (kind == BC_PLANAR_XY)
         r = rot_z(ef_t_uniform(rs, -M_PI, M_PI));
@@ -676,8 +682,8 @@ static int run_smooth(const ef_table_t *tbl, long n, int dump, unsigned long lon
 }
 #endif
 
-/* |d . (t0 x t1)| in double over the limit below which ef_seg_g1_cubic takes its planar path
- * (EF_SEG_PLANAR_EPS |d| + 8 ulps of the largest coordinate): above 1 is the general path. */
+/* |d . (t0 x t1)| in double over 1e-5 |d| + 8 ulps of the largest coordinate (what float32
+ * rounding leaves of coplanar data): above 1 is clearly 3-D. */
 static double g1_coplanarity(const ef_endpoint_t *e0, const ef_endpoint_t *e1)
 {
     double d[3] = {(double)e1->p.x - e0->p.x, (double)e1->p.y - e0->p.y, (double)e1->p.z - e0->p.z};
@@ -688,8 +694,7 @@ static double g1_coplanarity(const ef_endpoint_t *e0, const ef_endpoint_t *e1)
     for (int k = 0; k < 2; k++)
         scale = fmax(scale, fmax(fabs(p[k]->x), fmax(fabs(p[k]->y), fabs(p[k]->z))));
     return fabs(d[0] * c[0] + d[1] * c[1] + d[2] * c[2]) /
-           (EF_SEG_PLANAR_EPS * sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) +
-            8.0 * 1.1920929e-7 * scale);
+           (1e-5 * sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) + 8.0 * 1.1920929e-7 * scale);
 }
 
 /* Parse "g1"/"g2"/"blend" and N, build the table, run the calls, report how many of each kind. */
@@ -703,7 +708,7 @@ int main(int argc, char **argv)
         if (argc > 1 && strcmp(argv[1], path_kinds[k]) == 0)
             path_kind = k;
 #endif
-    /* g1p / g1_3d: the planar and the general path of ef_seg_g1_cubic on their own. */
+    /* g1p / g1_3d: ef_seg_g1_cubic_xy on XY data, ef_seg_g1_cubic on 3-D data. */
     int g1_path =
         argc > 1 ? (strcmp(argv[1], "g1p") == 0) + 2 * (strcmp(argv[1], "g1_3d") == 0) : 0;
     if (argc < 3 || (path_kind < 0 && g1_path == 0 && strcmp(argv[1], "g1") != 0 &&
@@ -767,6 +772,7 @@ int main(int argc, char **argv)
         ef_endpoint_t e0, e1;
         ef_seg_t seg;
         int kind = (int)(i % BC_COUNT);
+        bench_xy = g1_path == 1;
         if (g1_path == 1) /* the six coplanar kinds */
             kind = (int)(i % 6) + ((int)(i % 6) >= BC_TWISTED) * 2;
         else if (g1_path == 2)
@@ -778,9 +784,33 @@ int main(int argc, char **argv)
          * nothing of this loop is counted either way. */
         if (dump)
             CALLGRIND_ZERO_STATS;
-        rc = g2 ? ef_seg_g2_quintic(tbl, &e0, &e1, &seg) : ef_seg_g1_cubic(tbl, &e0, &e1, &seg);
+        if (g2)
+            rc = ef_seg_g2_quintic(tbl, &e0, &e1, &seg);
+        else if (g1_path == 1)
+            rc = ef_seg_g1_cubic_xy(tbl, &e0, &e1, &seg);
+        else
+            rc = ef_seg_g1_cubic(tbl, &e0, &e1, &seg);
         if (dump)
             CALLGRIND_DUMP_STATS;
+        if (g1_path == 1 && rc == EF_OK) {
+            ef_seg_t ref;
+            int rr = ef_seg_g1_cubic(tbl, &e0, &e1, &ref);
+            /* == on every float: bit for bit, a zero's sign aside (t.z may be -0 here). */
+            const float *fa = &ref.b[0].x, *fb = &seg.b[0].x, *na = &ref.norm.alpha,
+                        *nb = &seg.norm.alpha;
+            int diff = rr != EF_OK || ref.flags != seg.flags || ref.clamp != seg.clamp;
+            for (int q = 0; q < 18; q++)
+                diff |= fa[q] != fb[q];
+            for (int q = 0; q < 4; q++)
+                diff |= ref.dof[q] != seg.dof[q];
+            for (int q = 0; q < (int)(sizeof ref.norm / sizeof(float)); q++)
+                diff |= na[q] != nb[q];
+            if (diff) {
+                fprintf(stderr, "bench_ct: call %ld (kind %d): XY and 3-D segments differ\n", i,
+                        kind);
+                return 1;
+            }
+        }
         if (rc != EF_OK) {
             fprintf(stderr, "bench_ct: call %ld (kind %d) failed: %s\n", i, kind, ef_err_str(rc));
             return 1;

@@ -6,8 +6,8 @@
 # Usage: ct_bench.sh [--targets] [--verify] [--keep DIR] BENCH N KIND...
 #   BENCH     the bench_ct binary (this script builds nothing)
 #   N         calls per kind (random valid configurations, fixed seed)
-#   KIND      g1 (= g1p g1_3d: ef_seg_g1_cubic's planar and 3-D paths, each checked on its
-#             own), g2 or blend (ef_blend_corner) (several may be given; each is run and checked);
+#   KIND      g1 (= g1p g1_3d: ef_seg_g1_cubic_xy on XY data and ef_seg_g1_cubic on 3-D
+#             data, each checked on its own), g2 or blend (ef_blend_corner) (several may be given; each is run and checked);
 #             with the bench_ct_path binary also, as figures only (min / median / mean / max,
 #             never a failure): bprim_la, bprim_aa (ef_blend_prims line->arc, arc->arc),
 #             arcpiece (ef_blend_arc_piece), measure (ef_move_measure on quintics), smooth
@@ -15,7 +15,7 @@
 #             move, and push+pull instructions per move), interp, interp_c (the same stream
 #             through ef_interp, uniform / corrected stepping: ef_interp_process per 1 ms period,
 #             and how many periods are above 1000)
-#   --targets also fail if the max count is above the targets (G1 planar path 400,
+#   --targets also fail if the max count is above the targets (G1 XY path 400,
 #             G2 1500)
 #   --verify  also run once without per-call dumps and check that the single dump's total,
 #             and callgrind_annotate's inclusive count for the function, equal the sum of
@@ -34,7 +34,7 @@ set -eu
 
 MAX_RATIO=1.02
 TARGET_G1=400
-# The 400 is for the planar path; the general 3-D path has no target of its own.
+# The 400 is for the XY path; the general 3-D path has no target of its own.
 TARGET_G1_3D=0
 TARGET_G2=1500
 # No target was set for corner blends; this one is the G2 segment's.
@@ -62,7 +62,7 @@ fi
 bench=$1
 n=$2
 shift 2
-# g1 is two kinds: ef_seg_g1_cubic's planar and general paths each have their own constant count.
+# g1 is two kinds: the XY and the general entry each have their own constant count.
 kinds=
 for k in "$@"; do
     if [ "$k" = g1 ]; then kinds="$kinds g1p g1_3d"; else kinds="$kinds $k"; fi
@@ -123,7 +123,7 @@ status=0
 for kind in "$@"; do
     info=0
     case "$kind" in
-    g1p) fn=ef_seg_g1_cubic; label="G1 cubic, planar path"; target=$TARGET_G1 ;;
+    g1p) fn=ef_seg_g1_cubic_xy; label="G1 cubic, XY path"; target=$TARGET_G1 ;;
     g1_3d) fn=ef_seg_g1_cubic; label="G1 cubic, 3-D path"; target=$TARGET_G1_3D ;;
     g2) fn=ef_seg_g2_quintic; label="G2 quintic"; target=$TARGET_G2 ;;
     blend) fn=ef_blend_corner; label="corner blend"; target=$TARGET_BLEND ;;

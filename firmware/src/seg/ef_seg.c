@@ -49,9 +49,6 @@ static void seg_quintic(const ef_endpoint_t *e0, const ef_endpoint_t *e1, const 
     out->norm = *nm;
 }
 
-/* float32's 2^-23: a coordinate's ulp is at most this times its magnitude. */
-#define EF_FLT_EPS 1.1920929e-7f
-
 /* Hide an integer from the optimizer (an empty asm, no code): a flag combined with & stays
  * one test instead of being split back into short-circuit branches. */
 static inline int seg_ct_hidei(int x)
@@ -127,8 +124,8 @@ static inline void seg_g1_fold_lookup(const ef_table_t *tbl, float alpha, float 
     d[1] = seg_sel(swap, d0, d1);
 }
 
-/* ef_atan2f()'s polynomial (ef_math.c), for the planar path's inline copy below; the
- * planar/general comparison in test_seg_planar fails if the two ever differ. */
+/* ef_atan2f()'s polynomial (ef_math.c), for the XY path's inline copy below; test_fw
+ * seg_xy (XY against 3-D, bit for bit) fails if the two ever differ. */
 static const float seg_atan_c[8] = {
     9.999999545e-01f, -3.333228719e-01f, 1.997350213e-01f, -1.403925361e-01f,
     9.965704541e-02f, -6.018953761e-02f, 2.473677233e-02f, -4.825772456e-03f,
@@ -137,7 +134,7 @@ static const float seg_atan_c[8] = {
 /* ef_atan2f(y, x) for y >= 0 and x^2 + y^2 near 1 (a unit vector's sine and cosine): the
  * same operations, less the selects that are identities there (a zero denominator, y < 0),
  * and the two octant selects as exact sign flips (c in {0, 1}: c k + (1 - 2c) r is k - r or
- * r, rounded as ef_selectf's). Inline: the planar path calls it twice. */
+ * r, rounded as ef_selectf's). Inline: the XY path calls it twice. */
 static inline float seg_atan2_upper(float y, float x)
 {
     float ax = ef_fabsf(x);
@@ -157,76 +154,6 @@ static inline float seg_atan2_upper(float y, float x)
     return neg * EF_PI_F + (1.0f - 2.0f * neg) * r;
 }
 
-/*
- * The planar path of ef_seg_g1_cubic(): 1 when out was built, 0 when the general path must
- * decide (the data is not coplanar, or a check here fails: the general path then returns
- * the same error ef_normalize() names). What it accepts the general path accepts too, and
- * it computes every value the general path does with the same operations (ef_normalize():
- * the unit chord and tangents, their sines and cosines to the chord, the plane's
- * orientation), so the segments agree bit for bit; what it leaves out is what coplanar data
- * and a fold table make unnecessary: the per-component checks (one sum says the positions
- * are finite, the unit test says the tangents are), the zero-length guards (valid tangents
- * and chords are not zero), and the lookup's generic argument and domain handling.
- */
-static int seg_g1_planar(const ef_table_t *tbl, const ef_endpoint_t *e0, const ef_endpoint_t *e1,
-                         ef_seg_t *out)
-{
-    ef_vec3_t p0 = e0->p, p1 = e1->p, t0 = e0->t, t1 = e1->t;
-    /* NaN or inf anywhere makes the sum non-finite; finite coordinates beyond EF_MAX_COORD
-     * fail the largest magnitude, which is also the degeneracy test's scale. */
-    float sum = (p0.x + p0.y) + (p0.z + p1.x) + (p1.y + p1.z);
-    float scale = ef_maxf(
-        ef_maxf(ef_maxf(ef_fabsf(p0.x), ef_fabsf(p0.y)), ef_maxf(ef_fabsf(p0.z), ef_fabsf(p1.x))),
-        ef_maxf(ef_fabsf(p1.y), ef_fabsf(p1.z)));
-    float tt0 = ef_v3_dot(t0, t0), tt1 = ef_v3_dot(t1, t1);
-    ef_vec3_t d = ef_v3_sub(p1, p0);
-    float s = ef_v3_norm(d);
-    int ok = ef_finitef(sum) & (scale <= EF_MAX_COORD) &
-             (ef_fabsf(tt0 - 1.0f) <= 2.0f * EF_UNIT_TOL) &
-             (ef_fabsf(tt1 - 1.0f) <= 2.0f * EF_UNIT_TOL) & (s >= EF_MIN_CHORD) &
-             (s >= EF_MIN_CHORD_REL * scale);
-    /* Coplanar chord and tangents: d . (t0 x t1) is |d| times the sine of t1's angle out of
-     * the plane (d, t0) times t0's sine to the chord (the tangents are unit within
-     * EF_UNIT_TOL), plus what rounding the positions leaves in d (a few ulps of the largest
-     * coordinate: far from the origin a short chord's direction is only that exact). Tested
-     * first so non-planar data pays little before the general path. */
-    int planar = ef_fabsf(ef_v3_dot(d, ef_v3_cross(t0, t1))) <=
-                 EF_SEG_PLANAR_EPS * s + (8.0f * EF_FLT_EPS) * scale;
-    if (!seg_ct_hidei(ok & planar))
-        return 0;
-    ef_vec3_t ex = ef_v3_scale(d, 1.0f / s);
-    t0 = ef_v3_scale(t0, 1.0f / ef_sqrtf(tt0));
-    t1 = ef_v3_scale(t1, 1.0f / ef_sqrtf(tt1));
-    ef_vec3_t m0 = ef_v3_cross(ex, t0), m1 = ef_v3_cross(ex, t1);
-    /* The signs as ef_normalize() sets them: sigma makes m1 agree with m0, and the side is
-     * that of the first nonzero of m.z, m.y, m.x, m = m0 + sigma m1. */
-    float sigma = 1.0f - 2.0f * (float)seg_ct_hidei(ef_v3_dot(m0, m1) < 0.0f);
-    ef_vec3_t m = ef_v3_axpy(m0, sigma, m1);
-    float a0 = seg_atan2_upper(ef_v3_norm(m0), ef_v3_dot(t0, ex));
-    float a1 = seg_atan2_upper(ef_v3_norm(m1), ef_v3_dot(t1, ex));
-    int nz = m.z != 0.0f, ny = m.y != 0.0f;
-    int neg = seg_ct_hidei((nz & (m.z < 0.0f)) | ((nz ^ 1) & ny & (m.y < 0.0f)) |
-                           ((nz ^ 1) & (ny ^ 1) & (m.x < 0.0f)));
-    float fs = 1.0f - 2.0f * (float)neg;
-    ef_norm_t nm;
-    nm.alpha = fs * a0;
-    nm.beta = fs * sigma * a1;
-    nm.k0 = nm.k1 = 0.0f;
-    nm.chord = s;
-    nm.e1 = ex;
-    nm.t0 = t0;
-    nm.t1 = t1;
-    float dd[2];
-    seg_g1_fold_lookup(tbl, nm.alpha, nm.beta, dd);
-    out->dof[0] = dd[0] * s;
-    out->dof[1] = dd[1] * s;
-    out->dof[2] = out->dof[3] = 0.0f;
-    out->clamp = 0; /* the fold covers every angle: no clamp */
-    out->flags = EF_SEG_PLANAR;
-    seg_cubic(e0, e1, &nm, out);
-    return 1;
-}
-
 /* Normalize, look up (alpha, beta), scale the per-unit-chord DOFs back by the chord. */
 int ef_seg_g1_cubic(const ef_table_t *tbl, const ef_endpoint_t *e0, const ef_endpoint_t *e1,
                     ef_seg_t *out)
@@ -237,10 +164,6 @@ int ef_seg_g1_cubic(const ef_table_t *tbl, const ef_endpoint_t *e0, const ef_end
         return seg_fail(out, EF_ERR_ARG);
     if (tbl->kind != EF_TABLE_G1_CUBIC)
         return seg_fail(out, EF_ERR_KIND);
-    /* The table's symmetry is fixed per firmware: this does not depend on the data. */
-    if (tbl->symmetry == EF_SYM_G1_FOLD && tbl->naxes == 2 && tbl->ndof == 2 && tbl->data &&
-        seg_g1_planar(tbl, e0, e1, out))
-        return EF_OK;
     ef_norm_t nm;
     int rc = ef_normalize(e0, e1, 0, &nm);
     if (rc != EF_OK)
@@ -256,6 +179,95 @@ int ef_seg_g1_cubic(const ef_table_t *tbl, const ef_endpoint_t *e0, const ef_end
     out->clamp = clamp;
     out->flags = (uint32_t)(clamp != 0) * EF_SEG_CLAMPED;
     seg_cubic(e0, e1, &nm, out);
+    return EF_OK;
+}
+
+/* The error ef_seg_g1_cubic() gives for the planar data ef_seg_g1_cubic_xy() reads (off the
+ * constant-time path: only refused input comes here). */
+static int seg_xy_error(const ef_endpoint_t *e0, const ef_endpoint_t *e1)
+{
+    ef_endpoint_t a = *e0, b = *e1;
+    a.t.z = b.t.z = 0.0f;
+    b.p.z = a.p.z;
+    ef_norm_t nm;
+    int rc = ef_normalize(&a, &b, 0, &nm);
+    return rc != EF_OK ? rc : EF_ERR_DEGENERATE;
+}
+
+/*
+ * ef_normalize()'s operations on data in the plane z = z0, written out in 2-D: with the z
+ * components zero every term they add is an exact zero, so each value here is the general
+ * path's bit for bit (|e1 x t| is taken as sqrt(c^2), not |c|, for that reason: the square
+ * can underflow). ef_atan2f() and the fold lookup are inline copies with the same operations
+ * (cheaper where the data makes their generic parts identities); a table that is not
+ * fold-symmetric goes through ef_table_lookup_g1() itself.
+ */
+int ef_seg_g1_cubic_xy(const ef_table_t *tbl, const ef_endpoint_t *e0, const ef_endpoint_t *e1,
+                       ef_seg_t *out)
+{
+    if (!out)
+        return EF_ERR_ARG;
+    if (!tbl || !e0 || !e1)
+        return seg_fail(out, EF_ERR_ARG);
+    if (tbl->kind != EF_TABLE_G1_CUBIC)
+        return seg_fail(out, EF_ERR_KIND);
+    float x0 = e0->p.x, y0 = e0->p.y, z = e0->p.z, x1 = e1->p.x, y1 = e1->p.y;
+    float u0 = e0->t.x, v0 = e0->t.y, u1 = e1->t.x, v1 = e1->t.y;
+    float dx = x1 - x0, dy = y1 - y0;
+    float s = ef_sqrtf(dx * dx + dy * dy);
+    float az = ef_fabsf(z);
+    float scale = ef_maxf(ef_maxf(ef_maxf(ef_fabsf(x0), ef_fabsf(y0)), ef_maxf(az, ef_fabsf(x1))),
+                          ef_fabsf(y1));
+    float tt0 = u0 * u0 + v0 * v0, tt1 = u1 * u1 + v1 * v1;
+    /* NaN or inf in x or y makes s NaN or the scale too large; z is tested on its own. */
+    int ok = (scale <= EF_MAX_COORD) & (az <= EF_MAX_COORD) &
+             (ef_fabsf(tt0 - 1.0f) <= 2.0f * EF_UNIT_TOL) &
+             (ef_fabsf(tt1 - 1.0f) <= 2.0f * EF_UNIT_TOL) & (s >= EF_MIN_CHORD) &
+             (s >= EF_MIN_CHORD_REL * scale);
+    if (!seg_ct_hidei(ok))
+        return seg_fail(out, seg_xy_error(e0, e1));
+    float inv = 1.0f / s, n0 = 1.0f / ef_sqrtf(tt0), n1 = 1.0f / ef_sqrtf(tt1);
+    float ex = dx * inv, ey = dy * inv;
+    float t0x = u0 * n0, t0y = v0 * n0, t1x = u1 * n1, t1y = v1 * n1;
+    float c0 = ex * t0y - ey * t0x, c1 = ex * t1y - ey * t1x;
+    float a0 = seg_atan2_upper(ef_sqrtf(c0 * c0), t0x * ex + t0y * ey);
+    float a1 = seg_atan2_upper(ef_sqrtf(c1 * c1), t1x * ex + t1y * ey);
+    /* ef_normalize()'s signs: sigma makes the two normals agree, the side is that of their
+     * sum (its x and y are zeros, which never count as negative). */
+    float sigma = 1.0f - 2.0f * (float)seg_ct_hidei(c0 * c1 < 0.0f);
+    float f = 1.0f - 2.0f * (float)seg_ct_hidei(c0 + sigma * c1 < 0.0f);
+    ef_seg_t *o = out;
+    o->norm.alpha = f * a0;
+    o->norm.beta = f * sigma * a1;
+    o->norm.k0 = o->norm.k1 = 0.0f;
+    o->norm.chord = s;
+    o->norm.e1 = ef_v3(ex, ey, 0.0f);
+    o->norm.t0 = ef_v3(t0x, t0y, 0.0f);
+    o->norm.t1 = ef_v3(t1x, t1y, 0.0f);
+    float d[2];
+    uint32_t clamp = 0;
+    /* The table's symmetry is fixed per firmware: this does not depend on the data. */
+    if (tbl->symmetry == EF_SYM_G1_FOLD && tbl->naxes == 2 && tbl->ndof == 2 && tbl->data) {
+        seg_g1_fold_lookup(tbl, o->norm.alpha, o->norm.beta, d);
+    } else {
+        int rc = ef_table_lookup_g1(tbl, o->norm.alpha, o->norm.beta, d, &clamp);
+        if (rc != EF_OK)
+            return seg_fail(out, rc);
+    }
+    float x10 = d[0] * s, x11 = d[1] * s;
+    float k0 = x10 * (1.0f / 3.0f), k1 = -x11 * (1.0f / 3.0f);
+    o->dof[0] = x10;
+    o->dof[1] = x11;
+    o->dof[2] = o->dof[3] = 0.0f;
+    o->clamp = clamp;
+    o->flags = (uint32_t)(clamp != 0) * EF_SEG_CLAMPED;
+    o->b[0] = ef_v3(x0, y0, z);
+    o->b[1] = ef_v3(x0 + k0 * t0x, y0 + k0 * t0y, z);
+    o->b[2] = ef_v3(x1 + k1 * t1x, y1 + k1 * t1y, z);
+    o->b[3] = ef_v3(x1, y1, z);
+    o->b[4] = o->b[5] = ef_v3(0.0f, 0.0f, 0.0f);
+    o->degree = 3;
+    o->ndof = 2;
     return EF_OK;
 }
 

@@ -27,44 +27,54 @@ extern "C" {
  *  The segment still interpolates the end data exactly (positions, tangents, and for G2
  *  curvatures); only its DOFs are not the optimum for this configuration. */
 #define EF_SEG_CLAMPED 1u
-/** Segment flag: ef_seg_g1_cubic() built it on its planar path (coplanar chord and
- *  tangents); the segment is the general path's, bit for bit. */
-#define EF_SEG_PLANAR 2u
-
 /** A Bézier segment of degree 3 or 5. */
 typedef struct {
     ef_vec3_t b[6]; /**< control points b[0..degree] */
     uint8_t degree; /**< 3, 5, or 0 when invalid */
     uint8_t ndof;   /**< 2 (G1) or 4 (G2) */
-    uint32_t flags; /**< EF_SEG_CLAMPED, EF_SEG_PLANAR */
+    uint32_t flags; /**< EF_SEG_CLAMPED */
     uint32_t clamp; /**< EF_LOOKUP_CLAMP_* bits from the lookup */
     float dof[4];   /**< x1_0, x1_1 (G1) or x1_0, x2_0, x1_1, x2_1 (G2), program units */
     ef_norm_t norm; /**< the normalized configuration the DOFs were looked up for */
 } ef_seg_t;
 
-/** Largest |d . (t0 x t1)| / |d| (d the chord, tangents unit) that ef_seg_g1_cubic() treats
- *  as coplanar and takes its planar path for; 8 ulps of the largest coordinate are allowed
- *  on top (the rounding of d far from the origin). Float32 tangents in a rotated plane are
- *  coplanar to a few 1e-7. The planar path's segment is the general path's bit for bit at
- *  any value, so the limit only decides which count applies. */
-#ifndef EF_SEG_PLANAR_EPS
-#define EF_SEG_PLANAR_EPS 1e-5f
-#endif
-
 /**
- * @brief G1 cubic through the table. Constant instruction count for valid input, per path:
- * coplanar chord and tangents (within ::EF_SEG_PLANAR_EPS) with a fold-symmetric table take
- * the planar path, everything else the general 3-D path; both build the same segment.
+ * @brief G1 cubic through the table, any end data in 3-D. Constant instruction count for
+ * valid input. For data in a plane z = const, ef_seg_g1_cubic_xy() builds the same segment
+ * at about a third of the count.
  * @param tbl   G1 cubic table
  * @param e0,e1 end data (p, t used)
  * @param out   segment
  * @retval EF_OK             out valid (check out->flags for EF_SEG_CLAMPED)
- * @retval EF_ERR_ARG        NULL pointer
+ * @retval EF_ERR_ARG        NULL pointer, or a table without data
  * @retval EF_ERR_KIND       not a G1 cubic table
  * @retval EF_ERR_NONFINITE, EF_ERR_TANGENT, EF_ERR_DEGENERATE  as ef_normalize()
  */
 int ef_seg_g1_cubic(const ef_table_t *tbl, const ef_endpoint_t *e0, const ef_endpoint_t *e1,
                     ef_seg_t *out);
+
+/**
+ * @brief G1 cubic for end data in a plane z = const: the XY fast path of ef_seg_g1_cubic().
+ * Constant instruction count for valid input.
+ *
+ * Reads p.x, p.y, t.x, t.y of both ends and e0->p.z only: e1->p.z is taken as e0->p.z and
+ * t.z as 0 (the caller knows its move lies in an XY plane; nothing here tests it). On such
+ * data (e1->p.z == e0->p.z, t.z == 0) the segment, its DOFs, flags, clamp bits and norm
+ * are ef_seg_g1_cubic()'s bit for bit (a zero's sign aside: every control point's z is
+ * e0->p.z), and so is the error code of refused input.
+ * @param tbl   G1 cubic table
+ * @param e0,e1 end data (p.x, p.y, t.x, t.y of both; p.z of e0)
+ * @param out   segment, z = e0->p.z throughout
+ * @retval EF_OK             out valid (check out->flags for EF_SEG_CLAMPED)
+ * @retval EF_ERR_ARG        NULL pointer, or a table without data
+ * @retval EF_ERR_KIND       not a G1 cubic table
+ * @retval EF_ERR_NONFINITE  NaN/inf in a read coordinate or tangent component, or a
+ *                           coordinate beyond EF_MAX_COORD
+ * @retval EF_ERR_TANGENT    a tangent (t.x, t.y) not unit within EF_UNIT_TOL
+ * @retval EF_ERR_DEGENERATE chord shorter than ef_normalize() accepts
+ */
+int ef_seg_g1_cubic_xy(const ef_table_t *tbl, const ef_endpoint_t *e0, const ef_endpoint_t *e1,
+                       ef_seg_t *out);
 
 /**
  * @brief G2 quintic through the table. Constant instruction count for valid input.
