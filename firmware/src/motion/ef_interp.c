@@ -81,6 +81,27 @@ int ef_interp_check(const ef_move_t *m, ef_vec3_t start)
     return EF_OK;
 }
 
+/* Power-basis coefficients of m's curve relative to b0: the forward differences of the
+ * control points times the binomials, f(t) - b0 = sum_k C(n, k) D^k b_0 t^k. Computed once
+ * per move here (the background context) so a servo period is one Horner pass (see
+ * ip_horner()) instead of de Casteljau's triangle per evaluation. */
+static void ip_power(const ef_move_t *m, ef_vec3_t pc[6])
+{
+    ef_vec3_t d[6];
+    int n = m->degree;
+    for (int i = 0; i < 6; i++) {
+        d[i] = i <= n ? ef_v3_sub(m->b[i], m->b[0]) : ef_v3(0.0f, 0.0f, 0.0f);
+        pc[i] = ef_v3(0.0f, 0.0f, 0.0f);
+    }
+    float c = 1.0f; /* C(n, k), exact in float */
+    for (int k = 1; k <= n && k < 6; k++) {
+        for (int i = 0; i + k <= n; i++)
+            d[i] = ef_v3_sub(d[i + 1], d[i]);
+        c = c * (float)(n - k + 1) / (float)k;
+        pc[k] = ef_v3_scale(d[0], c);
+    }
+}
+
 /* Queue a planned move that joins the previous end (contract in ef_interp.h). */
 int ef_interp_push(ef_interp_t *ip, const ef_move_t *m)
 {
@@ -95,7 +116,9 @@ int ef_interp_push(ef_interp_t *ip, const ef_move_t *m)
         ip->t = ip->tau = ip->s_done = 0.0f;
         ip->t_c = ip->s_c = 0.0f;
     }
-    ip->q[(ip->head + ip->count) % EF_INTERP_QUEUE] = *m;
+    uint32_t slot = (ip->head + ip->count) % EF_INTERP_QUEUE;
+    ip->q[slot] = *m;
+    ip_power(m, ip->pc[slot]);
     ip->count++;
     ip->end = m->b[m->degree];
     ip->v_end = m->v_exit;
@@ -113,9 +136,33 @@ static void ip_kahan(float *sum, float *c, float x)
     *sum = t;
 }
 
+/* The curve relative to b0 at t from its power-basis coefficients (ip_power()), and for
+ * nder 1 or 2 its first / second derivative too (out[0..nder]): Horner's rule over all
+ * six coefficients (those above the degree are zero, so every degree costs the same),
+ * derivatives in the same pass. */
+static void ip_horner(const ef_vec3_t pc[6], float t, int nder, ef_vec3_t *out)
+{
+    ef_vec3_t p = pc[5], d1 = ef_v3(0.0f, 0.0f, 0.0f), d2 = d1;
+    if (nder == 0) {
+        for (int k = 4; k >= 0; k--)
+            p = ef_v3_axpy(pc[k], t, p);
+        out[0] = p;
+        return;
+    }
+    for (int k = 4; k >= 0; k--) {
+        d2 = ef_v3_axpy(d1, t, d2);
+        d1 = ef_v3_axpy(p, t, d1);
+        p = ef_v3_axpy(pc[k], t, p);
+    }
+    out[0] = p;
+    out[1] = d1;
+    if (nder > 1)
+        out[2] = ef_v3_scale(d2, 2.0f);
+}
+
 /* Arc length of the curve between parameters a and b by 8-point Gauss-Legendre quadrature
  * of |f'| (exact to float rounding for the smooth speeds of degree <= 5 curves). */
-static float ip_arc(const ef_vec3_t *lb, int degree, float a, float b)
+static float ip_arc(const ef_vec3_t *pc, float a, float b)
 {
     static const float gx[4] = {0.1834346425f, 0.5255324099f, 0.7966664774f,
                                 0.9602898565f}; /* abscissae on [-1, 1] */
@@ -124,15 +171,15 @@ static float ip_arc(const ef_vec3_t *lb, int degree, float a, float b)
     float span = b - a, mid = 0.5f * (a + b), sum = 0.0f;
     for (int k = 0; k < 4; k++) {
         ef_vec3_t e[2], f[2];
-        ef_bezier_eval(lb, degree, mid - 0.5f * span * gx[k], 1, e);
-        ef_bezier_eval(lb, degree, mid + 0.5f * span * gx[k], 1, f);
+        ip_horner(pc, mid - 0.5f * span * gx[k], 1, e);
+        ip_horner(pc, mid + 0.5f * span * gx[k], 1, f);
         sum += gw[k] * (ef_v3_norm(e[1]) + ef_v3_norm(f[1]));
     }
     return sum * span;
 }
 
 /** Position on the head move at time ip->t (uniform or corrected parameter step). */
-static void ip_eval(ef_interp_t *ip, const ef_move_t *m, float *v)
+static void ip_eval(ef_interp_t *ip, const ef_move_t *m, const ef_vec3_t *pc, float *v)
 {
     float tau_law = 0.0f;
     ef_timelaw_eval(m, ip->t, &tau_law, v);
@@ -140,19 +187,16 @@ static void ip_eval(ef_interp_t *ip, const ef_move_t *m, float *v)
      * float32 resolves one servo period's step far better than at machine coordinates,
      * where the evaluation's rounding (several ulps of ~100 mm) is a few per cent of a
      * slow 1 um step. The corrected step's chords need the same resolution. */
-    ef_vec3_t d[3], lb[6];
-    for (int i = 0; i <= m->degree && i < 6; i++)
-        lb[i] = ef_v3_sub(m->b[i], m->b[0]);
+    ef_vec3_t d[3];
     if (ip->mode != EF_STEP_CORRECTED || !(m->length <= EF_INTERP_CORRECTED_MAX_LEN)) {
-        ef_bezier_eval(lb, m->degree, tau_law, 0, d);
+        ip_horner(pc, tau_law, 0, d);
         ip->tau = tau_law;
         ip->pos = ef_v3_add(m->b[0], d[0]);
         return;
     }
     /* One step on arc length: S (the arc reached so far, from the chords of the steps)
      * towards s(t) = L tau_law. */
-    d[2] = ef_v3(0.0f, 0.0f, 0.0f); /* f'' (a line has none) */
-    ef_bezier_eval(lb, m->degree, ip->tau, m->degree >= 2 ? 2 : 1, d);
+    ip_horner(pc, ip->tau, 2, d); /* a line's f'' is exactly zero */
     float s = tau_law * m->length;
     float gap = s - ip->s_done;
     float law_ds = *v * (float)ip->period_us * 1e-6f; /* the law's distance per period */
@@ -163,19 +207,19 @@ static void ip_eval(ef_interp_t *ip, const ef_move_t *m, float *v)
          * span, one linear step misses on an uneven curve), so S stays a true arc length. */
         float t0 = ip->tau, s0 = ip->s_done, tn = tau_law, arc = 0.0f;
         for (int it = 0; it < EF_INTERP_RESYNC_ITER; it++) {
-            arc = ip_arc(lb, m->degree, t0, tn);
+            arc = ip_arc(pc, t0, tn);
             ef_vec3_t e[2];
-            ef_bezier_eval(lb, m->degree, tn, 1, e);
+            ip_horner(pc, tn, 1, e);
             float sp0 = ef_v3_norm(e[1]);
             float next = tn;
             if (sp0 > EF_INTERP_MIN_DERIV)
                 next = tn + (s - s0 - arc) / sp0;
             tn = ef_finitef(next) ? ef_maxf(t0, ef_minf(1.0f, next)) : tn;
         }
-        arc = ip_arc(lb, m->degree, t0, tn);
+        arc = ip_arc(pc, t0, tn);
         ip_kahan(&ip->s_done, &ip->s_c, arc);
         ef_vec3_t q0;
-        ef_bezier_eval(lb, m->degree, tn, 0, &q0);
+        ip_horner(pc, tn, 0, &q0);
         ip->tau = tn;
         ip->pos = ef_v3_add(m->b[0], q0);
         return;
@@ -217,7 +261,7 @@ static void ip_eval(ef_interp_t *ip, const ef_move_t *m, float *v)
     float hi = ef_minf(1.0f, ip->tau + cap);
     tn = ef_maxf(ip->tau, ef_minf(hi, tn));
     ef_vec3_t p[1];
-    ef_bezier_eval(lb, m->degree, tn, 0, p);
+    ip_horner(pc, tn, 0, p);
     float chord = ef_v3_norm(ef_v3_sub(p[0], d[0]));
     float arc = chord * (1.0f + ef_minf(EF_INTERP_ARC_CORR_MAX, kk * chord * chord));
     /* One secant correction on the arc actually covered: the step scaled by gap / arc takes
@@ -233,7 +277,7 @@ static void ip_eval(ef_interp_t *ip, const ef_move_t *m, float *v)
         t2 = ef_maxf(ip->tau, ef_minf(hi, t2));
         if (ef_finitef(t2) && t2 != tn) {
             tn = t2;
-            ef_bezier_eval(lb, m->degree, tn, 0, p);
+            ip_horner(pc, tn, 0, p);
             chord = ef_v3_norm(ef_v3_sub(p[0], d[0]));
             arc = chord * (1.0f + ef_minf(EF_INTERP_ARC_CORR_MAX, kk * chord * chord));
         }
@@ -278,7 +322,7 @@ int ef_interp_process_rate(ef_interp_t *ip, uint32_t dt_us, float rate, uint32_t
         }
         if (ip->count > 0) {
             const ef_move_t *m = &ip->q[ip->head];
-            ip_eval(ip, m, &v);
+            ip_eval(ip, m, ip->pc[ip->head], &v);
             sp->p = ip->pos;
             sp->v_plan = v;
             sp->seq = m->seq;
