@@ -80,9 +80,10 @@ typedef struct {
 /** Interpolator state (public for static allocation; treat as private). */
 typedef struct {
     ef_move_t q[EF_INTERP_QUEUE];
-    /** Power-basis coefficients of each queued curve relative to its b0, f(t) - b0 =
-     *  sum_k pc[k] t^k (zero above the degree), set by ef_interp_push() so the servo
-     *  period evaluates position and derivatives by Horner's rule. */
+    /** Power-basis coefficients of each queued curve relative to its b0, centred on
+     *  t = 1/2: f(t) - b0 = sum_k pc[k] (t - 1/2)^k (zero above the degree), set by
+     *  ef_interp_push() so the servo period evaluates position and derivatives by
+     *  Horner's rule. */
     ef_vec3_t pc[EF_INTERP_QUEUE][6];
     uint32_t head, count;
     int mode;           /**< ::ef_step_mode_t */
