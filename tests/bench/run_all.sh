@@ -13,8 +13,9 @@ trap 'rm -f "$x86log"' EXIT
 
 echo "== Instructions per segment call (callgrind, x86-64, firmware at -O2), 10000 random"
 echo "   valid configurations each (planar, 3-D, near-reversal, out-of-domain), and ef_blend_corner on"
-echo "   10000 random corners; targets (issue 17) G1 planar path <= 400, G2 <= 1500, each path's"
-echo "   max/min <= 1.02; G1 reported per path (planar: coplanar chord and tangents; 3-D: the rest)"
+echo "   10000 random corners; targets (issue 17) G1 XY entry <= 400, G2 <= 1500, each entry's"
+echo "   max/min <= 1.02; G1 reported per entry (XY: ef_seg_g1_cubic_xy on data in z = const;"
+echo "   3-D: ef_seg_g1_cubic on twisted and general data)"
 sh tests/bench/ct_bench.sh "$b/tests/bench_ct" 10000 g1 g2 blend | tee -a "$x86log"
 
 echo
