@@ -246,13 +246,35 @@ static float sm_poly_dev(const ef_smooth_prim_t *h, const ef_vec3_t *pts, ef_vec
     return worst;
 }
 
+/* Point of a quintic (deg 5) or cubic (deg 3) at t, in Bernstein form with the weights
+ * from the powers of t and 1 - t: a tenth of ef_bezier_eval()'s general de Casteljau, and as
+ * stable (non-negative weights summing to 1). */
+static ef_vec3_t sm_bez_point(const ef_vec3_t *b, int deg, float t)
+{
+    float u = 1.0f - t, t2 = t * t, u2 = u * u;
+    ef_vec3_t r;
+    if (deg == 5) {
+        float t3 = t2 * t, u3 = u2 * u;
+        r = ef_v3_scale(b[0], u3 * u2);
+        r = ef_v3_axpy(r, 5.0f * u2 * u2 * t, b[1]);
+        r = ef_v3_axpy(r, 10.0f * u3 * t2, b[2]);
+        r = ef_v3_axpy(r, 10.0f * u2 * t3, b[3]);
+        r = ef_v3_axpy(r, 5.0f * u * t2 * t2, b[4]);
+        return ef_v3_axpy(r, t3 * t2, b[5]);
+    }
+    r = ef_v3_scale(b[0], u2 * u);
+    r = ef_v3_axpy(r, 3.0f * u2 * t, b[1]);
+    r = ef_v3_axpy(r, 3.0f * u * t2, b[2]);
+    return ef_v3_axpy(r, t2 * t, b[3]);
+}
+
 /* A smooth-section move between two frames on held line h; its deviation is measured from
  * the chord (samples plus a bound between them) and, where vertices were merged into the
  * chord and pts holds them, from the input points themselves (sm_poly_dev()); m->dev is the
  * smaller of the two bounds (chord bound + merge_dev, or the polyline measure) plus the
  * between-samples bound. Returns an ef_err code (the caller falls back to a line). */
 static int sm_smooth_move(ef_smooth_t *s, ef_move_t *m, const ef_frame_t *f0, const ef_frame_t *f1,
-                          const ef_smooth_prim_t *h, const ef_vec3_t *pts, int measure)
+                          const ef_smooth_prim_t *h, const ef_vec3_t *pts)
 {
     ef_endpoint_t e0 = ef_frame_endpoint(f0), e1 = ef_frame_endpoint(f1);
     ef_seg_t seg;
@@ -268,8 +290,6 @@ static int sm_smooth_move(ef_smooth_t *s, ef_move_t *m, const ef_frame_t *f0, co
         m->b[i] = seg.b[i];
     m->degree = seg.degree;
     m->flags = (uint16_t)((seg.flags & EF_SEG_CLAMPED) ? EF_MOVE_CLAMPED : 0u);
-    if (!measure) /* rebuilt for emission: the caller has the measurement */
-        return sm_finish_move(m, EF_MOVE_SMOOTH, h->pr.feed, h->pr.tag);
     /* Samples: distance from the chord, and position along it / offset from it. */
     enum { NS = EF_BLEND_DEV_SAMPLES };
     float us[NS + 1];
@@ -278,9 +298,7 @@ static int sm_smooth_move(ef_smooth_t *s, ef_move_t *m, const ef_frame_t *f0, co
     float dmax = 0.0f;
     int mono = 1;
     for (int i = 0; i <= NS; i++) {
-        ef_vec3_t p;
-        float t = (float)i / (float)NS;
-        ef_bezier_eval(m->b, m->degree, t, 0, &p);
+        ef_vec3_t p = sm_bez_point(m->b, m->degree, (float)i / (float)NS);
         dmax = ef_maxf(dmax, sm_dist_seg(p, h->start, h->pr.end));
         ef_vec3_t q = ef_v3_sub(p, h->start);
         us[i] = ef_v3_dot(q, dir);
@@ -335,10 +353,10 @@ static ef_frame_t sm_line_frame(ef_vec3_t p, ef_vec3_t dir)
 /* The smooth-section move of held line h as its vertices stand: its start as decided (a
  * smooth frame, or where the blend before it ended), its end at the smooth frame fe, or on
  * the line trim_end before its end when fe is NULL; measured against the input points pts
- * (NULL: from the chord only; measure 0: not at all, m->dev 0). Deterministic: the same
- * state builds the same move. Returns an ef_err code. */
+ * (NULL: from the chord only). Built once, when h's end vertex is decided: a section that
+ * fits is kept in h (sm_section_keep()) and emitted from there. Returns an ef_err code. */
 static int sm_section_build(ef_smooth_t *s, const ef_smooth_prim_t *h, const ef_frame_t *fe,
-                            float trim_end, const ef_vec3_t *pts, int measure, ef_move_t *m)
+                            float trim_end, const ef_vec3_t *pts, ef_move_t *m)
 {
     ef_vec3_t dir = sm_dir(h);
     ef_frame_t f0 =
@@ -346,7 +364,7 @@ static int sm_section_build(ef_smooth_t *s, const ef_smooth_prim_t *h, const ef_
     ef_frame_t f1 = fe ? *fe : sm_line_frame(ef_v3_axpy(h->pr.end, -trim_end, dir), dir);
     if (h->trim_start > 0.0f)
         f0.p = h->blend_in_end; /* exactly where the blend ended */
-    int rc = sm_smooth_move(s, m, &f0, &f1, h, pts, measure);
+    int rc = sm_smooth_move(s, m, &f0, &f1, h, pts);
     return rc == EF_OK && !sm_move_ok(m) ? EF_ERR_NONFINITE : rc;
 }
 
@@ -355,7 +373,7 @@ static int sm_section_build(ef_smooth_t *s, const ef_smooth_prim_t *h, const ef_
 static int sm_body_section(ef_smooth_t *s, const ef_smooth_prim_t *h, const ef_frame_t *fe,
                            float trim_end, const ef_vec3_t *pts, ef_move_t *m)
 {
-    return sm_section_build(s, h, fe, trim_end, pts, 1, m) == EF_OK && m->dev <= h->pr.tol;
+    return sm_section_build(s, h, fe, trim_end, pts, m) == EF_OK && m->dev <= h->pr.tol;
 }
 
 /* Legendre polynomials P0..P4 and their first two derivatives at x. */
@@ -551,6 +569,43 @@ static ef_frame_t sm_arc_frame(ef_vec3_t p, ef_vec3_t t, ef_vec3_t q)
     return f;
 }
 
+/* Keep the fitted section of held line h (built and measured once: emission hands it on
+ * as it is, sm_section_emit()). */
+static void sm_section_keep(ef_smooth_prim_t *h, const ef_move_t *m)
+{
+    h->sec = 1;
+    h->sec_dev = m->dev;
+    for (int i = 0; i < 6; i++)
+        h->sec_b[i] = m->b[i];
+    h->sec_degree = m->degree;
+    h->sec_flags = m->flags;
+    h->sec_len = m->length;
+    h->sec_kmax = m->kappa_max;
+    h->sec_tabs = m->tabs;
+    h->sec_kabs = m->kabs;
+    h->sec_kjerk = m->kjerk;
+}
+
+/* The move of held line h's kept section (sec == 1), as sm_section_build() made it. */
+static void sm_section_emit(const ef_smooth_prim_t *h, ef_move_t *m)
+{
+    ef_move_t zero = {0};
+    *m = zero;
+    for (int i = 0; i < 6; i++)
+        m->b[i] = h->sec_b[i];
+    m->degree = h->sec_degree;
+    m->flags = h->sec_flags;
+    m->kind = EF_MOVE_SMOOTH;
+    m->feed = h->pr.feed;
+    m->tag = h->pr.tag;
+    m->length = h->sec_len;
+    m->kappa_max = h->sec_kmax;
+    m->tabs = h->sec_tabs;
+    m->kabs = h->sec_kabs;
+    m->kjerk = h->sec_kjerk;
+    m->dev = h->sec_dev; /* measured against the input points when it was fitted */
+}
+
 /* Fit held line h's section with the end frame fe of a smooth vertex being decided: built
  * and measured against the input points now (the section is final once the vertex is).
  * Where h starts at rest without a smooth frame, the arc of fe is tried first as its
@@ -566,8 +621,7 @@ static int sm_fit_section(ef_smooth_t *s, ef_smooth_prim_t *h, const ef_frame_t 
         h->fs = sm_arc_frame(fe->p, fe->t, h->start);
         h->start_smooth = 1;
         if (sm_body_section(s, h, fe, 0.0f, pts, &trial)) {
-            h->sec = 1;
-            h->sec_dev = trial.dev;
+            sm_section_keep(h, &trial);
             return 1;
         }
         h->start_smooth = 0;
@@ -575,8 +629,7 @@ static int sm_fit_section(ef_smooth_t *s, ef_smooth_prim_t *h, const ef_frame_t 
     }
     if (!sm_body_section(s, h, fe, 0.0f, pts, &trial))
         return 0;
-    h->sec = 1;
-    h->sec_dev = trial.dev;
+    sm_section_keep(h, &trial);
     return 1;
 }
 
@@ -698,8 +751,8 @@ static void sm_decide_vertex(ef_smooth_t *s, ef_smooth_prim_t *a, ef_smooth_prim
 }
 
 /* Held line h's end vertex is decided: build and measure its smooth section once, while
- * its merged vertices are still in their run slot (emission rebuilds the same move and
- * takes this measurement); the slot is free after. A section from a smooth vertex to an
+ * its merged vertices are still in their run slot (emission hands on the move kept then,
+ * sm_section_emit()); the slot is free after. A section from a smooth vertex to an
  * exact stop ends on the arc of its smooth start (sm_arc_frame()) when that fits, else on
  * the chord's direction; one that fits neither is driven as its chord between stops. */
 static void sm_close(ef_smooth_t *s, ef_smooth_prim_t *h)
@@ -713,15 +766,16 @@ static void sm_close(ef_smooth_t *s, ef_smooth_prim_t *h)
         if (sm_body_section(s, h, &fe, 0.0f, pts, &trial)) {
             h->fe = fe;
             h->end_smooth = 1;
-            h->sec = 1;
-            h->sec_dev = trial.dev;
+            sm_section_keep(h, &trial);
             return;
         }
     }
     int ok = sm_body_section(s, h, h->end_smooth ? &h->fe : (const ef_frame_t *)0, h->trim_end, pts,
                              &trial);
-    h->sec = ok ? 1u : 2u;
-    h->sec_dev = trial.dev;
+    if (ok)
+        sm_section_keep(h, &trial);
+    else
+        h->sec = 2u;
 }
 
 /* Decide the vertex between a and b, then close a. */
@@ -835,10 +889,8 @@ static int sm_next_move(ef_smooth_t *s, ef_move_t *m)
             ef_vec3_t b = ef_v3_axpy(h->pr.end, -h->trim_end, dir);
             if (h->start_smooth || h->end_smooth) {
                 rc = EF_OK;
-                if (h->sec == 1 &&
-                    sm_section_build(s, h, h->end_smooth ? &h->fe : (const ef_frame_t *)0,
-                                     h->trim_end, (const ef_vec3_t *)0, 0, m) == EF_OK) {
-                    m->dev = h->sec_dev; /* measured against the input points at sm_close() */
+                if (h->sec == 1) {
+                    sm_section_emit(h, m);
                 } else {
                     /* Not representable within the tolerance: the chord itself, with exact
                      * stops at both ends (tangents differ there). */

@@ -178,6 +178,15 @@ typedef struct {
     uint8_t sec;           /**< its smooth section: 0 none / not built yet, 1 fits, 2 does
                                 not (driven as its chord between exact stops) */
     float sec_dev;         /**< that section's measured deviation (when sec == 1) */
+    ef_vec3_t sec_b[6];    /**< that section's control points (when sec == 1): emitted as
+                                built and measured, not built a second time */
+    uint8_t sec_degree;    /**< its degree (5, or 3 for G1 cubic sections) */
+    uint16_t sec_flags;    /**< its EF_MOVE_* flags (a clamped lookup) */
+    float sec_len;         /**< its measured length (ef_move_measure()) */
+    float sec_kmax;        /**< its curvature bound (likewise) */
+    ef_vec3_t sec_tabs;    /**< its axis tangent bounds (likewise) */
+    ef_vec3_t sec_kabs;    /**< its axis curvature-vector bounds (likewise) */
+    ef_vec3_t sec_kjerk;   /**< its axis third-derivative bounds (likewise) */
 } ef_smooth_prim_t;
 
 /** Run slots: the vertices merged into a held line are needed until its end vertex is
