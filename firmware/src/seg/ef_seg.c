@@ -349,13 +349,9 @@ float ef_seg_length(const ef_vec3_t *b, int sym)
     return ef_bezier_h4_length(h, sym);
 }
 
-/* Length, then the speed samples (contract in ef_seg.h). */
-float ef_seg_speed_stats(const ef_vec3_t *b, float *len, float *dev_ends)
+/* ef_seg_speed_stats() for a quintic whose hodograph h and length l are known. */
+static float seg_speed_dev(const ef_vec3_t *h, float l, float *dev_ends)
 {
-    ef_vec3_t h[5];
-    seg_hodo(b, h);
-    float l = ef_bezier_h4_length(h, 0);
-    *len = l;
     float inv = 1.0f / ef_maxf(l, 1e-30f), dev = 0.0f;
     for (int i = 0; i <= EF_SEG_SPEED_SAMPLES; i++) {
         float sp = seg_speed(h, (float)i / (float)EF_SEG_SPEED_SAMPLES);
@@ -367,26 +363,55 @@ float ef_seg_speed_stats(const ef_vec3_t *b, float *len, float *dev_ends)
     return dev;
 }
 
+/* Length, then the speed samples (contract in ef_seg.h). */
+float ef_seg_speed_stats(const ef_vec3_t *b, float *len, float *dev_ends)
+{
+    ef_vec3_t h[5];
+    seg_hodo(b, h);
+    float l = ef_bezier_h4_length(h, 0);
+    *len = l;
+    return seg_speed_dev(h, l, dev_ends);
+}
+
+/* Finite without libm (NaN fails x == x, inf fails x - x == 0). */
+static int seg_finite(float x)
+{
+    return (x == x) & (x - x == 0.0f);
+}
+
 /* A quintic with end speeds x1 = its own length (x1 = L solved by ef_seg_even_next() over
  * EF_SEG_EVEN_ITER curves, from len, the length of a neighbouring candidate), tangential
- * DOFs x20, x21. 0 when it cannot be built. */
-static int seg_even_ends(const ef_endpoint_t *e0, const ef_endpoint_t *e1, float len, float x20,
-                         float x21, ef_seg_t *c)
+ * DOFs x20, x21. The curves are ef_seg_from_dofs()'s for nm, the normalization of (e0, e1)
+ * (which the DOFs do not change: made once by the caller, nm_ok its success), bit for bit.
+ * 0 when it cannot be built; else *dev and *dev_ends as ef_seg_speed_stats() gives them
+ * for the result, from the length its last pass measured. */
+static int seg_even_ends(const ef_endpoint_t *e0, const ef_endpoint_t *e1, const ef_norm_t *nm,
+                         int nm_ok, float len, float x20, float x21, ef_seg_t *c, float *dev,
+                         float *dev_ends)
 {
-    int ok = 1;
-    float xa = len, ga = 0.0f, x = len;
+    int ok = nm_ok & seg_finite(x20) & seg_finite(x21);
+    float xa = len, ga = 0.0f, x = len, l = 0.0f;
+    ef_vec3_t h[5];
     for (int it = 0; it < EF_SEG_EVEN_ITER; it++) {
-        float dof[4] = {x, x20, x, x21};
-        if (ok)
-            ok = ef_seg_from_dofs(e0, e1, 5, dof, c) == EF_OK;
-        ef_vec3_t h[5];
+        ok &= seg_finite(x) & (x > 0.0f);
+        if (ok) {
+            c->dof[0] = c->dof[2] = x;
+            c->dof[1] = x20;
+            c->dof[3] = x21;
+            c->flags = 0;
+            c->clamp = 0;
+            seg_quintic(e0, e1, nm, c);
+        }
         seg_hodo(c->b, h);
-        float g = ef_bezier_h4_length(h, 0) - x;
+        l = ef_bezier_h4_length(h, 0);
+        float g = l - x;
         float xn = it == 0 ? x + g : ef_seg_even_next(xa, ga, x, g);
         xa = x;
         ga = g;
         x = ef_selectf(xn > 0.0f, xn, x); /* the last curve built is the result */
     }
+    if (ok)
+        *dev = seg_speed_dev(h, l, dev_ends);
     return ok;
 }
 
@@ -404,10 +429,14 @@ int ef_seg_g2_even(const ef_endpoint_t *e0, const ef_endpoint_t *e1, ef_seg_t *s
     float len = 0.0f, end_t = 0.0f, end_a = 0.0f, end_b = 0.0f;
     float d_t = ef_seg_speed_stats(seg->b, &len, &end_t);
     ef_seg_t a = *seg, b = *seg;
-    int ok_a = seg_even_ends(e0, e1, len, seg->dof[1], seg->dof[3], &a);
-    int ok_b = seg_even_ends(e0, e1, len, 0.0f, 0.0f, &b);
-    float d_a = ok_a ? ef_seg_speed_stats(a.b, &len, &end_a) : 3.4e38f;
-    float d_b = ok_b ? ef_seg_speed_stats(b.b, &len, &end_b) : 3.4e38f;
+    /* The DOFs do not change the normalization: once, not per curve built. */
+    ef_norm_t nm;
+    int nm_ok = ef_normalize(e0, e1, 1, &nm) == EF_OK;
+    float d_a = 3.4e38f, d_b = 3.4e38f;
+    int ok_a = seg_even_ends(e0, e1, &nm, nm_ok, len, seg->dof[1], seg->dof[3], &a, &d_a, &end_a);
+    int ok_b = seg_even_ends(e0, e1, &nm, nm_ok, len, 0.0f, 0.0f, &b, &d_b, &end_b);
+    d_a = ok_a ? d_a : 3.4e38f;
+    d_b = ok_b ? d_b : 3.4e38f;
     int pick = EF_SEG_EVEN_TABLE;
     float d = end_t <= EF_SEG_END_SPEED_REL ? d_t : 3.4e38f, e = end_t;
     if (d_a < d) {
