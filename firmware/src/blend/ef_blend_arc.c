@@ -18,6 +18,10 @@
  * Empirical, not proven: tests/blend/test_prim.c's 1500 arc pieces (up to 4 turns) find the true
  * deviation at most 0.998 x the reported one with it, 2.8 x without. */
 #define EF_BA_ANGLE_ULP 2.0f
+/* Newton steps on x1 = L per candidate curve of ba_even(). */
+#ifndef EF_BA_NEWTON
+#define EF_BA_NEWTON 3
+#endif
 /* Extra samples per refined interval, plus one (ba_try()). */
 #define EF_BA_REFINE 8
 /* Points of each replaced piece checked for their distance to the blend (ba_try()). */
@@ -38,13 +42,14 @@
 #define EF_BA_KAPPA_REL   1e-4f
 /* First trim estimate for a tangent join: deviation ~ dk L^2 / EF_BA_TANGENT_GAIN. */
 #define EF_BA_TANGENT_GAIN 1.0f
-/* A blend's end speeds |f'(0)|, |f'(1)| are set to its arc length L by ef_seg_g2_even(): a
- * stepper that steps tau uniformly by the time law (EF_STEP_UNIFORM, the drives' segment
- * mode) moves at v |f'(tau)| / L, so at a junction with a line (|f'| / L = 1) the feed would
- * jump by v times the difference in one servo period. The table's optimum for a lopsided
+/* A blend's end speeds |f'(0)|, |f'(1)| are set to its arc length L as ef_seg_g2_even()
+ * sets a segment's (ba_even()): a stepper that steps tau uniformly by the time law
+ * (EF_STEP_UNIFORM, the drives' segment mode) moves at v |f'(tau)| / L, so at a junction
+ * with a line (|f'| / L = 1) the feed would jump by v times the difference in one servo
+ * period. The table's optimum for a lopsided
  * corner (one side trimmed far more than the other, or a tight arc on one side) can be far
  * off: 0.4 and 0.9 were seen, and at 9 mm/s the jump was 1 mm/s in 1 ms, 1000 mm/s^2
- * (tests/fuzz, issue 18). A trial whose ends ef_seg_g2_even() could not bring within
+ * (tests/fuzz, issue 18). A trial whose ends ba_even() could not bring within
  * EF_SEG_END_SPEED_REL is not a blend. */
 
 /* Finite test without libm (NaN fails x == x, inf fails x - x == 0). */
@@ -289,6 +294,234 @@ int ef_blend_arc_piece(const ef_table_t *g2, ef_vec3_t start, const ef_prim_t *p
     return EF_OK;
 }
 
+/* The hodograph of the G2 quintic between end frames (p0, t0, kappa0 n0) and (p1, t1,
+ * kappa1 n1) with DOFs (x10, x20, x11, x21) (ef_seg.h's control points) is
+ *
+ *     f'(t) = B2 D + (x10 u0 + x20 w0 / 4) t0 + x10^2 w0 (kappa0 / 4) n0
+ *                  + (x11 u1 + x21 w1 / 4) t1 + x11^2 w1 (kappa1 / 4) n1,
+ *
+ * D = 5 (p1 - p0), with the degree-4 Bernstein combinations u0 = B0 + B1 - 2 B2,
+ * w0 = B1 - B2, u1 = B3 + B4 - 2 B2, w1 = B2 - B3: five fixed vectors per trial weighted by
+ * scalars that depend only on t and the DOFs. ba_even() evaluates every candidate curve's
+ * speed that way at fixed nodes, from these tables, with no control points built. Rows:
+ * B2, u0, w0, u1, w1 at the 16 Gauss-Legendre nodes of ef_bezier_h4_length() (the pairs
+ * 1/2 -+ offset; last column the weight) and at t = i / EF_SEG_SPEED_SAMPLES
+ * (ef_seg_speed_stats()'s samples; EF_SEG_SPEED_SAMPLES must be 16). */
+static const float ba_gl_basis[16][6] = {
+    {3.682600273e-01f, -3.496051143e-01f, -7.120300264e-02f, -4.916950222e-01f, 1.653577987e-01f,
+     9.472530523e-02f},
+    {3.682600273e-01f, -4.916950222e-01f, -1.653577987e-01f, -3.496051143e-01f, 7.120300264e-02f,
+     9.472530523e-02f},
+    {3.178827972e-01f, -8.908715965e-02f, 6.018117391e-02f, -5.003268262e-01f, 1.990910577e-01f,
+     9.130170752e-02f},
+    {3.178827972e-01f, -5.003268262e-01f, -1.990910577e-01f, -8.908715965e-02f, -6.018117391e-02f,
+     9.130170752e-02f},
+    {2.341682424e-01f, 2.340713596e-01f, 1.857970654e-01f, -4.049125716e-01f, 1.761372419e-01f,
+     8.457825970e-02f},
+    {2.341682424e-01f, -4.049125716e-01f, -1.761372419e-01f, 2.340713596e-01f, -1.857970654e-01f,
+     8.457825970e-02f},
+    {1.433276364e-01f, 5.461162761e-01f, 2.612295691e-01f, -2.627544581e-01f, 1.207594106e-01f,
+     7.479799441e-02f},
+    {1.433276364e-01f, -2.627544581e-01f, -1.207594106e-01f, 5.461162761e-01f, -2.612295691e-01f,
+     7.479799441e-02f},
+    {6.913259958e-02f, 7.859566038e-01f, 2.616328877e-01f, -1.316196017e-01f, 6.271070651e-02f,
+     6.231448563e-02f},
+    {6.913259958e-02f, -1.316196017e-01f, -6.271070651e-02f, 7.859566038e-01f, -2.616328877e-01f,
+     6.231448563e-02f},
+    {2.356566626e-02f, 9.281511103e-01f, 1.945645498e-01f, -4.597944160e-02f, 2.243414922e-02f,
+     4.757925584e-02f},
+    {2.356566626e-02f, -4.597944160e-02f, -2.243414922e-02f, 9.281511103e-01f, -1.945645498e-01f,
+     4.757925584e-02f},
+    {4.356038577e-03f, 9.868485229e-01f, 9.753116433e-02f, -8.628715772e-03f, 4.273266991e-03f,
+     3.112676197e-02f},
+    {4.356038577e-03f, -8.628715772e-03f, -4.273266991e-03f, 9.868485229e-01f, -9.753116433e-02f,
+     3.112676197e-02f},
+    {1.667289496e-04f, 9.994992202e-01f, 2.069616341e-02f, -3.328649152e-04f, 1.661367543e-04f,
+     1.357622971e-02f},
+    {1.667289496e-04f, -3.328649152e-04f, -1.661367543e-04f, 9.994992202e-01f, -2.069616341e-02f,
+     1.357622971e-02f},
+};
+_Static_assert(EF_SEG_SPEED_SAMPLES == 16, "ba_uni_basis holds ef_seg_speed_stats()'s 17 samples");
+static const float ba_uni_basis[17][5] = {
+    {0.000000000e+00f, 1.000000000e+00f, 0.000000000e+00f, 0.000000000e+00f, 0.000000000e+00f},
+    {2.059936523e-02f, 9.372711182e-01f, 1.853942871e-01f, -4.026794434e-02f, 1.968383789e-02f},
+    {7.177734375e-02f, 7.775878906e-01f, 2.631835938e-01f, -1.364746094e-01f, 6.494140625e-02f},
+    {1.392517090e-01f, 5.595855713e-01f, 2.630310059e-01f, -2.558441162e-01f, 1.178283691e-01f},
+    {2.109375000e-01f, 3.164062500e-01f, 2.109375000e-01f, -3.710937500e-01f, 1.640625000e-01f},
+    {2.769470215e-01f, 7.569885254e-02f, 1.292419434e-01f, -4.604339600e-01f, 1.930236816e-01f},
+    {3.295898438e-01f, -1.403808594e-01f, 3.662109375e-02f, -5.075683594e-01f, 1.977539062e-01f},
+    {3.633728027e-01f, -3.151702881e-01f, -5.191040039e-02f, -5.016937256e-01f, 1.749572754e-01f},
+    {3.750000000e-01f, -4.375000000e-01f, -1.250000000e-01f, -4.375000000e-01f, 1.250000000e-01f},
+    {3.633728027e-01f, -5.016937256e-01f, -1.749572754e-01f, -3.151702881e-01f, 5.191040039e-02f},
+    {3.295898438e-01f, -5.075683594e-01f, -1.977539062e-01f, -1.403808594e-01f, -3.662109375e-02f},
+    {2.769470215e-01f, -4.604339600e-01f, -1.930236816e-01f, 7.569885254e-02f, -1.292419434e-01f},
+    {2.109375000e-01f, -3.710937500e-01f, -1.640625000e-01f, 3.164062500e-01f, -2.109375000e-01f},
+    {1.392517090e-01f, -2.558441162e-01f, -1.178283691e-01f, 5.595855713e-01f, -2.630310059e-01f},
+    {7.177734375e-02f, -1.364746094e-01f, -6.494140625e-02f, 7.775878906e-01f, -2.631835938e-01f},
+    {2.059936523e-02f, -4.026794434e-02f, -1.968383789e-02f, 9.372711182e-01f, -1.853942871e-01f},
+    {0.000000000e+00f, 0.000000000e+00f, 0.000000000e+00f, 1.000000000e+00f, 0.000000000e+00f},
+};
+
+/* The five vectors of the hodograph (above) for a trial's end frames. */
+static void ba_hodo_vectors(const ef_frame_t *f0, const ef_frame_t *f1, ef_vec3_t *v)
+{
+    v[0] = ef_v3_scale(ef_v3_sub(f1->p, f0->p), 5.0f);
+    v[1] = f0->t;
+    v[2] = ef_v3_scale(f0->n, 0.25f * f0->kappa);
+    v[3] = f1->t;
+    v[4] = ef_v3_scale(f1->n, 0.25f * f1->kappa);
+}
+
+/* f'(t) at a node r (a row of the tables above) for DOFs x = (x10, x20, x11, x21); with dd,
+ * also d f'/d s where both end speeds move together (x10 = x11 = s). */
+static ef_vec3_t ba_hodo_at(const ef_vec3_t *v, const float *r, const float *x, ef_vec3_t *dd)
+{
+    ef_vec3_t d = ef_v3_scale(v[0], r[0]);
+    d = ef_v3_axpy(d, x[0] * r[1] + 0.25f * x[1] * r[2], v[1]);
+    d = ef_v3_axpy(d, x[0] * x[0] * r[2], v[2]);
+    d = ef_v3_axpy(d, x[2] * r[3] + 0.25f * x[3] * r[4], v[3]);
+    d = ef_v3_axpy(d, x[2] * x[2] * r[4], v[4]);
+    if (dd) {
+        ef_vec3_t e = ef_v3_scale(v[1], r[1]);
+        e = ef_v3_axpy(e, 2.0f * x[0] * r[2], v[2]);
+        e = ef_v3_axpy(e, r[3], v[3]);
+        *dd = ef_v3_axpy(e, 2.0f * x[2] * r[4], v[4]);
+    }
+    return d;
+}
+
+/* Arc length L of the curve with DOFs x (16-node Gauss-Legendre, ef_seg_length()'s rule);
+ * with dl, also dL/ds for both end speeds moving together (integral of <f', df'/ds> / |f'|
+ * at the same nodes). */
+static float ba_len(const ef_vec3_t *v, const float *x, float *dl)
+{
+    float len = 0.0f, dlen = 0.0f;
+    for (int i = 0; i < 16; i++) {
+        ef_vec3_t dd;
+        ef_vec3_t d = ba_hodo_at(v, ba_gl_basis[i], x, dl ? &dd : 0);
+        float sp = ef_v3_norm(d);
+        len += ba_gl_basis[i][5] * sp;
+        if (dl)
+            dlen += ba_gl_basis[i][5] * (ef_v3_dot(d, dd) / ef_maxf(sp, 1e-30f));
+    }
+    if (dl)
+        *dl = dlen;
+    return len;
+}
+
+/* ef_seg_speed_stats()'s evenness: the largest | |f'(t)| / len - 1 | at t = i / 16. */
+static float ba_spread(const ef_vec3_t *v, const float *x, float len)
+{
+    float inv = 1.0f / ef_maxf(len, 1e-30f), m = 0.0f;
+    for (int i = 0; i <= 16; i++)
+        m = ef_maxf(m, ef_fabsf(ef_v3_norm(ba_hodo_at(v, ba_uni_basis[i], x, 0)) * inv - 1.0f));
+    return m;
+}
+
+/* A candidate of ba_even(): both end speeds s = L (the curve's own length) with tangential
+ * DOFs x20, x21, by EF_BA_NEWTON Newton steps on g(s) = L(s) - s from s0 (g' = L' - 1, near
+ * -1: L moves little with s; a flat g' takes the fixed-point step instead). With both end
+ * speeds s, f'(t) = a + s q + s^2 r at each node, so |f'|^2 is a quartic in s whose
+ * coefficients (dot products of a, q, r) are computed once; each step is then a few
+ * multiplies and a square root per node. x gets the DOFs, *len the curve's length at them;
+ * returns its speed spread (ba_spread()). */
+static float ba_even_ends(const ef_vec3_t *v, float s0, float x20, float x21, float *x, float *len)
+{
+    float c[16][5];
+    for (int i = 0; i < 16; i++) {
+        const float *r = ba_gl_basis[i];
+        ef_vec3_t a = ef_v3_scale(v[0], r[0]);
+        a = ef_v3_axpy(a, 0.25f * x20 * r[2], v[1]);
+        a = ef_v3_axpy(a, 0.25f * x21 * r[4], v[3]);
+        ef_vec3_t q = ef_v3_axpy(ef_v3_scale(v[1], r[1]), r[3], v[3]);
+        ef_vec3_t rr = ef_v3_axpy(ef_v3_scale(v[2], r[2]), r[4], v[4]);
+        c[i][0] = ef_v3_dot(a, a);
+        c[i][1] = 2.0f * ef_v3_dot(a, q);
+        c[i][2] = ef_v3_dot(q, q) + 2.0f * ef_v3_dot(a, rr);
+        c[i][3] = 2.0f * ef_v3_dot(q, rr);
+        c[i][4] = ef_v3_dot(rr, rr);
+    }
+    float s = s0;
+    for (int it = 0; it <= EF_BA_NEWTON; it++) {
+        float l = 0.0f, dl = 0.0f;
+        for (int i = 0; i < 16; i++) {
+            const float *k = c[i];
+            float s2 = k[0] + s * (k[1] + s * (k[2] + s * (k[3] + s * k[4])));
+            float ds2 = k[1] + s * (2.0f * k[2] + s * (3.0f * k[3] + s * 4.0f * k[4]));
+            float sp = ef_sqrtf(ef_maxf(s2, 0.0f));
+            l += ba_gl_basis[i][5] * sp;
+            dl += ba_gl_basis[i][5] * (0.5f * ds2 / ef_maxf(sp, 1e-30f));
+        }
+        *len = l; /* the last pass only measures: L at the final s */
+        float g = l - s, dg = dl - 1.0f;
+        float sn = s - g / ef_selectf(dg < -0.1f, dg, -1.0f);
+        int step = (it < EF_BA_NEWTON) & (sn > 0.0f);
+        s = ef_selectf(step, sn, s);
+    }
+    x[0] = s;
+    x[1] = x20;
+    x[2] = s;
+    x[3] = x21;
+    return ba_spread(v, x, *len);
+}
+
+/* Control points of the G2 quintic with DOFs x between exact frames (ef_seg.h's formulas;
+ * ef_seg_from_dofs()'s curve without its normalization). */
+static void ba_build(const ef_frame_t *f0, const ef_frame_t *f1, const float *x, ef_vec3_t *b)
+{
+    ef_vec3_t d2a = ef_v3_axpy(ef_v3_scale(f0->t, x[1]), f0->kappa * x[0] * x[0], f0->n);
+    ef_vec3_t d2b = ef_v3_axpy(ef_v3_scale(f1->t, x[3]), f1->kappa * x[2] * x[2], f1->n);
+    b[0] = f0->p;
+    b[5] = f1->p;
+    b[1] = ef_v3_axpy(f0->p, 0.2f * x[0], f0->t);
+    b[4] = ef_v3_axpy(f1->p, -0.2f * x[2], f1->t);
+    b[2] = ef_v3_axpy(ef_v3_sub(ef_v3_scale(b[1], 2.0f), f0->p), 0.05f, d2a);
+    b[3] = ef_v3_axpy(ef_v3_sub(ef_v3_scale(b[4], 2.0f), f1->p), 0.05f, d2b);
+}
+
+/* Largest | |f'| / len - 1 | at the two ends of the stored control points b. */
+static float ba_end_err(const ef_vec3_t *b, float len)
+{
+    float inv = 5.0f / ef_maxf(len, 1e-30f);
+    float e0 = ef_fabsf(ef_v3_norm(ef_v3_sub(b[1], b[0])) * inv - 1.0f);
+    return ef_maxf(e0, ef_fabsf(ef_v3_norm(ef_v3_sub(b[5], b[4])) * inv - 1.0f));
+}
+
+/* ef_seg_g2_even()'s choice for a blend between exact frames, with its criteria (ef_seg.h:
+ * the table's curve while its end speeds are within EF_SEG_END_SPEED_REL of its length, the
+ * table's x2 with x1 = L, or the arc-length choice x1 = L, x2 = 0; the smallest spread of
+ * |f'| / L over 17 equal steps wins) at a fraction of the cost: every speed from the
+ * hodograph's five vectors (ba_hodo_at()), x1 = L by Newton steps with dL/dx from the same
+ * nodes instead of five secant curves, control points built once, from the frames, for the
+ * winner only. *uneven: the kept curve's end speed error relative to its length, from its
+ * stored control points (ba_try() refuses it above EF_SEG_END_SPEED_REL). */
+static void ba_even(const ef_frame_t *f0, const ef_frame_t *f1, ef_seg_t *seg, float *uneven)
+{
+    ef_vec3_t v[5];
+    ba_hodo_vectors(f0, f1, v);
+    float xt[4] = {seg->dof[0], seg->dof[1], seg->dof[2], seg->dof[3]};
+    float l_t = ba_len(v, xt, 0);
+    float d_t = ba_spread(v, xt, l_t);
+    float end_t = ba_end_err(seg->b, l_t);
+    float xa[4], xb[4], l_a, l_b; /* l_a, l_b: the candidates' lengths (unused here) */
+    float d_a = ba_even_ends(v, l_t, xt[1], xt[3], xa, &l_a);
+    float d_b = ba_even_ends(v, l_t, 0.0f, 0.0f, xb, &l_b);
+    float d = ef_selectf(end_t <= EF_SEG_END_SPEED_REL, d_t, 3.4e38f);
+    int pick = d_a < d ? 1 : 0;
+    d = ef_minf(d, d_a);
+    pick = d_b < d ? 2 : pick;
+    const float *x = pick == 2 ? xb : xa;
+    if (pick != 0) {
+        ba_build(f0, f1, x, seg->b);
+        for (int k = 0; k < 4; k++)
+            seg->dof[k] = x[k];
+    }
+    /* The winner's end speeds against the length of the curve as stored, as
+     * ef_seg_g2_even() measures them: on a tiny blend far from the origin the float32
+     * control points move |f'(0)| and |f'(1)| by up to a few 1e-3 of L. */
+    *uneven = ba_end_err(seg->b, ef_seg_length(seg->b, 0));
+}
+
 /* One trial blend for trims (li, lo): end frames, the quintic, its measured deviation. */
 typedef struct {
     ef_seg_t seg;
@@ -357,7 +590,7 @@ static void ba_try(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in
     int rc = ef_seg_g2_quintic(g2, &e0, &e1, &tr->seg);
     float uneven = 0.0f;
     if (rc == EF_OK)
-        ef_seg_g2_even(&e0, &e1, &tr->seg, 0, &uneven);
+        ba_even(&ga, &gb, &tr->seg, &uneven);
     tr->pa = ga.p;
     tr->pb = gb.p;
     tr->li = li;
@@ -421,7 +654,7 @@ static void ba_try(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in
     /* A configuration whose tangent angles the table had to clamp (a lopsided hairpin: a
      * tangent beyond 90 degrees from the chord) gives a poor curve; such a trial does not
      * count. (A clamped curvature, a tight arc, is fine: the curve still meets the end data
-     * exactly and its deviation is measured.) Nor does one whose end speeds ef_seg_g2_even()
+     * exactly and its deviation is measured.) Nor does one whose end speeds ba_even()
      * could not bring within EF_SEG_END_SPEED_REL of its mean. */
     uint32_t bad = EF_LOOKUP_CLAMP_ALPHA | EF_LOOKUP_CLAMP_BETA;
     int even = uneven <= EF_SEG_END_SPEED_REL;

@@ -68,11 +68,13 @@
  * fixed number of steps (::EF_BLEND_ITER) until the measured deviation is within
  * tol - q; if none is, the outcome is ::EF_BLEND_STOP. Trims are limited by max_in and
  * max_out separately (asymmetric trims: a short neighbour on one side shortens only that
- * side, the other keeps the trim the tolerance allows). Every trial's curve goes through
- * ef_seg_g2_even(): its end speeds |f'(0)|, |f'(1)| are set to its arc length (the table's
- * for a lopsided corner were up to 60 % off), and of the candidates that do, the most even
- * is kept: a stepper that steps the parameter uniformly (the drives' segment mode) would
- * otherwise jump in feed at both junctions.
+ * side, the other keeps the trim the tolerance allows). Every trial's curve is evened as
+ * ef_seg_g2_even() evens a segment: its end speeds |f'(0)|, |f'(1)| are set to its arc
+ * length (the table's for a lopsided corner were up to 60 % off), and of the candidates that
+ * do, the most even is kept: a stepper that steps the parameter uniformly (the drives'
+ * segment mode) would otherwise jump in feed at both junctions. The same candidates and
+ * criteria, computed in ef_blend_arc.c at about a fifth of the cost (every speed from the
+ * hodograph's five fixed vectors, x1 = L by Newton steps on a per-node quartic).
  *
  * ## Tangent joins (ef_blend_prims())
  * A vertex whose tangents turn by less than ::EF_BLEND_MIN_TURN but whose curvature vectors
@@ -250,9 +252,9 @@ int ef_blend_prims(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in
  *               4 eps of the ends' largest coordinate (control point rounding);
  *               tests/blend/test_prim.c finds the true deviation (dense sampling in double)
  *               at most 0.97 of it (1500 pieces up to full sweep, helices included); at
- *               full sweep the bound is 1.04 x the true maximum (3.26e-4 r, 3.15e-4 r). On error m is all zero.
- *               The primitive is checked again (ef_prim_check(); its codes are
- *               returned).
+ *               full sweep the bound is 1.04 x the true maximum (3.26e-4 r, 3.15e-4 r).
+ *               On error m is all zero. The primitive is checked again (ef_prim_check();
+ *               its codes are returned).
  * @retval EF_OK
  * @retval EF_ERR_ARG  NULL pointer, not an arc, s0/s1 out of range or piece too long
  * @retval EF_ERR_KIND not a G2 quintic table
