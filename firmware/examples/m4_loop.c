@@ -31,6 +31,12 @@ extern const ef_table_t ef_tbl_g2_default;
 /* Power of two, so the free-running indices wrap consistently. 32 moves cover the longest
  * ef_smooth_push() (~230 000 instructions, 2 ms at shift 3) many times over. */
 #define EX_RING 32u
+/* Moves handed to the interpolator per period at most: ef_interp_push() prepares a move's
+ * power basis (a few hundred instructions), so taking every waiting move in one interrupt
+ * made its worst case eight pushes long (17 790 instructions measured). Two keep the queue
+ * ahead of moves down to half a period long; shorter ones on average would underrun, which
+ * the image counts and fails on. */
+#define EX_PUSH_PER_PERIOD 2u
 /* Instructions per tick of timer 0 (25 MHz) at 2^EF_M4_ICOUNT_SHIFT ns per instruction,
  * at least 1: the counter's resolution. */
 #define EX_RES ((40u >> EF_M4_ICOUNT_SHIFT) > 0u ? (40u >> EF_M4_ICOUNT_SHIFT) : 1u)
@@ -91,7 +97,8 @@ void SysTick_Handler(void)
     uint32_t tail = atomic_load_explicit(&ex_tail, memory_order_relaxed);
     uint32_t head = atomic_load_explicit(&ex_head, memory_order_acquire);
     int err = 0;
-    while (tail != head && ef_interp_space(&ex_ip) > 0u) {
+    for (uint32_t k = 0; k < EX_PUSH_PER_PERIOD && tail != head && ef_interp_space(&ex_ip) > 0u;
+         k++) {
         err |= ef_interp_push(&ex_ip, &ex_ring[tail % EX_RING]) != EF_OK;
         tail++;
     }

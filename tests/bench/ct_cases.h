@@ -190,6 +190,10 @@ static inline int ct_g1_kind(long i, int g1_path)
     return (int)(i % CT_COUNT);
 }
 
+/* Set for the XY entry (bench_ct g1p, ef_seg_g1_cubic_xy): ct_make_config() lays every kind
+ * in a plane z = const. */
+static int ct_xy;
+
 /* One random valid configuration of the given kind; g2 also fills n and kappa. */
 static inline void ct_make_config(unsigned long long *rs, int kind, int g2, ef_endpoint_t *e0,
                                   ef_endpoint_t *e1)
@@ -204,7 +208,9 @@ static inline void ct_make_config(unsigned long long *rs, int kind, int g2, ef_e
         p0[2] = 0;
     }
     ct_rot3_t r;
-    if (kind == CT_ALONG_AXIS) {
+    if (ct_xy) { /* bench_ct g1p: every kind turned about z only, in the plane z = p0[2] */
+        r = ct_rot_z(kind == CT_ALONG_AXIS ? 0 : ct_uniform(rs, -M_PI, M_PI));
+    } else if (kind == CT_ALONG_AXIS) {
         r = ct_rot_z(0);
     } else if (kind == CT_PLANAR_XY) {
         r = ct_rot_z(ct_uniform(rs, -M_PI, M_PI));

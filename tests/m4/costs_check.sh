@@ -23,7 +23,7 @@ if [ "$rc" -ne 0 ]; then
     exit 1
 fi
 status=0
-for f in ef_seg_g1_cubic/planar ef_seg_g1_cubic/3d ef_seg_g2_quintic ef_blend_corner \
+for f in ef_seg_g1_cubic_xy ef_seg_g1_cubic/3d ef_seg_g2_quintic ef_blend_corner \
     ef_blend_prims/line-arc ef_blend_prims/arc-line ef_blend_prims/arc-arc \
     ef_blend_prims/helix-helix ef_blend_arc_piece ef_move_measure ef_smooth_push/cam \
     ef_smooth_pull/cam ef_interp_process/uniform ef_interp_process/corrected; do

@@ -169,11 +169,13 @@ static void costs_report(const char *func, uint32_t *v, uint32_t n)
     ef_m4_puts(line);
 }
 
-/* ef_seg_g1_cubic (g1_path 1 planar, 2 3-D) or ef_seg_g2_quintic (g1_path 0). */
+/* ef_seg_g1_cubic_xy (g1_path 1: the coplanar kinds in planes z = const, as bench_ct g1p),
+ * ef_seg_g1_cubic (g1_path 2: 3-D data) or ef_seg_g2_quintic (g1_path 0). */
 __attribute__((noinline)) static void costs_seg(const char *name, int g1_path)
 {
     unsigned long long rs = CT_SEED;
     int g2 = g1_path == 0;
+    ct_xy = g1_path == 1;
     for (long i = 0; i < COSTS_N; i++) {
         (void)ct_make_seg(&rs, i, g1_path, g2, &costs_in.seg[i].e0, &costs_in.seg[i].e1);
     }
@@ -183,7 +185,9 @@ __attribute__((noinline)) static void costs_seg(const char *name, int g1_path)
     for (long i = 0; i < COSTS_N; i++) {
         uint32_t t0 = ef_m4_icount_begin();
         int rc = g2 ? ef_seg_g2_quintic(tbl, &costs_in.seg[i].e0, &costs_in.seg[i].e1, &seg)
-                    : ef_seg_g1_cubic(tbl, &costs_in.seg[i].e0, &costs_in.seg[i].e1, &seg);
+                 : g1_path == 1
+                     ? ef_seg_g1_cubic_xy(tbl, &costs_in.seg[i].e0, &costs_in.seg[i].e1, &seg)
+                     : ef_seg_g1_cubic(tbl, &costs_in.seg[i].e0, &costs_in.seg[i].e1, &seg);
         costs_v[i] = ef_m4_icount_end(t0);
         if (rc != EF_OK) {
             costs_fail(name, i, rc);
@@ -485,7 +489,7 @@ int main(void)
         costs_fail("ef_table_check", 0, rc);
         return 1;
     }
-    costs_seg("ef_seg_g1_cubic/planar", 1);
+    costs_seg("ef_seg_g1_cubic_xy", 1);
     costs_seg("ef_seg_g1_cubic/3d", 2);
     costs_seg("ef_seg_g2_quintic", 0);
     costs_corner();
