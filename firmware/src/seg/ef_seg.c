@@ -220,10 +220,11 @@ int ef_seg_g1_cubic_xy(const ef_table_t *tbl, const ef_endpoint_t *e0, const ef_
                           ef_fabsf(y1));
     float tt0 = u0 * u0 + v0 * v0, tt1 = u1 * u1 + v1 * v1;
     /* NaN or inf in x or y makes s NaN or the scale too large; z is tested on its own. */
-    int ok = (scale <= EF_MAX_COORD) & (az <= EF_MAX_COORD) &
-             (ef_fabsf(tt0 - 1.0f) <= 2.0f * EF_UNIT_TOL) &
-             (ef_fabsf(tt1 - 1.0f) <= 2.0f * EF_UNIT_TOL) & (s >= EF_MIN_CHORD) &
-             (s >= EF_MIN_CHORD_REL * scale);
+    /* Bitwise on purpose (no branch per test); the casts say so to clang. */
+    int ok = (int)(scale <= EF_MAX_COORD) & (int)(az <= EF_MAX_COORD) &
+             (int)(ef_fabsf(tt0 - 1.0f) <= 2.0f * EF_UNIT_TOL) &
+             (int)(ef_fabsf(tt1 - 1.0f) <= 2.0f * EF_UNIT_TOL) & (int)(s >= EF_MIN_CHORD) &
+             (int)(s >= EF_MIN_CHORD_REL * scale);
     if (!seg_ct_hidei(ok))
         return seg_fail(out, seg_xy_error(e0, e1));
     float inv = 1.0f / s, n0 = 1.0f / ef_sqrtf(tt0), n1 = 1.0f / ef_sqrtf(tt1);
