@@ -158,3 +158,16 @@ float ef_bezier_h4_length(const ef_vec3_t *h, int sym)
     }
     return len;
 }
+
+/* Both halves, each by the 16-node rule scaled to [0, 1/2] (contract in ef_bezier.h). */
+float ef_bezier_h4_length_halves(const ef_vec3_t *h)
+{
+    float len = 0.0f;
+    for (int i = 0; i < 8; i++) {
+        float o = 0.5f * bz_gl16[i][0];
+        float a = ef_v3_norm(ef_bezier_b4(h, 0.25f - o)) + ef_v3_norm(ef_bezier_b4(h, 0.25f + o));
+        float b = ef_v3_norm(ef_bezier_b4(h, 0.75f - o)) + ef_v3_norm(ef_bezier_b4(h, 0.75f + o));
+        len += bz_gl16[i][1] * (a + b);
+    }
+    return 0.5f * len;
+}

@@ -294,7 +294,7 @@ int ef_move_measure(ef_move_t *m)
         prim_mm_elevate(h2, 2);
         h3[1] = h3[2] = h3[0]; /* a constant, as a quadratic */
     }
-    float len = ef_bezier_h4_length(h1, 0);
+    float len = ef_bezier_h4_length_halves(h1); /* followed to the end: ef_bezier.h */
     float kmax = 0.0f;
     float ilen = 1.0f / ef_maxf(len, 1e-30f);
     float ilen2 = ilen * ilen, ilen3 = ilen2 * ilen;
