@@ -17,6 +17,9 @@ enum {
 
 /* Shortest move handed to the planner (it refuses anything shorter). */
 #define EF_SM_MIN_MOVE EF_MIN_CHORD
+/* Shortest piece an arc body is split into for its tolerance (sm_next_move()): well above
+ * EF_SM_MIN_MOVE, so a piece's measured length never falls below it by rounding. */
+#define EF_SM_MIN_PIECE (4.0f * EF_MIN_CHORD)
 
 /* Emission phases of the oldest held primitive. */
 enum { EF_E_BODY = 0, EF_E_BLEND = 1, EF_E_DONE = 2 };
@@ -852,12 +855,27 @@ static int sm_next_move(ef_smooth_t *s, ef_move_t *m)
             }
             if (s->arc_next == 0) {
                 /* Piece count: by sweep, then doubled until a piece is within the budget
-                 * (all pieces of an arc are congruent, so the first one decides). */
+                 * (all pieces of an arc are congruent, so the first one decides). A
+                 * doubling that does not halve the deviation stops there, one count back:
+                 * what is left is float32 rounding at the coordinates' magnitude, which no
+                 * split reduces (the approximation error falls 64-fold per doubling). Nor
+                 * is a piece made shorter than EF_SM_MIN_PIECE: the stage would drop it as
+                 * a remnant (a fuzzed arc of 1e-6 at z = 1e5 went into 64 pieces of
+                 * 1.6e-8, all dropped, and the chain ended 1.07e-6 short). */
                 float budget = ef_maxf(0.5f * h->pr.tol, EF_SMOOTH_ARC_TOL_MIN);
+                float body = h->len - h->trim_start - h->trim_end;
                 uint32_t n = sm_arc_pieces(h);
-                for (int k = 0; k < EF_SMOOTH_ARC_SPLITS; k++) {
+                float dev_prev = 3.4e38f;
+                for (int k = 0; k <= EF_SMOOTH_ARC_SPLITS; k++) {
                     if (sm_arc_piece(s, h, 0, n, m) != EF_OK || m->dev <= budget)
                         break;
+                    if (!(m->dev < 0.5f * dev_prev)) {
+                        n /= 2u;
+                        break;
+                    }
+                    if (k == EF_SMOOTH_ARC_SPLITS || body < 2.0f * (float)n * EF_SM_MIN_PIECE)
+                        break;
+                    dev_prev = m->dev;
                     n *= 2u;
                 }
                 s->arc_n = n;
