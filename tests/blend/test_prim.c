@@ -614,7 +614,7 @@ static void test_arc_piece(void)
 {
     unsigned long long seed = 77;
     double worst_full = 0, worst_half = 0, worst_any = 0, worst_under = 0, worst_over = 0;
-    double worst_full_exact = 0;
+    double worst_full_exact = 0, worst_end = 0, worst_herm = 0;
     int n = 0;
     for (int i = 0; i < 1500; i++) {
         int kind = i % 3; /* 0: full piece sweep, 1: half, 2: random */
@@ -668,6 +668,25 @@ static void test_arc_piece(void)
         double rel = dev / r;
         double piece_len = (double)fs1 - fs0;
         EF_CHECK_NEAR(mv.length, piece_len, 1e-3 * piece_len);
+        /* end speeds equal to the length (the arc-length choice x1 = s1 - s0, x2 = 0) */
+        for (int e = 0; e < 2; e++) {
+            dv3 q, d1;
+            bez_d(mv.b, 5, e, &q, &d1, NULL);
+            /* plus float32 rounding of b1 - b0 = x1 t / 5 at the coordinates' magnitude (as
+             * for blends below: a piece of 1e-3 at 50 from the origin is off by 1e-2) */
+            double scl = dnorm(c) + r + fabs(rise);
+            double rho = fabs(dnorm(d1) / mv.length - 1.0);
+            double slack = 10.0 * 2.4e-7 * scl / mv.length;
+            worst_end = fmax(worst_end, rho / (EF_SEG_END_SPEED_REL + slack));
+            EF_CHECK(rho <= EF_SEG_END_SPEED_REL + slack);
+        }
+        /* the closed-form bound without its float32 terms, r sigma^6 / 46080, against the
+         * dense measure less float32 rounding of the coordinates */
+        double sig = fabs((double)pr.sweep) * ((double)fs1 - fs0) / len;
+        double herm = r * pow(sig, 6) / 46080.0;
+        double fl0 = 4e-7 * (dnorm(c) + r + fabs(rise)) +
+                     2.4e-7 * r * fabs((double)pr.sweep) * fs1 / len; /* the frames' angle */
+        worst_herm = fmax(worst_herm, dev / (herm + fl0));
         if (kind == 0)
             worst_full = fmax(worst_full, rel);
         if (kind == 0 && !helix && r >= 1 && dnorm(c) < 1)
@@ -687,8 +706,12 @@ static void test_arc_piece(void)
            n, (double)EF_ARC_PIECE_SWEEP, worst_full, worst_half, worst_any);
     printf("arc pieces: true dev / m->dev max %.4f, m->dev / true dev max %.4f\n", worst_under,
            worst_over);
+    printf("arc pieces: end speed / length - 1 over allowed max %.3f; true dev / (r sigma^6 / "
+           "46080 + rounding) max %.4f\n",
+           worst_end, worst_herm);
     (void)worst_full_exact;
     EF_CHECK(n > 1400);
+    EF_CHECK(worst_herm <= 1.0);
     EF_CHECK(worst_full < 1e-3);
     EF_CHECK(worst_under < 1.05);
 

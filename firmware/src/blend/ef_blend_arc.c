@@ -13,8 +13,6 @@
 /* Share of the tolerance kept for float32 rounding, per unit of the coordinates' magnitude
  * (as ef_blend.c). */
 #define EF_BA_ROUND_MARGIN (4.0f * 1.1920929e-7f)
-/* Samples of an arc piece's quintic for its deviation from the true arc (fixed count). */
-#define EF_BA_PIECE_SAMPLES 64
 /* Float32 error of ef_prim_frame()'s angle on an arc, in ulp of the angle (ba_piece()):
  * rounding s / len and sweep * frac, half an ulp each, doubled for len's own rounding.
  * Empirical, not proven: tests/blend/test_prim.c's 1500 arc pieces (up to 4 turns) find the true
@@ -231,7 +229,18 @@ static float ba_dist_piece(ef_vec3_t q, const ef_ba_piece_t *pc)
     return ef_sqrtf(ef_minf(e2, ef_selectf(inside, din, 3.4e38f))) + pc->err;
 }
 
-/* An arc piece as a measured G2 quintic move (contract in ef_blend.h). */
+/* An arc piece as a G2 quintic move with a closed-form deviation bound (contract in
+ * ef_blend.h). The quintic is the arc-length choice x1 = s1 - s0, x2 = 0: its end
+ * derivatives f' = x1 t, f'' = x1^2 kappa n are exactly those of the arc (circle or helix)
+ * parametrized by t = (s - s0) / (s1 - s0), so it is that parametrization's two-point
+ * Hermite interpolant of order 3 at each end. The error of such an interpolant is
+ * A^(6)(xi) t^3 (1 - t)^3 / 6! per component, with a Peano kernel of one sign, so for the
+ * vector |f(t) - A(t)| <= max |A^(6)| / 6! / 64. The helix's axial part is linear in t and
+ * reproduced exactly; its circular part has |A^(6)| = r sigma^6 (sigma the piece's sweep).
+ * Hence dev <= r sigma^6 / 46080, no samples and no table needed; the same end data also
+ * give end speeds equal to the arc's length, which is the quintic's to O(sigma^6). */
+#define EF_BA_HERMITE_K (1.0f / 46080.0f)
+
 int ef_blend_arc_piece(const ef_table_t *g2, ef_vec3_t start, const ef_prim_t *pr, float s0,
                        float s1, ef_move_t *m)
 {
@@ -248,36 +257,35 @@ int ef_blend_arc_piece(const ef_table_t *g2, ef_vec3_t start, const ef_prim_t *p
         return rc;
     if (!(s0 >= 0.0f) || !(s1 > s0) || !(s1 <= len))
         return EF_ERR_ARG;
-    float piece = ef_fabsf(pr->sweep) * ((s1 - s0) / len);
+    float asw = ef_fabsf(pr->sweep);
+    float piece = asw * ((s1 - s0) / len);
     if (!(piece <= EF_ARC_PIECE_SWEEP * (1.0f + 1e-5f)))
         return EF_ERR_ARG;
 
     ef_frame_t f0, f1;
     ef_prim_frame(start, pr, s0, &f0);
     ef_prim_frame(start, pr, s1, &f1);
-    ef_endpoint_t e0 = ef_frame_endpoint(&f0), e1 = ef_frame_endpoint(&f1);
-    ef_seg_t seg;
-    rc = ef_seg_g2_quintic(g2, &e0, &e1, &seg);
-    if (rc != EF_OK)
-        return rc;
-    ef_seg_g2_even(&e0, &e1, &seg, 0, 0); /* a piece of a circle: nearly its arc-length form */
-
-    /* Deviation from the true arc piece: EF_BA_PIECE_SAMPLES interior samples. */
-    float dev = 0.0f;
-    ef_ba_piece_t pc;
-    ba_piece(start, pr, len, s0, s1, &pc);
-    for (int i = 1; i <= EF_BA_PIECE_SAMPLES; i++) {
-        float t = (float)i * (1.0f / (float)(EF_BA_PIECE_SAMPLES + 1));
-        dev = ef_maxf(dev, ba_dist_piece(ba_q5(seg.b, t), &pc));
-    }
-    for (int i = 0; i < 6; i++)
-        m->b[i] = seg.b[i];
+    float x1 = s1 - s0;
+    ef_vec3_t d2a = ef_v3_scale(f0.n, f0.kappa * x1 * x1);
+    ef_vec3_t d2b = ef_v3_scale(f1.n, f1.kappa * x1 * x1);
+    m->b[0] = f0.p;
+    m->b[5] = f1.p;
+    m->b[1] = ef_v3_axpy(f0.p, 0.2f * x1, f0.t);
+    m->b[4] = ef_v3_axpy(f1.p, -0.2f * x1, f1.t);
+    m->b[2] = ef_v3_axpy(ef_v3_sub(ef_v3_scale(m->b[1], 2.0f), f0.p), 0.05f, d2a);
+    m->b[3] = ef_v3_axpy(ef_v3_sub(ef_v3_scale(m->b[4], 2.0f), f1.p), 0.05f, d2b);
+    /* The bound, plus what float32 adds: ef_prim_frame()'s angle (EF_BA_ANGLE_ULP ulp of the
+     * angle at s1, times the radius, as ba_piece()) and the control points' rounding at the
+     * coordinates' magnitude. */
+    float r = ba_radius(start, pr);
+    float s2 = piece * piece, s6 = s2 * s2 * s2;
+    float ang = r * asw * (s1 / len) * (EF_BA_ANGLE_ULP * 1.1920929e-7f);
+    float scale = ef_maxf(ba_maxabs(f0.p), ba_maxabs(f1.p));
     m->degree = 5;
     m->kind = EF_MOVE_ARC;
-    m->flags = (uint16_t)((seg.flags & EF_SEG_CLAMPED) ? EF_MOVE_CLAMPED : 0u);
     m->tag = pr->tag;
     m->feed = pr->feed;
-    m->dev = dev;
+    m->dev = r * s6 * EF_BA_HERMITE_K + ang + EF_BA_ROUND_MARGIN * scale;
     rc = ef_move_measure(m);
     if (rc != EF_OK) {
         ba_zero_move(m);
