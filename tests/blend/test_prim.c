@@ -1350,6 +1350,79 @@ static void test_seg_even(void)
     EF_CHECK_EQ(ef_seg_g2_even(&c0, &c1, NULL, NULL, NULL), EF_SEG_EVEN_TABLE);
 }
 
+/* The last piece of an arc whose end is off its circle (a G-code radius error within
+ * ef_prim_check()'s tolerance): ef_prim_end_gap() is that distance; the piece ends exactly
+ * on pr->end, keeps its end speeds at its length, and its dev covers the true deviation
+ * from the circle. Small gaps take the closed form, large ones (relative to the piece) the
+ * table route; both are exercised. */
+static void test_arc_piece_gap(void)
+{
+    unsigned long long seed = 91;
+    int closed = 0, table = 0;
+    double worst_gap = 0, worst_end = 0, worst_dev = 0;
+    for (int i = 0; i < 400; i++) {
+        double r = log_uniform(&seed, 0.2, 50);
+        double sw = ((i & 1) ? 1 : -1) * ef_t_uniform(&seed, 0.05, 3.0);
+        dv3 c = d3(ef_t_uniform(&seed, -20, 20), ef_t_uniform(&seed, -20, 20), 5);
+        dv3 s0 = daxpy(c, r, rand_perp(&seed, d3(0, 0, 1)));
+        ef_prim_t pr = mk_arc_d(s0, c, d3(0, 0, (i & 2) ? 1 : -1), sw, 0.0);
+        double tolr = fmax(EF_ARC_ABS_TOL, EF_ARC_REL_TOL * r);
+        double err = ((i & 4) ? 1 : -1) * tolr * log_uniform(&seed, 1e-5, 0.9);
+        /* the end moved radially by err (the same angle) */
+        dv3 e = dv(pr.end), cc = dv(pr.centre);
+        dv3 w = dsub(e, cc);
+        pr.end = fv(daxpy(e, err / dnorm(w), w));
+        pr.feed = 10.0f;
+        ef_vec3_t sf = fv(s0);
+        float len;
+        if (ef_prim_check(sf, &pr, &len) != EF_OK) {
+            EF_CHECK(0);
+            continue;
+        }
+        double gap = ef_prim_end_gap(sf, &pr);
+        worst_gap = fmax(worst_gap, fabs(gap - fabs(err)) / (1e-6 * (dnorm(c) + r)));
+        EF_CHECK(fabs(gap - fabs(err)) <= 1e-6 * (dnorm(c) + r));
+        /* the last piece: from 1e-3 up to the whole piece sweep */
+        double psw = log_uniform(&seed, 1e-3, 1.0) * EF_ARC_PIECE_SWEEP;
+        double plen = fmin((double)len, len * psw / fabs(sw));
+        float fs0 = (float)(len - plen), fs1 = len;
+        if (fabsf(pr.sweep) * ((fs1 - fs0) / len) > EF_ARC_PIECE_SWEEP)
+            fs0 = fs1 - (float)plen * (1.0f - 2e-6f);
+        ef_move_t mv;
+        if (ef_blend_arc_piece(G2, sf, &pr, fs0, fs1, &mv) != EF_OK) {
+            EF_CHECK(0);
+            continue;
+        }
+        if (gap <= 2.5e-4 * ((double)fs1 - fs0))
+            closed++;
+        else
+            table++;
+        EF_CHECK(memcmp(&mv.b[5], &pr.end, sizeof pr.end) == 0);
+        double scl = dnorm(c) + r;
+        for (int k = 0; k < 2; k++) {
+            dv3 q, d1;
+            bez_d(mv.b, 5, k, &q, &d1, NULL);
+            double rho = fabs(dnorm(d1) / mv.length - 1.0);
+            double slack = 10.0 * 2.4e-7 * scl / mv.length;
+            worst_end = fmax(worst_end, rho / (EF_SEG_END_SPEED_REL + slack));
+            EF_CHECK(rho <= EF_SEG_END_SPEED_REL + slack);
+        }
+        dprim_t m = dprim(sf, &pr);
+        double dev = dev_piece(mv.b, &m, fs0, fs1), fl = 4e-7 * scl;
+        worst_dev = fmax(worst_dev, dev / (mv.dev + fl));
+        EF_CHECK(dev <= mv.dev + fl);
+    }
+    printf("arc pieces off the circle: %d closed form, %d table route; gap error max %.3f of "
+           "1e-6 scale; end speed over allowed max %.3f; true dev / dev max %.4f\n",
+           closed, table, worst_gap, worst_end, worst_dev);
+    EF_CHECK(closed > 50);
+    EF_CHECK(table > 50);
+    /* lines have no gap; NULL is 0 */
+    ef_prim_t l = mk_line(ef_v3(1, 2, 3));
+    EF_CHECK_EQ(ef_prim_end_gap(ef_v3(0, 0, 0), &l) == 0.0f, 1);
+    EF_CHECK_EQ(ef_prim_end_gap(ef_v3(0, 0, 0), NULL) == 0.0f, 1);
+}
+
 int main(int argc, char **argv)
 {
     static const ef_test_part_t parts[] = {
@@ -1357,6 +1430,7 @@ int main(int argc, char **argv)
         {"frame", test_frame},
         {"measure", test_measure},
         {"arc_piece", test_arc_piece},
+        {"arc_piece_gap", test_arc_piece_gap},
         {"seg_even", test_seg_even},
         {"blend_prims_args", test_blend_prims_args},
         {"blend_prims", test_blend_prims},

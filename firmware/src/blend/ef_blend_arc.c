@@ -229,6 +229,56 @@ static float ba_dist_piece(ef_vec3_t q, const ef_ba_piece_t *pc)
     return ef_sqrtf(ef_minf(e2, ef_selectf(inside, din, 3.4e38f))) + pc->err;
 }
 
+/* Largest gap between an arc's end and its model circle (ef_prim_end_gap()) that the
+ * closed-form piece carries, relative to the piece's length: the quintic's end speeds then
+ * differ from its length by about that much, well within EF_SEG_END_SPEED_REL. */
+#define EF_BA_PIECE_GAP_REL 2.5e-4f
+/* Samples of a table-built piece's quintic for its deviation from the true arc. */
+#define EF_BA_PIECE_SAMPLES 64
+
+/* Fill a piece's move fields and measure it; the move is zeroed on failure. */
+static int ba_piece_finish(const ef_prim_t *pr, float dev, ef_move_t *m)
+{
+    m->degree = 5;
+    m->kind = EF_MOVE_ARC;
+    m->tag = pr->tag;
+    m->feed = pr->feed;
+    m->dev = dev;
+    int rc = ef_move_measure(m);
+    if (rc != EF_OK)
+        ba_zero_move(m);
+    return rc;
+}
+
+/* The last piece of an arc whose end lies off its circle by more than
+ * EF_BA_PIECE_GAP_REL of the piece (a short G-code arc with a radius error near the
+ * tolerance; fuzzed: 0.0122 off after 5e-6 of arc): the table's quintic between the exact
+ * end frames, evened (ef_seg_g2_even()), its deviation from the true piece measured at
+ * EF_BA_PIECE_SAMPLES samples. About 65 k instructions against the closed form's 10 k. */
+static int ba_piece_table(const ef_table_t *g2, ef_vec3_t start, const ef_prim_t *pr, float len,
+                          float s0, float s1, const ef_frame_t *f0, const ef_frame_t *f1, float gap,
+                          ef_move_t *m)
+{
+    ef_endpoint_t e0 = ef_frame_endpoint(f0), e1 = ef_frame_endpoint(f1);
+    ef_seg_t seg;
+    int rc = ef_seg_g2_quintic(g2, &e0, &e1, &seg);
+    if (rc != EF_OK)
+        return rc;
+    ef_seg_g2_even(&e0, &e1, &seg, 0, 0);
+    float dev = 0.0f;
+    ef_ba_piece_t pc;
+    ba_piece(start, pr, len, s0, s1, &pc);
+    for (int i = 1; i <= EF_BA_PIECE_SAMPLES; i++) {
+        float t = (float)i * (1.0f / (float)(EF_BA_PIECE_SAMPLES + 1));
+        dev = ef_maxf(dev, ba_dist_piece(ba_q5(seg.b, t), &pc));
+    }
+    for (int i = 0; i < 6; i++)
+        m->b[i] = seg.b[i];
+    m->flags = (uint16_t)((seg.flags & EF_SEG_CLAMPED) ? EF_MOVE_CLAMPED : 0u);
+    /* the samples measure against the circle, which misses the end by the gap */
+    return ba_piece_finish(pr, dev + gap, m);
+}
+
 /* An arc piece as a G2 quintic move with a closed-form deviation bound (contract in
  * ef_blend.h). The quintic is the arc-length choice x1 = s1 - s0, x2 = 0: its end
  * derivatives f' = x1 t, f'' = x1^2 kappa n are exactly those of the arc (circle or helix)
@@ -238,7 +288,11 @@ static float ba_dist_piece(ef_vec3_t q, const ef_ba_piece_t *pc)
  * vector |f(t) - A(t)| <= max |A^(6)| / 6! / 64. The helix's axial part is linear in t and
  * reproduced exactly; its circular part has |A^(6)| = r sigma^6 (sigma the piece's sweep).
  * Hence dev <= r sigma^6 / 46080, no samples and no table needed; the same end data also
- * give end speeds equal to the arc's length, which is the quintic's to O(sigma^6). */
+ * give end speeds equal to the arc's length, which is the quintic's to O(sigma^6).
+ * The last piece ends on pr->end, which may lie off the circle by a gap g
+ * (ef_prim_end_gap()): that moves b3, b4, b5 by the same vector, so the curve moves by at
+ * most |g| (Bernstein weights sum to at most 1) and dev grows by |g|; a gap above
+ * EF_BA_PIECE_GAP_REL of the piece takes the table route (ba_piece_table()). */
 #define EF_BA_HERMITE_K (1.0f / 46080.0f)
 
 int ef_blend_arc_piece(const ef_table_t *g2, ef_vec3_t start, const ef_prim_t *pr, float s0,
@@ -266,6 +320,9 @@ int ef_blend_arc_piece(const ef_table_t *g2, ef_vec3_t start, const ef_prim_t *p
     ef_prim_frame(start, pr, s0, &f0);
     ef_prim_frame(start, pr, s1, &f1);
     float x1 = s1 - s0;
+    float gap = s1 >= len ? ef_prim_end_gap(start, pr) : 0.0f;
+    if (!(gap <= EF_BA_PIECE_GAP_REL * x1))
+        return ba_piece_table(g2, start, pr, len, s0, s1, &f0, &f1, gap, m);
     ef_vec3_t d2a = ef_v3_scale(f0.n, f0.kappa * x1 * x1);
     ef_vec3_t d2b = ef_v3_scale(f1.n, f1.kappa * x1 * x1);
     m->b[0] = f0.p;
@@ -281,17 +338,8 @@ int ef_blend_arc_piece(const ef_table_t *g2, ef_vec3_t start, const ef_prim_t *p
     float s2 = piece * piece, s6 = s2 * s2 * s2;
     float ang = r * asw * (s1 / len) * (EF_BA_ANGLE_ULP * 1.1920929e-7f);
     float scale = ef_maxf(ba_maxabs(f0.p), ba_maxabs(f1.p));
-    m->degree = 5;
-    m->kind = EF_MOVE_ARC;
-    m->tag = pr->tag;
-    m->feed = pr->feed;
-    m->dev = r * s6 * EF_BA_HERMITE_K + ang + EF_BA_ROUND_MARGIN * scale;
-    rc = ef_move_measure(m);
-    if (rc != EF_OK) {
-        ba_zero_move(m);
-        return rc;
-    }
-    return EF_OK;
+    return ba_piece_finish(pr, r * s6 * EF_BA_HERMITE_K + ang + EF_BA_ROUND_MARGIN * scale + gap,
+                           m);
 }
 
 /* The hodograph of the G2 quintic between end frames (p0, t0, kappa0 n0) and (p1, t1,

@@ -211,6 +211,20 @@ int ef_prim_frame(ef_vec3_t start, const ef_prim_t *pr, float s, ef_frame_t *out
     return EF_OK;
 }
 
+/* Distance of an arc's end from its model's end (contract in ef_path.h). */
+float ef_prim_end_gap(ef_vec3_t start, const ef_prim_t *pr)
+{
+    if (!pr || pr->kind != EF_PRIM_ARC)
+        return 0.0f;
+    ef_arc_geo_t g;
+    prim_arc_geo(start, pr, &g);
+    float sn, cs;
+    prim_sincosf(pr->sweep, &sn, &cs);
+    ef_vec3_t rad = ef_v3_add(ef_v3_scale(g.eu, cs), ef_v3_scale(g.ev, sn));
+    ef_vec3_t p = ef_v3_axpy(ef_v3_axpy(g.base, g.r0, rad), g.h, g.a);
+    return ef_v3_norm(ef_v3_sub(pr->end, p));
+}
+
 /* Cubic Bernstein evaluation, for the second hodograph in ef_move_measure(). */
 static ef_vec3_t prim_mm_b3(const ef_vec3_t *p, float t)
 {

@@ -238,8 +238,11 @@ int ef_blend_prims(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in
  * parametrized by t = (s - s0) / (s1 - s0), so the end speeds equal the piece's length and
  * the quintic is that parametrization's two-point Hermite interpolant (order 3 at each
  * end). Constant instruction count (no table lookup, no sampling; ef_move_measure() is most
- * of it).
- * @param g2     G2 quintic table (checked for its kind only: the DOFs need no lookup)
+ * of it), except for the last piece of an arc whose end lies off its circle
+ * (ef_prim_end_gap(), up to the radius tolerance) by more than 2.5e-4 of the piece: that
+ * one is the table's quintic between the same end frames, evened by ef_seg_g2_even(), its
+ * deviation sampled at 64 points (about 6.5 times the cost).
+ * @param g2     G2 quintic table (for the table route above)
  * @param start  where the primitive starts
  * @param pr     the arc primitive
  * @param s0,s1  0 <= s0 < s1 <= its length; the sweep of the piece must not exceed
@@ -249,12 +252,15 @@ int ef_blend_prims(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in
  *               bound of the Hermite interpolant's error, r sigma^6 / 46080 (sigma the
  *               piece's sweep, r the radius; the helix's axial part is reproduced exactly),
  *               plus 2 ulp of the arc's angle at s1 times r (the float32 frames) and
- *               4 eps of the ends' largest coordinate (control point rounding);
+ *               4 eps of the ends' largest coordinate (control point rounding),
+ *               plus the end's gap on the last piece;
  *               tests/blend/test_prim.c finds the true deviation (dense sampling in double)
  *               at most 0.97 of it (1500 pieces up to full sweep, helices included); at
  *               full sweep the bound is 1.04 x the true maximum (3.26e-4 r, 3.15e-4 r).
- *               On error m is all zero. The primitive is checked again (ef_prim_check();
- *               its codes are returned).
+ *               The table route: the sampled deviation from the circle plus the gap;
+ *               flags EF_MOVE_CLAMPED where the table clamped. On error m is all
+ *               zero. The primitive is checked again (ef_prim_check(); its codes are
+ *               returned).
  * @retval EF_OK
  * @retval EF_ERR_ARG  NULL pointer, not an arc, s0/s1 out of range or piece too long
  * @retval EF_ERR_KIND not a G2 quintic table

@@ -159,6 +159,15 @@ int ef_prim_check(ef_vec3_t start, const ef_prim_t *pr, float *len);
  */
 int ef_prim_frame(ef_vec3_t start, const ef_prim_t *pr, float s, ef_frame_t *out);
 
+/**
+ * @brief How far a (checked) arc's end point lies from where its model puts the end: the
+ * circle of the start radius, swept by `sweep`, risen by the helix's rise. ef_prim_check()
+ * allows the radius tolerance there (a G-code arc whose end is off its circle, or the
+ * rounding of the sweep), and ef_prim_frame() puts the point at s = len exactly on
+ * `pr->end`, so the last stretch of the arc carries this gap. 0 for a line or NULL.
+ */
+float ef_prim_end_gap(ef_vec3_t start, const ef_prim_t *pr);
+
 /** Move kinds. */
 typedef enum {
     EF_MOVE_LINE = 1,   /**< a straight piece (degree 1), exact constant speed */
