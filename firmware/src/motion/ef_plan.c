@@ -12,6 +12,9 @@
 
 /** Bisection steps for every speed search (float32 has 24 mantissa bits). */
 #define EF_PLAN_BISECT 32
+/** Safeguarded Newton steps where a released group's law reaches a member's end
+ *  (pl_law_cross()). */
+#define EF_PLAN_CROSS_ITER 8
 
 /** Smallest largest-|tangent component| a move may report (every unit vector has one
  *  component >= 1/sqrt(3)); below it the tabs data is inconsistent. */
@@ -703,17 +706,28 @@ static void pl_law_cross(const ef_move_t *g, uint32_t last, float target, uint32
         if (s0 + ds >= target)
             break;
     }
+    /* Newton's method on s(u) = target inside the bracket [lo, hi], a bisection step where
+     * it would leave the bracket (or the speed is 0): s is a cubic with s' the speed >= 0,
+     * so the root is simple wherever the law moves and the steps converge quadratically;
+     * EF_PLAN_CROSS_ITER of them replace EF_PLAN_BISECT bisections (a pull's largest share
+     * of instructions). The bracket keeps the result in the phase. */
     float hi = g->law.dt[kk];
-    for (int i = 0; i < EF_PLAN_BISECT && lo < hi; i++) {
-        float mid = 0.5f * (lo + hi);
-        pl_law_at(g, kk, mid, &s0, &ds, d);
-        if (s0 + ds >= target)
-            hi = mid;
-        else
-            lo = mid;
+    /* a target at or past the phase's end (the last used phase, or rounding): its end */
+    pl_law_at(g, kk, hi, &s0, &ds, d);
+    int past = !((s0 + ds) > target);
+    float uu = 0.5f * (lo + hi);
+    for (int i = 0; i < EF_PLAN_CROSS_ITER; i++) {
+        pl_law_at(g, kk, uu, &s0, &ds, d);
+        float f = (s0 + ds) - target;
+        hi = f >= 0.0f ? uu : hi;
+        lo = f >= 0.0f ? lo : uu;
+        float un = uu - f / d[0];
+        /* false for NaN (d[0] = 0); inclusive, so a root found on the bracket stays */
+        int inside = (un >= lo) & (un <= hi);
+        uu = inside ? un : 0.5f * (lo + hi);
     }
     *k = kk;
-    *u = hi;
+    *u = past ? hi : uu;
 }
 
 /** The law of one member of the group being released: the group law between the crossing
