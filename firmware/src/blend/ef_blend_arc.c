@@ -320,7 +320,8 @@ int ef_blend_arc_piece(const ef_table_t *g2, ef_vec3_t start, const ef_prim_t *p
     ef_prim_frame(start, pr, s0, &f0);
     ef_prim_frame(start, pr, s1, &f1);
     float x1 = s1 - s0;
-    float gap = s1 >= len ? ef_prim_end_gap(start, pr) : 0.0f;
+    /* computed for every piece, so the count stays the same for the last one */
+    float gap = ef_selectf(s1 >= len, ef_prim_end_gap(start, pr), 0.0f);
     if (!(gap <= EF_BA_PIECE_GAP_REL * x1))
         return ba_piece_table(g2, start, pr, len, s0, s1, &f0, &f1, gap, m);
     ef_vec3_t d2a = ef_v3_scale(f0.n, f0.kappa * x1 * x1);
