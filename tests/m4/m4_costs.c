@@ -427,8 +427,12 @@ static void costs_progs(void)
 #endif
 
 /* The moves of the CAM stream through the interpolator at a 1 ms servo period, every
- * ef_interp_process() call timed (pushes not included). */
-__attribute__((noinline)) static void costs_interp(const char *name, int mode)
+ * ef_interp_process() call timed (pushes not included). With `late`, every 50th call comes
+ * COSTS_LATE_US late (a missed servo deadline), and only those calls are recorded: in
+ * corrected stepping they take the resynchronization path (ef_interp.c: the parameter found
+ * by Newton steps with quadrature), whose cost the regular period's figure does not show. */
+#define COSTS_LATE_US 10000u
+__attribute__((noinline)) static void costs_interp(const char *name, int mode, int late)
 {
     int rc = ef_interp_init(&costs_ip, costs_moves[0].b[0], 1000u, mode);
     if (rc != EF_OK || costs_nmoves == 0u) {
@@ -440,7 +444,7 @@ __attribute__((noinline)) static void costs_interp(const char *name, int mode)
     while (nm > 1u && costs_moves[nm - 1u].v_exit > 0.0f) {
         nm--;
     }
-    uint32_t next = 0, k = 0, n = 0, underruns = 0;
+    uint32_t next = 0, k = 0, n = 0, underruns = 0, calls = 0;
     ef_setpoint_t sp;
     ef_m4_stack_paint();
     for (;;) {
@@ -452,8 +456,10 @@ __attribute__((noinline)) static void costs_interp(const char *name, int mode)
             }
             k++;
         }
+        uint32_t dt = (late && calls % 50u == 49u) ? COSTS_LATE_US : 1000u;
+        calls++;
         uint32_t t0 = ef_m4_icount_begin();
-        rc = ef_interp_process(&costs_ip, 1000u, &next, &sp);
+        rc = ef_interp_process(&costs_ip, dt, &next, &sp);
         uint32_t c = ef_m4_icount_end(t0);
         if (rc == EF_ERR_UNDERRUN) {
             underruns++;
@@ -461,7 +467,8 @@ __attribute__((noinline)) static void costs_interp(const char *name, int mode)
             costs_fail(name, (long)n, rc);
             return;
         }
-        if (sp.moving && n < COSTS_CALLS_MAX) { /* periods of motion, not the idle end */
+        int keep = !late || dt != 1000u;
+        if (keep && sp.moving && n < COSTS_CALLS_MAX) { /* periods of motion, not the idle end */
             costs_v[n++] = c;
         }
         if (k == nm && !sp.moving) {
@@ -505,8 +512,9 @@ int main(void)
 #else
     ef_m4_puts("m4_costs: no sample programs compiled in (golden_progs.c not generated)\n");
 #endif
-    costs_interp("ef_interp_process/uniform", EF_STEP_UNIFORM);
-    costs_interp("ef_interp_process/corrected", EF_STEP_CORRECTED);
+    costs_interp("ef_interp_process/uniform", EF_STEP_UNIFORM, 0);
+    costs_interp("ef_interp_process/corrected", EF_STEP_CORRECTED, 0);
+    costs_interp("ef_interp_process/corrected-late", EF_STEP_CORRECTED, 1);
     for (int e = 0; e < CS_COUNT; e++) {
         ef_m4_puts("stack ");
         ef_m4_puts(costs_stack_name[e]);
