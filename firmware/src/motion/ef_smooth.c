@@ -853,6 +853,7 @@ static int sm_next_move(ef_smooth_t *s, ef_move_t *m)
                 /* Both blends took the whole arc: nothing of it is left between them. */
                 return sm_skip_body(s, h, m);
             }
+            int reuse = 0;
             if (s->arc_next == 0) {
                 /* Piece count: by sweep, then doubled until a piece is within the budget
                  * (all pieces of an arc are congruent, so the first one decides). A
@@ -864,10 +865,12 @@ static int sm_next_move(ef_smooth_t *s, ef_move_t *m)
                  * 1.6e-8, all dropped, and the chain ended 1.07e-6 short). */
                 float budget = ef_maxf(0.5f * h->pr.tol, EF_SMOOTH_ARC_TOL_MIN);
                 float body = h->len - h->trim_start - h->trim_end;
-                uint32_t n = sm_arc_pieces(h);
+                uint32_t n = sm_arc_pieces(h), built = 0;
                 float dev_prev = 3.4e38f;
                 for (int k = 0; k <= EF_SMOOTH_ARC_SPLITS; k++) {
-                    if (sm_arc_piece(s, h, 0, n, m) != EF_OK || m->dev <= budget)
+                    int rc0 = sm_arc_piece(s, h, 0, n, m);
+                    built = rc0 == EF_OK ? n : 0u;
+                    if (rc0 != EF_OK || m->dev <= budget)
                         break;
                     if (!(m->dev < 0.5f * dev_prev)) {
                         n /= 2u;
@@ -879,9 +882,11 @@ static int sm_next_move(ef_smooth_t *s, ef_move_t *m)
                     n *= 2u;
                 }
                 s->arc_n = n;
+                /* the first piece at the final count is already in *m: not built twice */
+                reuse = built == n;
             }
             uint32_t n = s->arc_n;
-            rc = sm_arc_piece(s, h, s->arc_next, n, m);
+            rc = reuse ? EF_OK : sm_arc_piece(s, h, s->arc_next, n, m);
             if (rc == EF_OK && !sm_move_ok(m))
                 rc = EF_ERR_NONFINITE;
             if (rc == EF_OK) {
