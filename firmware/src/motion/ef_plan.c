@@ -4,17 +4,23 @@
  *
  * The backward-pass bounds are kept up to date incrementally by each push (from the newest
  * move back, stopping at the first unchanged bound), so a pull only runs the forward step and
- * the time law of the oldest move. Without a jerk limit every ramp inversion is closed-form
- * (plus a fixed few-ulp correction); with one it is a bisection with a fixed iteration count
- * (EF_PLAN_BISECT). Worst case: a push O(EF_LOOKAHEAD) inversions, a pull O(1). */
+ * the time law of the oldest move. Every ramp inversion is closed-form (plus a fixed few-ulp
+ * correction): without a jerk limit a square root; with one a quadratic (trapezoidal
+ * acceleration) or a monotone cubic solved by fixed Newton steps (triangular), bisection
+ * (EF_PLAN_BISECT) only as the fallback. Worst case: a push O(EF_LOOKAHEAD) inversions, a
+ * pull O(1) plus the push of a staged move it hands over. */
 #include "evenfeed/motion/ef_plan.h"
 #include "evenfeed/core/ef_err.h"
 
 /** Bisection steps for every speed search (float32 has 24 mantissa bits). */
 #define EF_PLAN_BISECT 32
 /** Safeguarded Newton steps where a released group's law reaches a member's end
- *  (pl_law_cross()). */
+ *  (pl_law_cross()), before bisection takes over, and the relative step below which a
+ *  Newton iterate counts as converged (two ulps of u). */
 #define EF_PLAN_CROSS_ITER 8
+#define EF_PLAN_CROSS_TOL  2.4e-7f
+/** Newton steps of the triangular ramp's cubic (pl_cubic_rise()). */
+#define EF_PLAN_CUBIC_NEWTON 6
 
 /** Smallest largest-|tangent component| a move may report (every unit vector has one
  *  component >= 1/sqrt(3)); below it the tabs data is inconsistent. */
@@ -110,6 +116,62 @@ static float pl_ramp_dist_down(float v0, float e, float a, float j)
             (v) = -1.0f;                                                                           \
     } while (0)
 
+/** The x >= 0 with x (x + c)^2 = q (c, q >= 0): the rise of a triangular-acceleration ramp
+ *  from speed c / 2 over distance sqrt(q / j). x (x + c)^2 rises and is convex for x >= 0,
+ *  so Newton's method from above converges monotonically; the start, the smaller of
+ *  q / c^2 and cbrt(q) (each >= x), is within 1.6 x of x, and EF_PLAN_CUBIC_NEWTON steps
+ *  reach float32 resolution. */
+static float pl_cubic_rise(float c, float q)
+{
+    float x = ef_minf(q / ef_maxf(c * c, 1e-30f), ef_cbrtf(q));
+    for (int i = 0; i < EF_PLAN_CUBIC_NEWTON; i++) {
+        float xc = x + c;
+        float f = x * xc * xc - q, df = xc * (3.0f * x + c);
+        float xn = x - f / ef_maxf(df, 1e-30f);
+        x = ef_maxf(xn, 0.0f);
+    }
+    return x;
+}
+
+/** The largest v >= e with pl_ramp_dist(v, e) <= len under a jerk limit, in closed form:
+ *  with x = v - e and k = a^2 / j, a trapezoidal ramp (x >= k) has
+ *  (2e + x)(x + k) = 2 a len, a quadratic; a triangular one (x < k) has
+ *  x (2e + x)^2 = j len^2 (pl_cubic_rise()). */
+static float pl_ramp_up_jerk(float e, float len, float a, float j)
+{
+    float k = a * a / j;
+    float b = 2.0f * e + k, r = 2.0f * e - k;
+    float disc = ef_sqrtf(r * r + 8.0f * a * len);
+    /* x = (disc - b) / 2, written without the cancellation: (disc^2 - b^2) / (2 (disc + b)),
+     * disc^2 - b^2 = 8 a len - 8 e k */
+    float x = (4.0f * (a * len - e * k)) / ef_maxf(disc + b, 1e-30f);
+    if (x >= k)
+        return e + x;
+    return e + pl_cubic_rise(2.0f * e, j * len * len);
+}
+
+/** pl_ramp_top()'s answer under a jerk limit, in closed form (the caller lowers it by a few
+ *  ulps where rounding puts it just beyond len). Up: pl_ramp_up_jerk(). Down: the
+ *  distance pl_ramp_dist_down(v, e) is the ramp from v to max(e, p(v)), p(v) the concave
+ *  distance's peak (v / 3 while v <= 1.5 k, k / 2 above), and rises with v. While p(v) <= e
+ *  (e >= k / 2, or v <= 3 e) it is the ramp to e; past that, the ramp to p(v):
+ *  (4 v / 3) sqrt(2 v / (3 j)) = len, v = cbrt(27 j len^2 / 32), while v <= 1.5 k, else
+ *  the trapezoid from v to k / 2: (v + k / 2)^2 = 2 a len. Replaces EF_PLAN_BISECT
+ *  bisections: the backward pass inverts once per move it updates, up to the whole window
+ *  on one push (also the push of a staged move a pull hands over), and 64 bisected
+ *  inversions were ~100 k M4 instructions. */
+static float pl_ramp_top_jerk(float e, float len, float a, float j, int down)
+{
+    float k = a * a / j;
+    float up = pl_ramp_up_jerk(e, len, a, j);
+    if (!down || e >= 0.5f * k || pl_ramp_dist(3.0f * e, e, a, j) >= len)
+        return up;
+    float v = ef_cbrtf((27.0f / 32.0f) * j * len * len);
+    if (v > 1.5f * k)
+        v = ef_sqrtf(2.0f * a * len) - 0.5f * k;
+    return v;
+}
+
 /** Largest v >= vf such that a ramp between v and vf fits in len (either direction: the
  *  distance is symmetric); with `down`, every ramp from v to a speed in [vf, v] must fit
  *  (pl_ramp_dist_down()). The returned value always satisfies the condition. Without a jerk
@@ -127,6 +189,18 @@ static float pl_ramp_top(float vf, float len, float a, float j, int down)
         float v = hi;
         EF_PLAN_ULP_DOWN(v, v >= vf && pl_ramp_dist(v, vf, a, 0.0f) <= len);
         if (v >= vf)
+            return v;
+    } else {
+        /* the closed form, lowered by about an ulp per step while it does not fit, never
+         * below vf (which fits: d = 0); where len is a few ulps of vf's ramp that is vf */
+        float v = ef_maxf(pl_ramp_top_jerk(vf, len, a, j, down), vf);
+        int fits = 0;
+        for (int k = 0; k <= EF_PLAN_ULP_STEPS && !fits; k++) {
+            v = k == 0 ? v : ef_maxf(vf, v - v * 1.2e-7f);
+            d = down ? pl_ramp_dist_down(v, vf, a, j) : pl_ramp_dist(v, vf, a, j);
+            fits = d <= len;
+        }
+        if (fits)
             return v;
     }
     for (int i = 0; i < EF_PLAN_BISECT; i++) {
@@ -706,28 +780,37 @@ static void pl_law_cross(const ef_move_t *g, uint32_t last, float target, uint32
         if (s0 + ds >= target)
             break;
     }
-    /* Newton's method on s(u) = target inside the bracket [lo, hi], a bisection step where
-     * it would leave the bracket (or the speed is 0): s is a cubic with s' the speed >= 0,
-     * so the root is simple wherever the law moves and the steps converge quadratically;
-     * EF_PLAN_CROSS_ITER of them replace EF_PLAN_BISECT bisections (a pull's largest share
-     * of instructions). The bracket keeps the result in the phase. */
-    float hi = g->law.dt[kk];
-    /* a target at or past the phase's end (the last used phase, or rounding): its end */
+    /* Newton's method on s(u) = target inside the bracket [lo, hi], from the secant point
+     * of the bracket's ends, with a bisection step where it would leave the bracket (or
+     * the speed is 0): s is a cubic with s' the speed >= 0, so the root is simple wherever
+     * the law moves and the steps converge quadratically. Where they have not converged
+     * (EF_PLAN_CROSS_TOL) after EF_PLAN_CROSS_ITER steps (a fuzzed deceleration
+     * phase whose root sat at 0.2 % of it: the midpoint start and the concave cubic sent
+     * every step out of the bracket), bisection finishes the job as before (at most
+     * EF_PLAN_BISECT steps in all). Most crossings take 3 to 5 steps instead of 32. */
+    float end = g->law.dt[kk], hi = end;
     pl_law_at(g, kk, hi, &s0, &ds, d);
-    int past = !((s0 + ds) > target);
-    float uu = 0.5f * (lo + hi);
-    for (int i = 0; i < EF_PLAN_CROSS_ITER; i++) {
+    float f_hi = (s0 + ds) - target;
+    int past = !(f_hi > 0.0f); /* at or past the phase's end: its end */
+    pl_law_at(g, kk, lo, &s0, &ds, d);
+    float f_lo = (s0 + ds) - target;
+    float uu = lo - f_lo * ((hi - lo) / (f_hi - f_lo));
+    uu = ((uu > lo) & (uu < hi)) ? uu : 0.5f * (lo + hi);
+    int done = past;
+    for (int i = 0; i < EF_PLAN_BISECT && !done; i++) {
         pl_law_at(g, kk, uu, &s0, &ds, d);
         float f = (s0 + ds) - target;
         hi = f >= 0.0f ? uu : hi;
         lo = f >= 0.0f ? lo : uu;
         float un = uu - f / d[0];
         /* false for NaN (d[0] = 0); inclusive, so a root found on the bracket stays */
-        int inside = (un >= lo) & (un <= hi);
+        int inside = (i < EF_PLAN_CROSS_ITER) & (un >= lo) & (un <= hi);
+        /* converged: the step is below float32 resolution of u */
+        done = inside & (ef_fabsf(un - uu) <= EF_PLAN_CROSS_TOL * uu);
         uu = inside ? un : 0.5f * (lo + hi);
     }
     *k = kk;
-    *u = past ? hi : uu;
+    *u = past ? end : (done ? uu : hi); /* not converged: bisection's answer, as before */
 }
 
 /** The law of one member of the group being released: the group law between the crossing
