@@ -16,7 +16,7 @@ awk '
     FILENAME == ARGV[1] && /: [0-9]+ calls, instructions min / {
         lab = $0; sub(/: [0-9]+ calls.*/, "", lab)
         m = ""
-        if (lab == "G1 cubic, planar path") m = "ef_seg_g1_cubic_xy"
+        if (lab == "G1 cubic, XY path") m = "ef_seg_g1_cubic_xy"
         else if (lab == "G1 cubic, 3-D path") m = "ef_seg_g1_cubic/3d"
         else if (lab == "G2 quintic") m = "ef_seg_g2_quintic"
         else if (lab == "corner blend") m = "ef_blend_corner"
