@@ -19,6 +19,8 @@
  *  Newton iterate counts as converged (two ulps of u). */
 #define EF_PLAN_CROSS_ITER 8
 #define EF_PLAN_CROSS_TOL  2.4e-7f
+/** ... and the distance from the target, relative to it, that counts as found (an ulp). */
+#define EF_PLAN_CROSS_FTOL 1.2e-7f
 /** Newton steps of the triangular ramp's cubic (pl_cubic_rise()). */
 #define EF_PLAN_CUBIC_NEWTON 6
 
@@ -802,12 +804,15 @@ static void pl_law_cross(const ef_move_t *g, uint32_t last, float target, uint32
         float f = (s0 + ds) - target;
         hi = f >= 0.0f ? uu : hi;
         lo = f >= 0.0f ? lo : uu;
+        /* found: s within an ulp of the target (where the law starts from rest, s ~ u^3,
+         * the steps shrink only by a third each and would not converge in u) */
+        int hit = ef_fabsf(f) <= EF_PLAN_CROSS_FTOL * ef_fabsf(target);
         float un = uu - f / d[0];
         /* false for NaN (d[0] = 0); inclusive, so a root found on the bracket stays */
         int inside = (i < EF_PLAN_CROSS_ITER) & (un >= lo) & (un <= hi);
         /* converged: the step is below float32 resolution of u */
-        done = inside & (ef_fabsf(un - uu) <= EF_PLAN_CROSS_TOL * uu);
-        uu = inside ? un : 0.5f * (lo + hi);
+        done = hit | (inside & (ef_fabsf(un - uu) <= EF_PLAN_CROSS_TOL * uu));
+        uu = hit ? uu : (inside ? un : 0.5f * (lo + hi));
     }
     *k = kk;
     *u = past ? end : (done ? uu : hi); /* not converged: bisection's answer, as before */
