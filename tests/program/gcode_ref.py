@@ -122,9 +122,13 @@ def run_rs274(path):
             for t in range(1, 100):
                 f.write("T%d P%d Z0 D0 ;\n" % (t, t))
         cmd = [RS274, "-t", "tool.tbl", "-v", "rs274ngc.var", "-g", "prog.ngc"]
+        # rs274 keeps its tool table in $HOME/.tool.mmap, truncated and mapped by every run:
+        # two runs at once (ctest -j) truncate each other's mapping and one dies of SIGBUS
+        # (exit 135, "link (updating variable file)"). HOME is the run's own directory.
+        env = dict(os.environ, HOME=d)
         try:
-            p = subprocess.run(cmd, cwd=d, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
-                               stderr=subprocess.PIPE, timeout=TIMEOUT_S)
+            p = subprocess.run(cmd, cwd=d, env=env, stdin=subprocess.DEVNULL,
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, timeout=TIMEOUT_S)
         except subprocess.TimeoutExpired as e:
             return 124, (e.stdout or b"").decode(errors="replace"), "timeout"
         return p.returncode, p.stdout.decode(errors="replace"), p.stderr.decode(errors="replace")
