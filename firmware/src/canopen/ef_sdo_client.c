@@ -20,6 +20,10 @@
 #define SDC_LAST      0x01u /**< c bit of a segment (no more segments) */
 /** Data bytes of one SDO segment. */
 #define SDC_SEG_BYTES 7u
+/** What a retry may leave behind (ef_sdo_client_t::dup): the answer to the initiate or to the
+ *  segment request it replaced. */
+#define SDC_DUP_INIT 1u
+#define SDC_DUP_SEG  2u
 /** Upload size when the server indicated none (the last segment ends it). */
 #define SDC_LEN_UNKNOWN 0xFFFFFFFFu
 
@@ -86,10 +90,15 @@ static void sdc_ul_seg(ef_sdo_client_t *c, uint32_t now_us, ef_can_frame_t *out)
 /* The transfer ends with rc (abort: the code an abort or a wrong toggle carries). */
 static int sdc_end(ef_sdo_client_t *c, int rc, uint32_t abort)
 {
-    /* A retried transfer: the server may still answer its first request. */
-    c->stale_pending = c->tries >= 2u;
+    /* A retried transfer answered, but not twice: the other answer may still come (after a
+     * timeout, two went unanswered for a timeout each: none is waited for). */
+    c->stale_pending = (uint8_t)(rc != EF_ERR_TIMEOUT ? c->dup : 0u);
     c->stale_index = c->index;
     c->stale_sub = c->sub;
+    c->stale_node = c->node;
+    c->stale_write = c->write;
+    c->dup = 0;
+    c->held = 0;
     c->state = EF_SDOC_IDLE;
     c->rc = rc;
     c->abort = abort;
@@ -132,6 +141,37 @@ static int sdc_ul_init_rx(ef_sdo_client_t *c, const uint8_t *d, uint32_t now_us,
     return EF_ERR_AGAIN;
 }
 
+/* Whether d is the late answer a retry left (dup: SDC_DUP_INIT or SDC_DUP_SEG) of the transfer
+ * (index, sub, write): an initiate response of its kind echoing index/sub, or (with abort)
+ * an abort echoing them; or a segment answer of its kind (segments echo nothing). */
+static int sdc_dup_answer(const uint8_t *d, uint8_t dup, uint16_t index, uint8_t sub, uint8_t write,
+                          int abort)
+{
+    uint8_t cmd = d[0], cs = cmd & SDC_CS_MASK;
+    if (dup == SDC_DUP_SEG)
+        return write ? cs == SDC_DL_ACK : cs == 0u;
+    int kind = write ? cmd == SDC_DL_RESP : cs == SDC_UL_INIT;
+    int echo = ef_co_get16(&d[1]) == index && d[3] == sub;
+    return (dup == SDC_DUP_INIT) & echo & (kind | (abort & (cmd == EF_CO_SDO_ABORT)));
+}
+
+/* Start the transfer set up in c: its initiate goes out, unless the last transfer with this
+ * server was retried and its duplicate answer has not come; then the initiate is held until
+ * it does (ef_sdo_client_rx()) or for one timeout (ef_sdo_client_process()). */
+static void sdc_begin(ef_sdo_client_t *c, uint32_t now_us, ef_can_frame_t *out)
+{
+    c->tries = 1;
+    c->dup = 0;
+    c->rc = EF_ERR_AGAIN;
+    c->abort = 0;
+    int hold = c->stale_pending && c->stale_node == c->node;
+    c->stale_pending = (uint8_t)hold; /* another server's late answer is not routed here */
+    sdc_request(c, now_us, out);
+    c->held = (uint8_t)hold;
+    if (hold)
+        out->dlc = 0;
+}
+
 /* Initialise the client (contract in ef_sdo_client.h). */
 int ef_sdo_client_init(ef_sdo_client_t *c, uint32_t timeout_us)
 {
@@ -159,10 +199,7 @@ int ef_sdo_client_download(ef_sdo_client_t *c, uint8_t node, uint16_t index, uin
     c->write = 1;
     c->len = len;
     c->value = 0;
-    c->tries = 1;
-    c->rc = EF_ERR_AGAIN;
-    c->abort = 0;
-    sdc_request(c, now_us, out);
+    sdc_begin(c, now_us, out);
     return EF_OK;
 }
 
@@ -178,10 +215,7 @@ int ef_sdo_client_upload(ef_sdo_client_t *c, uint8_t node, uint16_t index, uint8
     c->index = index;
     c->sub = sub;
     c->write = 0;
-    c->tries = 1;
-    c->rc = EF_ERR_AGAIN;
-    c->abort = 0;
-    sdc_request(c, now_us, out);
+    sdc_begin(c, now_us, out);
     return EF_OK;
 }
 
@@ -199,12 +233,25 @@ int ef_sdo_client_rx(ef_sdo_client_t *c, const ef_can_frame_t *f, uint32_t now_u
     const uint8_t *d = f->data;
     uint8_t cmd = d[0];
     int echo = ef_co_get16(&d[1]) == c->index && d[3] == c->sub;
-    uint8_t cs = cmd & SDC_CS_MASK;
-    if (!echo && c->stale_pending && ef_co_get16(&d[1]) == c->stale_index && d[3] == c->stale_sub &&
-        (cmd == EF_CO_SDO_ABORT || cmd == SDC_DL_RESP || cs == SDC_UL_INIT)) {
+    if (c->held) {
+        /* Nothing of this transfer is out: only the last one's duplicate is expected. */
+        if (!sdc_dup_answer(d, c->stale_pending, c->stale_index, c->stale_sub, c->stale_write, 1))
+            return sdc_end(c, EF_ERR_PROTO, 0);
         c->stale_pending = 0;
+        c->held = 0;
         c->stale_ignored++;
-        return EF_ERR_AGAIN; /* the late answer to a retried transfer's first request */
+        sdc_request(c, now_us, out);
+        return EF_ERR_AGAIN;
+    }
+    /* A retried transfer: the answer to the request the retry replaced comes first (the server
+     * answers in order), so an initiate answer once past the initiate, or a segment answer
+     * while at the initiate, is that one. */
+    int seg = (c->state == EF_SDOC_DL_SEG) | (c->state == EF_SDOC_UL_SEG);
+    int when = seg ? c->dup == SDC_DUP_INIT : c->dup == SDC_DUP_SEG;
+    if (when && sdc_dup_answer(d, c->dup, c->index, c->sub, c->write, 0)) {
+        c->dup = 0;
+        c->stale_ignored++;
+        return EF_ERR_AGAIN;
     }
     if (cmd == EF_CO_SDO_ABORT)
         return sdc_end(c, EF_ERR_PROTO, echo ? ef_co_get32(&d[4]) : 0u);
@@ -258,8 +305,18 @@ int ef_sdo_client_process(ef_sdo_client_t *c, uint32_t now_us, ef_can_frame_t *o
         return EF_ERR_STATE;
     if (!ef_time_reached(now_us, c->t0_us + c->timeout_us))
         return EF_ERR_AGAIN;
+    if (c->held) {
+        /* The last transfer's duplicate did not come: this one's initiate goes now. */
+        c->held = 0;
+        c->stale_pending = 0;
+        sdc_request(c, now_us, out);
+        return EF_ERR_AGAIN;
+    }
     if (c->tries < 2u) {
         c->tries++;
+        /* the replaced request may still be answered too */
+        int init = (c->state == EF_SDOC_DL_INIT) | (c->state == EF_SDOC_UL_INIT);
+        c->dup = init ? SDC_DUP_INIT : SDC_DUP_SEG;
         sdc_request(c, now_us, out);
         return EF_ERR_AGAIN;
     }
@@ -278,6 +335,8 @@ void ef_sdo_client_abandon(ef_sdo_client_t *c)
 {
     if (c && c->state != EF_SDOC_IDLE) {
         c->state = EF_SDOC_IDLE;
+        c->held = 0;
+        c->dup = 0;
         c->rc = EF_ERR_STATE;
         c->abort = 0;
     }

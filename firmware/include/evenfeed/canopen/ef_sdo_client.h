@@ -12,33 +12,47 @@
  *
  * ## States (::ef_sdo_client_t::state) and transitions
  *
- *     state    event                                        next     out
- *     IDLE     download(), len <= 4                         DL_INIT  initiate, expedited (e, s, n)
- *     IDLE     download(), len > 4                          DL_INIT  initiate, size in 4..7 (s)
- *     IDLE     upload()                                     UL_INIT  initiate upload
- *     DL_INIT  initiate response (0x60, index/sub echoed):
- *                expedited                                  IDLE ok  -
- *                segmented                                  DL_SEG   segment, toggle 0
- *     DL_SEG   segment response, same toggle, more to send  DL_SEG   next segment, toggle ^ 1
- *     DL_SEG   segment response, same toggle, all sent      IDLE ok  -
- *     UL_INIT  initiate response (0x4x, echoed), e = 1      IDLE ok  -
- *     UL_INIT  initiate response (0x4x, echoed), e = 0      UL_SEG   segment request, toggle 0
- *     UL_SEG   segment, same toggle, c = 0                  UL_SEG   segment request, toggle ^ 1
- *     UL_SEG   segment, same toggle, c = 1                  IDLE ok  -
- *     busy     abort (0x80) echoing index/sub               IDLE     ::EF_ERR_PROTO, its code
- *     busy     segment with the wrong toggle                IDLE     ::EF_ERR_PROTO,
- * ::EF_CO_ABORT_TOGGLE busy     anything else (not 8 bytes, wrong specifier, no echo, an abort not
- * echoing)               IDLE     ::EF_ERR_PROTO, abort 0 busy     no answer for the timeout, first
- * time        *_INIT   the initiate again busy     no answer again, or after no_retry() IDLE
- * ::EF_ERR_TIMEOUT busy     abandon()                                    IDLE     (no outcome)
+ *     state    event                                     next     out
+ *     IDLE     download(), len <= 4                      DL_INIT  initiate, expedited (e, s, n)
+ *     IDLE     download(), len > 4                       DL_INIT  initiate, size in 4..7 (s)
+ *     IDLE     upload()                                  UL_INIT  initiate upload
+ *     IDLE     either, a duplicate of this server due    *_INIT   - (held: the initiate waits)
+ *     held     the duplicate (the answer to the request  *_INIT   the held initiate
+ *              the last transfer's retry replaced)
+ *     held     anything else                             IDLE     EF_ERR_PROTO, abort 0
+ *     held     one timeout                               *_INIT   the held initiate
+ *     DL_INIT  initiate response (0x60, echoed):
+ *                expedited                               IDLE ok  -
+ *                segmented                               DL_SEG   segment, toggle 0
+ *     DL_SEG   segment response, same toggle, more       DL_SEG   next segment, toggle ^ 1
+ *     DL_SEG   segment response, same toggle, all sent   IDLE ok  -
+ *     UL_INIT  initiate response (0x4x, echoed), e = 1   IDLE ok  -
+ *     UL_INIT  initiate response (0x4x, echoed), e = 0   UL_SEG   segment request, toggle 0
+ *     UL_SEG   segment, same toggle, c = 0               UL_SEG   segment request, toggle ^ 1
+ *     UL_SEG   segment, same toggle, c = 1               IDLE ok  -
+ *     *_SEG    retried at the initiate: its other answer *_SEG    - (ignored, once)
+ *     *_INIT   retried at a segment: that one's answer   *_INIT   - (ignored, once)
+ *     busy     abort (0x80) echoing index/sub            IDLE     EF_ERR_PROTO, its code
+ *     busy     segment with the wrong toggle             IDLE     EF_ERR_PROTO, TOGGLE
+ *     busy     anything else (not 8 bytes, wrong         IDLE     EF_ERR_PROTO, abort 0
+ *              specifier, no echo, unechoed abort)
+ *     busy     no answer for the timeout, first time     *_INIT   the initiate again
+ *     busy     no answer again, or after no_retry()      IDLE     EF_ERR_TIMEOUT
+ *     busy     abandon()                                 IDLE     (no outcome)
  *
- * A retry restarts the whole transfer from its initiate (a segmented transfer too: the
- * server has dropped or will drop the half-done one). Every request sent restarts the timer.
- * A server that was only slow answers both requests: after a retried transfer has ended, one
- * initiate answer or abort that echoes its index/sub (and not the pending transfer's) is a
- * late duplicate and is ignored (stale_ignored), wherever it arrives; a second one, or one
- * echoing anything else, is the error above. (A master held back between reading its clock
- * and sending a request times out early: seen under a loaded User-Mode Linux guest.)
+ * (TOGGLE: ::EF_CO_ABORT_TOGGLE.) A retry restarts the whole transfer from its initiate (a
+ * segmented transfer too: the server has dropped or will drop the half-done one). Every
+ * request sent restarts the timer. A server that was only slow answers both initiates, in
+ * order, and CAN SDO frames carry no transaction number, so the second answer is told apart
+ * by position: within the transfer, once it is past its initiate (a segment phase), an
+ * initiate answer echoing it is that duplicate and is ignored (and a retry at a segment: a
+ * segment answer while the new initiate waits); after the transfer ended, the
+ * next transfer with the same server holds its initiate back until the duplicate has come
+ * (and is ignored) or one timeout has passed, so an answer is never taken for the next
+ * transfer's (a write of 0x1602:00 then its read-back, under a loaded User-Mode Linux guest
+ * with 350 ms between request and answer, was one). stale_ignored counts both kinds. A
+ * master held back between reading its clock and sending a request times out early: seen
+ * under load as well.
  * Uploads longer than ::EF_SDO_CLIENT_BUF are read to the end and cut.
  */
 #ifndef EF_SDO_CLIENT_H
@@ -87,12 +101,17 @@ typedef struct {
     uint32_t timeout_us;
     int32_t rc;     /**< outcome of the last transfer (EF_ERR_AGAIN while pending) */
     uint32_t abort; /**< its abort code (0: none) */
+    uint8_t dup;    /**< retried: the replaced request's answer may come (1: initiate,
+                         2: segment request; 0: none) */
+    uint8_t held;   /**< 1: the initiate is held back for the last transfer's duplicate */
     /* A transfer that was retried may still get the answer to its first request after it
-     * ended: one initiate answer (or abort) echoing its index/sub is then ignored. */
+     * ended (dup was set): the next transfer with that server waits for it (held). */
     uint16_t stale_index;
     uint8_t stale_sub;
-    uint8_t stale_pending;  /**< 1: that one answer may still come */
-    uint32_t stale_ignored; /**< such answers ignored */
+    uint8_t stale_node;
+    uint8_t stale_write;
+    uint8_t stale_pending;  /**< that one answer may still come (dup's values) */
+    uint32_t stale_ignored; /**< duplicate answers ignored (in a transfer or held for) */
     uint8_t buf[EF_SDO_CLIENT_BUF];
 } ef_sdo_client_t;
 
