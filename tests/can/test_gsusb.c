@@ -80,6 +80,17 @@ static void t_opts(void)
     EF_CHECK(t_has(m.text, "unknown 'turbo'"));
     EF_CHECK_EQ(ef_gsusb_opts_parse("channel=8", &o, &m), EF_ERR_ARG);
     EF_CHECK_EQ(ef_gsusb_opts_parse("channel=", &o, &m), EF_ERR_ARG);
+    /* timeout=MS: 1..60000, anything else named */
+    ef_gsusb_opts_default(&o);
+    EF_CHECK_EQ(o.timeout_ms, 0u);
+    EF_CHECK_EQ(ef_gsusb_opts_parse("timeout=7500", &o, &m), EF_OK);
+    EF_CHECK_EQ(o.timeout_ms, 7500u);
+    EF_CHECK_EQ(ef_gsusb_opts_parse("timeout=60000", &o, &m), EF_OK);
+    const char *bad_to[] = {"timeout=", "timeout=0", "timeout=-5", "timeout=60001", "timeout=1s"};
+    for (size_t i = 0; i < sizeof bad_to / sizeof bad_to[0]; i++) {
+        EF_CHECK_EQ(ef_gsusb_opts_parse(bad_to[i], &o, &m), EF_ERR_ARG);
+        EF_CHECK(t_has(m.text, "timeout=MS, 1..60000"));
+    }
 
     static ef_gsusb_t g;
     ef_gsusb_init(&g);
@@ -92,6 +103,10 @@ static void t_opts(void)
     o.hw_timestamps = -1;
     o.channel = EF_GSUSB_MAX_CHANNELS;
     EF_CHECK_EQ(ef_gsusb_set_opts(&g, &o, &m), EF_ERR_ARG);
+    o.channel = 0;
+    o.timeout_ms = 60001u;
+    EF_CHECK_EQ(ef_gsusb_set_opts(&g, &o, &m), EF_ERR_ARG);
+    EF_CHECK(t_has(m.text, "timeout 60001 ms"));
 
     char fs[160];
     EF_CHECK(!strcmp(ef_gsusb_feature_str(0, fs, sizeof fs), "none"));

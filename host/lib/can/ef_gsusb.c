@@ -89,6 +89,20 @@ static const char gsu_access_hint[] =
 
 /* ---- Options and specs -------------------------------------------------------------- */
 
+/* Largest timeout option (ms): a minute, far beyond any adapter's answer. */
+#define GSU_TIMEOUT_MAX_MS 60000u
+
+/* The bulk OUT bound and the echo bound in force (ms). */
+static unsigned gsu_out_ms(const ef_gsusb_t *g)
+{
+    return g->opts.timeout_ms ? (unsigned)g->opts.timeout_ms : (unsigned)EF_GSUSB_OUT_TIMEOUT_MS;
+}
+
+static uint32_t gsu_echo_ms(const ef_gsusb_t *g)
+{
+    return g->opts.timeout_ms ? 2u * g->opts.timeout_ms : (uint32_t)EF_GSUSB_ECHO_TIMEOUT_MS;
+}
+
 void ef_gsusb_opts_default(ef_gsusb_opts_t *o)
 {
     memset(o, 0, sizeof *o);
@@ -119,6 +133,9 @@ int ef_gsusb_set_opts(ef_gsusb_t *g, const ef_gsusb_opts_t *o, ef_msg_t *m)
         return ef_fail(m, EF_ERR_ARG,
                        "gs_usb options: listen-only and loop-back exclude "
                        "each other");
+    if (o->timeout_ms > GSU_TIMEOUT_MAX_MS)
+        return ef_fail(m, EF_ERR_ARG, "gs_usb options: timeout %u ms (at most %u)",
+                       (unsigned)o->timeout_ms, GSU_TIMEOUT_MAX_MS);
     g->opts = *o;
     return EF_OK;
 }
@@ -143,6 +160,13 @@ int ef_gsusb_opts_parse(const char *s, ef_gsusb_opts_t *o, ef_msg_t *m)
             o->hw_timestamps = 1;
         } else if (!strcmp(w, "no-timestamps")) {
             o->hw_timestamps = 0;
+        } else if (!strncmp(w, "timeout=", 8)) {
+            char *end;
+            unsigned long t = strtoul(w + 8, &end, 10);
+            if (!w[8] || *end || w[8] == '-' || t < 1 || t > GSU_TIMEOUT_MAX_MS)
+                return ef_fail(m, EF_ERR_ARG, "gs_usb options: '%s': timeout=MS, 1..%u", w,
+                               GSU_TIMEOUT_MAX_MS);
+            o->timeout_ms = (uint32_t)t;
         } else if (!strncmp(w, "channel=", 8)) {
             char *end;
             unsigned long c = strtoul(w + 8, &end, 10);
@@ -153,7 +177,7 @@ int ef_gsusb_opts_parse(const char *s, ef_gsusb_opts_t *o, ef_msg_t *m)
         } else {
             return ef_fail(m, EF_ERR_ARG,
                            "gs_usb options: unknown '%s' (loopback, listen-only, one-shot, "
-                           "timestamps, no-timestamps, channel=N)",
+                           "timestamps, no-timestamps, channel=N, timeout=MS)",
                            w);
         }
     }
@@ -726,7 +750,7 @@ static int gsu_submit(ef_gsusb_t *g, const ef_can_frame_t *f)
     hf.channel = g->opts.channel;
     size_t n = ef_gsusb_frame_encode(&hf, s->buf); /* host frames out carry no timestamp */
     libusb_fill_bulk_transfer(s->xfer, g->h, g->ep_out, s->buf, (int)n, gsu_tx_cb, g,
-                              EF_GSUSB_OUT_TIMEOUT_MS);
+                              gsu_out_ms(g));
     s->f = *f;
     s->t_submit = gsu_now();
     int r = libusb_submit_transfer(s->xfer);
@@ -771,13 +795,13 @@ static int gsu_pending_error(ef_gsusb_t *g)
     uint32_t now = gsu_now();
     for (int i = 0; i < EF_GSUSB_TX_WINDOW; i++) {
         const ef_gsusb_txs_t *s = &g->tx[i];
-        if (s->wait_echo && now - s->t_submit > EF_GSUSB_ECHO_TIMEOUT_MS * 1000u) {
+        if (s->wait_echo && now - s->t_submit > gsu_echo_ms(g) * 1000u) {
             /* A frame never confirmed is one the bus never carried: nothing sent after it
              * can be trusted to arrive either (no ACK on the bus, or the firmware hung). */
             ef_fail(&g->msg, EF_ERR_IO,
                     "%s: frame %03X not confirmed by the adapter (no echo) within %d ms: no "
                     "other node acknowledging on the bus, or the adapter hung",
-                    g->label, (unsigned)s->f.id, EF_GSUSB_ECHO_TIMEOUT_MS);
+                    g->label, (unsigned)s->f.id, (int)gsu_echo_ms(g));
             g->io_rc = EF_ERR_IO;
             return g->io_rc;
         }

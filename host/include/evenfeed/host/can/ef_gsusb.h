@@ -79,6 +79,11 @@ typedef struct {
     uint8_t one_shot;     /**< no automatic retransmission */
     int8_t hw_timestamps; /**< -1: on where offered (default); 0: off; 1: required */
     uint8_t channel;      /**< channel of a multi-channel adapter (0) */
+    /** Bound on a bulk OUT transfer (ms); a frame's echo is waited for twice this. 0: the
+     *  defaults, ::EF_GSUSB_OUT_TIMEOUT_MS and ::EF_GSUSB_ECHO_TIMEOUT_MS. Raised where the
+     *  adapter or the host cannot keep real-time pace: an emulated bus on a loaded host
+     *  (tests/can/test_can_hil.c), a hub shared with busy devices. At most 60000. */
+    uint32_t timeout_ms;
 } ef_gsusb_opts_t;
 
 /** One latency distribution (us). */
