@@ -774,13 +774,17 @@ static void pl_law_cross(const ef_move_t *g, uint32_t last, float target, uint32
 {
     float s0, ds, d[3];
     uint32_t kk = *k;
-    float lo = *u;
+    float lo = *u, s_end = 0.0f;
+    int have_end = 0; /* s_end is s at phase kk's end */
     for (; kk < last; kk++, lo = 0.0f) {
         if (!(g->law.dt[kk] > 0.0f))
             continue;
         pl_law_at(g, kk, g->law.dt[kk], &s0, &ds, d);
-        if (s0 + ds >= target)
+        s_end = s0 + ds;
+        if (s_end >= target) {
+            have_end = 1;
             break;
+        }
     }
     /* Newton's method on s(u) = target inside the bracket [lo, hi], from the secant point
      * of the bracket's ends, with a bisection step where it would leave the bracket (or
@@ -791,8 +795,11 @@ static void pl_law_cross(const ef_move_t *g, uint32_t last, float target, uint32
      * every step out of the bracket), bisection finishes the job as before (at most
      * EF_PLAN_BISECT steps in all). Most crossings take 3 to 5 steps instead of 32. */
     float end = g->law.dt[kk], hi = end;
-    pl_law_at(g, kk, hi, &s0, &ds, d);
-    float f_hi = (s0 + ds) - target;
+    if (!have_end) { /* the last used phase: not evaluated by the search */
+        pl_law_at(g, kk, hi, &s0, &ds, d);
+        s_end = s0 + ds;
+    }
+    float f_hi = s_end - target;
     int past = !(f_hi > 0.0f); /* at or past the phase's end: its end */
     pl_law_at(g, kk, lo, &s0, &ds, d);
     float f_lo = (s0 + ds) - target;

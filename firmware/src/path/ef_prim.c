@@ -92,6 +92,16 @@ static void prim_arc_geo(ef_vec3_t start, const ef_prim_t *pr, ef_arc_geo_t *g)
     g->len = ef_sqrtf(ang * ang + h * h);
 }
 
+/* An arc's model point at the angle with sine sn and cosine cs and axial fraction frac of the
+ * rise; rad: the outward radial unit there. Shared by ef_prim_frame() and ef_prim_end_gap(),
+ * which must agree on where the model ends. */
+static ef_vec3_t prim_arc_point(const ef_arc_geo_t *g, float sn, float cs, float frac,
+                                ef_vec3_t *rad)
+{
+    *rad = ef_v3_add(ef_v3_scale(g->eu, cs), ef_v3_scale(g->ev, sn));
+    return ef_v3_axpy(ef_v3_axpy(g->base, g->r0, *rad), g->h * frac, g->a);
+}
+
 /* Validate a primitive and give its length (contract in ef_path.h). */
 int ef_prim_check(ef_vec3_t start, const ef_prim_t *pr, float *len)
 {
@@ -192,8 +202,8 @@ int ef_prim_frame(ef_vec3_t start, const ef_prim_t *pr, float s, ef_frame_t *out
     float th = pr->sweep * frac;
     float sn, cs;
     prim_sincosf(th, &sn, &cs);
-    ef_vec3_t rad = ef_v3_add(ef_v3_scale(g.eu, cs), ef_v3_scale(g.ev, sn)); /* outward */
-    ef_vec3_t p = ef_v3_axpy(ef_v3_axpy(g.base, g.r0, rad), g.h * frac, g.a);
+    ef_vec3_t rad;
+    ef_vec3_t p = prim_arc_point(&g, sn, cs, frac, &rad);
     /* dp/ds: (r0 sweep / len) (-sin e_u + cos e_v) + (h / len) a, unit by construction. */
     float il = 1.0f / ef_maxf(len, 1e-30f);
     ef_vec3_t tan = ef_v3_add(ef_v3_scale(g.eu, -sn), ef_v3_scale(g.ev, cs));
@@ -220,8 +230,8 @@ float ef_prim_end_gap(ef_vec3_t start, const ef_prim_t *pr)
     prim_arc_geo(start, pr, &g);
     float sn, cs;
     prim_sincosf(pr->sweep, &sn, &cs);
-    ef_vec3_t rad = ef_v3_add(ef_v3_scale(g.eu, cs), ef_v3_scale(g.ev, sn));
-    ef_vec3_t p = ef_v3_axpy(ef_v3_axpy(g.base, g.r0, rad), g.h, g.a);
+    ef_vec3_t rad;
+    ef_vec3_t p = prim_arc_point(&g, sn, cs, 1.0f, &rad);
     return ef_v3_norm(ef_v3_sub(pr->end, p));
 }
 
