@@ -444,6 +444,10 @@ static void crep_summary(const crep_ctx_t *c, const char *title, const ef_pipe_s
     printf("moves            %u: %u line, %u arc, %u blend, %u smooth\n", (unsigned)st->moves,
            (unsigned)st->moves_kind[EF_MOVE_LINE], (unsigned)st->moves_kind[EF_MOVE_ARC],
            (unsigned)st->moves_kind[EF_MOVE_BLEND], (unsigned)st->moves_kind[EF_MOVE_SMOOTH]);
+    if (sm->remnants)
+        printf("                 %u remnants under %g mm absorbed (not moves: joined to the "
+               "move before, or at rest)\n",
+               (unsigned)sm->remnants, (double)EF_MIN_CHORD);
     printf("vertices         %u blended, %u straight, %u exact stops (%u reversals, %u slow "
            "corners), %u merged, %u smooth\n",
            (unsigned)sm->blends, (unsigned)sm->straight, (unsigned)sm->stops,
@@ -499,13 +503,13 @@ static int crep_write_json(const crep_ctx_t *c, const char *path, const char *ti
             "\"events\": %u, \"notes\": %u, \"moves\": %u, \"lines\": %u, "
             "\"arc_pieces\": %u, \"blends\": %u, \"smooth_moves\": %u, "
             "\"exact_stops\": %u, \"reversals\": %u, \"slow_corners\": %u, \"merged\": %u, "
-            "\"smooth_vertices\": %u, \"dev_max\": ",
+            "\"smooth_vertices\": %u, \"remnants\": %u, \"dev_max\": ",
             (unsigned)st->prims, (unsigned)st->rapids, (unsigned)st->arcs, (unsigned)st->events,
             (unsigned)st->notes, (unsigned)st->moves, (unsigned)st->moves_kind[EF_MOVE_LINE],
             (unsigned)st->moves_kind[EF_MOVE_ARC], (unsigned)st->moves_kind[EF_MOVE_BLEND],
             (unsigned)st->moves_kind[EF_MOVE_SMOOTH], (unsigned)st->sm.stops,
             (unsigned)st->sm.reversals, (unsigned)st->sm.slow_corners, (unsigned)st->sm.merged,
-            (unsigned)st->sm.smooth);
+            (unsigned)st->sm.smooth, (unsigned)st->sm.remnants);
     cli_json_num(fp, st->dev_max * f);
     fprintf(fp, ", \"dev_over\": %u, \"cycle_time\": ", (unsigned)st->dev_over);
     cli_json_num(fp, st->cycle_time);

@@ -117,8 +117,12 @@ static void sm_stage(ef_smooth_t *s, const ef_move_t *m)
         /* A remnant below float32 resolution (e.g. what two blends leave of a line, to
          * rounding): not a move a planner or drive can time. The move before it is
          * stretched to its end (by less than EF_MIN_CHORD, while that move is still
-         * staged) and takes over its stop, if any; otherwise the next move's start snaps
-         * over the gap. */
+         * staged) and takes over its stop, if any. With none staged, the move before has
+         * gone to the planner, which happens only when it ends at a stop (sm_pump()) or
+         * before the first move: the machine is at rest at out_end, within EF_MIN_CHORD of
+         * the remnant's end, so a stop of the remnant is that one, and the next move's start
+         * snaps over the gap. Counted either way (stats.remnants). */
+        s->st.remnants++;
         if (prev) {
             prev->b[prev->degree] = m->b[m->degree];
             prev->flags |= (uint16_t)(m->flags & EF_MOVE_STOP_END);

@@ -148,6 +148,11 @@ typedef struct {
     uint32_t merged;       /**< vertices removed by band decimation (collinear collapse) */
     uint32_t smooth;       /**< smooth vertices */
     uint32_t arc_pieces;   /**< arc pieces emitted */
+    uint32_t remnants;     /**< moves built shorter than EF_MIN_CHORD (what two blends leave of
+                                a line, to rounding), not emitted: joined to the move before,
+                                or, where that one has gone to the planner (it ended at a stop),
+                                covered by the next move's start (the machine is at rest there,
+                                within EF_MIN_CHORD of the remnant's end) */
     float dev_max;         /**< largest deviation of any emitted move from the programmed path */
 } ef_smooth_stats_t;
 
