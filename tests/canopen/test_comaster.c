@@ -167,7 +167,7 @@ static void fk_sdo(fk_drive_t *d, const ef_can_frame_t *f)
         uint32_t n = len - d->up_pos > 7 ? 7 : len - d->up_pos;
         int last = d->up_pos + n >= len;
         r[0] = (uint8_t)((d->up_toggle ? 0x10 : 0) | ((7 - n) << 1) | (last ? 1 : 0));
-        memcpy(&r[1], FK_NAME + d->up_pos, n);
+        memcpy(&r[1], &FK_NAME[d->up_pos], n);
         d->up_pos += n;
         d->up_toggle ^= 1;
         fk_reply(tx, r, 8);
