@@ -28,6 +28,8 @@
 #   EF_HIL_VCAN_ECHO  1: load vcan with echo=1 (driver-side loopback, like real hardware)
 #   EF_HIL_MODULES    extra kernel modules to load by name (e.g. "sch_plug sch_tbf vxcan")
 #   EF_HIL_PASS_ENV   names of further variables to copy into the guest
+#   EF_HIL_NICE       niceness of the machine on the host (default -10 where permitted; 0:
+#                     the caller's), so host load starves it less (docs/hil.md)
 #   EF_HIL_TMP        where the run directory is made (default: VERDICT_FILE's directory)
 #   EF_HIL_KEEP       1: keep the run directory after a pass (always kept after a failure)
 set -u
