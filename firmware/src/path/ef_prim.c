@@ -95,8 +95,8 @@ static void prim_arc_geo(ef_vec3_t start, const ef_prim_t *pr, ef_arc_geo_t *g)
 /* An arc's model point at the angle with sine sn and cosine cs and axial fraction frac of the
  * rise; rad: the outward radial unit there. Shared by ef_prim_frame() and ef_prim_end_gap(),
  * which must agree on where the model ends. */
-static ef_vec3_t prim_arc_point(const ef_arc_geo_t *g, float sn, float cs, float frac,
-                                ef_vec3_t *rad)
+static inline ef_vec3_t prim_arc_point(const ef_arc_geo_t *g, float sn, float cs, float frac,
+                                       ef_vec3_t *rad)
 {
     *rad = ef_v3_add(ef_v3_scale(g->eu, cs), ef_v3_scale(g->ev, sn));
     return ef_v3_axpy(ef_v3_axpy(g->base, g->r0, *rad), g->h * frac, g->a);
