@@ -690,6 +690,19 @@ static ef_can_frame_t sc_answer(uint8_t cmd, uint16_t index, uint8_t sub, uint32
     return f;
 }
 
+/* A 1-byte write of 0x1602:00 to node at t0 that times out, is retried at t0 + 1000 and is
+ * answered once at t0 + 1100: its second answer is still due (the client's timeout is
+ * 1000 us). */
+static void sc_retried_write(ef_sdo_client_t *c, uint8_t node, uint32_t t0)
+{
+    const uint8_t one[1] = {1};
+    ef_can_frame_t out, a = sc_answer(0x60, 0x1602, 0, 0);
+    EF_CHECK_EQ(ef_sdo_client_download(c, node, 0x1602, 0, one, 1, t0, &out), EF_OK);
+    EF_CHECK_EQ(ef_sdo_client_process(c, t0 + 1000u, &out), EF_ERR_AGAIN);
+    EF_CHECK_EQ(out.dlc, 8);
+    EF_CHECK_EQ(ef_sdo_client_rx(c, &a, t0 + 1100u, &out), EF_OK);
+}
+
 /* The SDO client on its own (ef_sdo_client.h), frame by frame through its transition table:
  * expedited and segmented download and upload (exact frames, toggles, the value and the data
  * cut to the buffer), aborts with and without echo, a wrong toggle, a malformed answer, the
@@ -899,11 +912,8 @@ static void t_sdo_client(void)
      * write of 0x1602:00 retried, then its read-back. The duplicate write answer echoes the
      * same object; had the read gone out, it would have been taken for the read's (the wrong
      * specifier: an error). Held, the read goes out after it and reads the value. */
-    const uint8_t one[1] = {1};
-    EF_CHECK_EQ(ef_sdo_client_download(&c, 2, 0x1602, 0, one, 1, 5000, &out), EF_OK);
-    EF_CHECK_EQ(ef_sdo_client_process(&c, 6000, &out), EF_ERR_AGAIN);
+    sc_retried_write(&c, 2, 5000);
     a = sc_answer(0x60, 0x1602, 0, 0);
-    EF_CHECK_EQ(ef_sdo_client_rx(&c, &a, 6100, &out), EF_OK);
     EF_CHECK_EQ(ef_sdo_client_upload(&c, 2, 0x1602, 0, 6200, &out), EF_OK);
     EF_CHECK_EQ(out.dlc, 0);
     EF_CHECK_EQ(ef_sdo_client_rx(&c, &a, 6300, &out), EF_ERR_AGAIN);
@@ -914,10 +924,7 @@ static void t_sdo_client(void)
     EF_CHECK_EQ(ef_sdo_client_value(&c), 1u);
     /* A duplicate that never comes (the first request was lost): the held initiate goes
      * after one timeout. */
-    EF_CHECK_EQ(ef_sdo_client_download(&c, 2, 0x1602, 0, one, 1, 7000, &out), EF_OK);
-    EF_CHECK_EQ(ef_sdo_client_process(&c, 8000, &out), EF_ERR_AGAIN);
-    a = sc_answer(0x60, 0x1602, 0, 0);
-    EF_CHECK_EQ(ef_sdo_client_rx(&c, &a, 8100, &out), EF_OK);
+    sc_retried_write(&c, 2, 7000);
     EF_CHECK_EQ(ef_sdo_client_upload(&c, 2, 0x1602, 0, 8200, &out), EF_OK);
     EF_CHECK_EQ(out.dlc, 0);
     EF_CHECK_EQ(ef_sdo_client_due_us(&c, 8200), 1000);
@@ -929,18 +936,12 @@ static void t_sdo_client(void)
     EF_CHECK_EQ(ef_sdo_client_rx(&c, &a, 9300, &out), EF_OK);
     /* ... a transfer with another server is not held (its late answer is not routed here);
      * while held, anything but the duplicate is an error. */
-    EF_CHECK_EQ(ef_sdo_client_download(&c, 2, 0x1602, 0, one, 1, 10000, &out), EF_OK);
-    EF_CHECK_EQ(ef_sdo_client_process(&c, 11000, &out), EF_ERR_AGAIN);
-    a = sc_answer(0x60, 0x1602, 0, 0);
-    EF_CHECK_EQ(ef_sdo_client_rx(&c, &a, 11100, &out), EF_OK);
+    sc_retried_write(&c, 2, 10000);
     EF_CHECK_EQ(ef_sdo_client_upload(&c, 3, 0x1602, 0, 11200, &out), EF_OK);
     EF_CHECK_EQ(out.dlc, 8);
     a = sc_answer(0x4F, 0x1602, 0, 1);
     EF_CHECK_EQ(ef_sdo_client_rx(&c, &a, 11300, &out), EF_OK);
-    EF_CHECK_EQ(ef_sdo_client_download(&c, 3, 0x1602, 0, one, 1, 12000, &out), EF_OK);
-    EF_CHECK_EQ(ef_sdo_client_process(&c, 13000, &out), EF_ERR_AGAIN);
-    a = sc_answer(0x60, 0x1602, 0, 0);
-    EF_CHECK_EQ(ef_sdo_client_rx(&c, &a, 13100, &out), EF_OK);
+    sc_retried_write(&c, 3, 12000);
     EF_CHECK_EQ(ef_sdo_client_upload(&c, 3, 0x1603, 0, 13200, &out), EF_OK);
     EF_CHECK_EQ(out.dlc, 0);
     a = sc_answer(0x4F, 0x1603, 0, 1);
