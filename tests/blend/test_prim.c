@@ -803,6 +803,7 @@ static ef_prim_t prim_reverse(ef_vec3_t s, const ef_prim_t *p)
 typedef struct {
     const char *name;
     int n, blends, clamped, straight, stop, rev, other;
+    int nwide, bwide; /* corners whose neighbour limits are the primitives or their halves */
     double dev_max, v_max, p_max, under_max, g2_t, g2_k, pos, rho;
     double *devs, *hd, free_min;
     int ndev, nhd, nfree, tan_stop;
@@ -875,6 +876,9 @@ static void corner_case(stats_t *st, unsigned long long *seed, int in_arc, int o
     ef_blend_t bl;
     int rc =
         ef_blend_prims(G2, start_in, &in, len_in, &out, len_out, (float)tol, max_in, max_out, &bl);
+    int wide = lim <= 1;
+    st->nwide += wide;
+    st->bwide += wide & (rc == EF_OK) & !(bl.flags & (EF_BLEND_STRAIGHT | EF_BLEND_STOP));
     /* the true vertex turn from the float primitives' exact tangents */
     dprim_t mi = dprim(start_in, &in), mo = dprim(vf, &out);
     dv3 p, tvi, tvo;
@@ -1132,14 +1136,20 @@ static void test_tangent_joins(void)
         }
         qsort(st.hd, (size_t)st.nhd, sizeof(double), cmp_d);
         printf("%-12s: %d joins: %d blends (%d clamped), %d straight, %d stop, %d skipped; "
+               "%d of %d with wide neighbour limits blended; "
                "dev/tol max %.6f, two-sided max %.6f median %.4f; G2 ends (err / allowed): "
                "tangent %.2g, curvature*L %.2g; end speed / L - 1 max %.2g\n",
-               st.name, st.n, st.blends, st.clamped, st.straight, st.stop, st.other, st.dev_max,
-               st.nhd ? st.hd[st.nhd - 1] : 0, st.nhd ? st.hd[(st.nhd - 1) / 2] : 0, st.g2_t,
-               st.g2_k, st.rho);
+               st.name, st.n, st.blends, st.clamped, st.straight, st.stop, st.other, st.bwide,
+               st.nwide, st.dev_max, st.nhd ? st.hd[st.nhd - 1] : 0,
+               st.nhd ? st.hd[(st.nhd - 1) / 2] : 0, st.g2_t, st.g2_k, st.rho);
         EF_CHECK_EQ(st.tan_stop, 0);
         EF_CHECK_EQ(st.rev, 0);
-        EF_CHECK(st.blends >= st.n * 9 / 10);
+        /* Trims are symmetric (ef_blend.h): where one neighbour limit is short (lim 2, 3
+         * below) both trims are, and the blend that fits there is often below what float32
+         * holds evenly, so the join stays straight (or, turning by a hair more than
+         * EF_BLEND_MIN_TURN, stops). With wide limits nearly all blend. */
+        EF_CHECK(st.bwide >= st.nwide * 9 / 10);
+        EF_CHECK(st.blends >= st.n * 3 / 4);
         EF_CHECK(st.other < N / 50);
         EF_CHECK(st.nhd == 0 || st.hd[st.nhd - 1] <= 1.0 + 1e-3);
         stats_free(&st);

@@ -66,6 +66,6 @@ awk '
             printf "%-30s %9s %8s | %9s %8s | %9s %8s | %-12s %s\n", f, d(xmax, f), d(xr, f),
                    d(amax, f), d(ar, f), d(smax, f), d(sr, f), target(f), met(f)
         }
-        print "max/min target 1.02: the segment, corner, arc-piece and measure calls are constant;"
-        print "ef_blend_prims, the smoother and the interpolator are not (their bound is the max column)"
+        print "max/min target 1.02: the segment, corner, arc-piece, measure and ef_blend_prims calls"
+        print "are constant; the smoother and the interpolator are not (their bound is the max column)"
     }' "$x86" "$o2" "$os"

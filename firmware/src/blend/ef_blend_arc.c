@@ -1,10 +1,11 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* Corners with arc/helix ends (ef_blend_prims()) and arc pieces as G2 quintics
  * (ef_blend_arc_piece()). Both build the quintic from exact end frames of the primitives
- * (ef_prim_frame()) through the G2 table and measure its deviation, since no closed form
- * exists for it; the distance from a point to a line or arc piece is in closed form
- * (ba_dist_piece(), the pieces prepared once per trial by ba_piece()), and the
- * quintic is evaluated in Bernstein form (ba_q5()). See ef_blend.h. */
+ * (ef_prim_frame()) and bound its deviation in closed form: a corner against the line–line
+ * blend of its vertex tangents (ef_blend_prims()), a piece as the arc's Hermite
+ * interpolant. Only an arc piece whose end lies off its circle takes the table's quintic
+ * and measures it (ba_piece_table(): the distance from a point to an arc piece in closed
+ * form, ba_dist_piece(), the quintic in Bernstein form, ba_q5()). See ef_blend.h. */
 #include "evenfeed/blend/ef_blend.h"
 #include "evenfeed/geom/ef_bezier.h"
 #include "evenfeed/core/ef_config.h"
@@ -18,19 +19,10 @@
  * Empirical, not proven: tests/blend/test_prim.c's 1500 arc pieces (up to 4 turns) find the true
  * deviation at most 0.998 x the reported one with it, 2.8 x without. */
 #define EF_BA_ANGLE_ULP 2.0f
-/* Newton steps on x1 = L per candidate curve of ba_even(). */
+/* Newton steps on x1 = L per trial blend (ba_even_ends()). */
 #ifndef EF_BA_NEWTON
 #define EF_BA_NEWTON 3
 #endif
-/* Extra samples per refined interval, plus one (ba_try()). */
-#define EF_BA_REFINE 8
-/* Points of each replaced piece checked for their distance to the blend (ba_try()). */
-#define EF_BA_PATH_PTS 3
-/* Relative allowance over the blend's bounded deviation: the between-sample term is an
- * estimate (second differences), not a proof. tests/blend/test_prim.c (6000 random corners)
- * finds the true deviation at most 0.984 x the result (with the 0.99 target, all within
- * 0.981 tol). */
-#define EF_BA_DEV_REL 1.02f
 /* Tangent joins (turn below EF_BLEND_MIN_TURN, ef_blend_prims()): the curvature jump
  * dk = |kappa_in n_in - kappa_out n_out| is blended when dk tol >= EF_BLEND_MIN_TURN^2, i.e.
  * when a transition that deviates by tol (trims about sqrt(tol / dk), turning the tangent by
@@ -40,16 +32,18 @@
  * curvature vectors (an arc split into two at a vertex is no join to blend). */
 #define EF_BA_TANGENT_MIN (EF_BLEND_MIN_TURN * EF_BLEND_MIN_TURN)
 #define EF_BA_KAPPA_REL   1e-4f
+/* Share of a trim limit above which a trial takes the limit itself (ba_corner_try()). */
+#define EF_BA_CAP_SNAP 0.98f
 /* First trim estimate for a tangent join: deviation ~ dk L^2 / EF_BA_TANGENT_GAIN. */
 #define EF_BA_TANGENT_GAIN 1.0f
 /* A blend's end speeds |f'(0)|, |f'(1)| are set to its arc length L as ef_seg_g2_even()
- * sets a segment's (ba_even()): a stepper that steps tau uniformly by the time law
+ * sets a segment's (ba_even_ends()): a stepper that steps tau uniformly by the time law
  * (EF_STEP_UNIFORM, the drives' segment mode) moves at v |f'(tau)| / L, so at a junction
  * with a line (|f'| / L = 1) the feed would jump by v times the difference in one servo
  * period. The table's optimum for a lopsided
- * corner (one side trimmed far more than the other, or a tight arc on one side) can be far
+ * corner (one side trimmed far more than the other, or a tight arc on one side) was far
  * off: 0.4 and 0.9 were seen, and at 9 mm/s the jump was 1 mm/s in 1 ms, 1000 mm/s^2
- * (tests/fuzz, issue 18). A trial whose ends ba_even() could not bring within
+ * (tests/fuzz, issue 18). A trial whose ends ba_even_ends() could not bring within
  * EF_SEG_END_SPEED_REL is not a blend. */
 
 /* Finite test without libm (NaN fails x == x, inf fails x - x == 0). */
@@ -106,21 +100,6 @@ static ef_vec3_t ba_q5(const ef_vec3_t *b, float t)
     return ef_v3_axpy(r, w5, b[5]);
 }
 
-/* The same for the first (degree 4, h1) and second (degree 3, h2) hodographs. */
-static void ba_d12(const ef_vec3_t *h1, const ef_vec3_t *h2, float t, ef_vec3_t *d1, ef_vec3_t *d2)
-{
-    float u = 1.0f - t, t2 = t * t, u2 = u * u;
-    ef_vec3_t r = ef_v3_scale(h1[0], u2 * u2);
-    r = ef_v3_axpy(r, 4.0f * u2 * u * t, h1[1]);
-    r = ef_v3_axpy(r, 6.0f * u2 * t2, h1[2]);
-    r = ef_v3_axpy(r, 4.0f * u * t2 * t, h1[3]);
-    *d1 = ef_v3_axpy(r, t2 * t2, h1[4]);
-    r = ef_v3_scale(h2[0], u2 * u);
-    r = ef_v3_axpy(r, 3.0f * u2 * t, h2[1]);
-    r = ef_v3_axpy(r, 3.0f * u * t2, h2[2]);
-    *d2 = ef_v3_axpy(r, t2 * t, h2[3]);
-}
-
 /* sin x for |x| <= pi/4 (fdlibm's float kernel, about 1 ulp). */
 static float ba_sin(float x)
 {
@@ -128,14 +107,6 @@ static float ba_sin(float x)
     return x + x * z *
                    (-1.6666667163e-01f +
                     z * (8.3333337680e-03f + z * (-1.9841270114e-04f + z * 2.7183114939e-06f)));
-}
-
-/* cos x for |x| <= pi/4 (fdlibm's float kernel). */
-static float ba_cos(float x)
-{
-    float z = x * x;
-    return 1.0f - 0.5f * z +
-           z * z * (4.1666667908e-02f + z * (-1.3888889225e-03f + z * 2.4801587642e-05f));
 }
 
 /* A replaced piece [sa, sb] of a checked primitive, prepared once per trial for
@@ -147,11 +118,9 @@ static float ba_cos(float x)
  * err: what ef_prim_frame()'s float32 angle (sweep * s / len, a few ulp of it) can move a
  * point along an arc, EF_BA_ANGLE_ULP ulp of the angle at the piece's far end times the
  * radius, added to every distance (the blend's ends come from those frames, so they may lie
- * that far beyond the true piece's ends); 0 for lines. q: EF_BA_PATH_PTS points of the piece,
- * evenly spaced (the path-to-blend check of ba_try()). */
+ * that far beyond the true piece's ends); 0 for lines. */
 typedef struct {
     ef_vec3_t p0, t, cm, ex, ey, a, pa, pb;
-    ef_vec3_t q[EF_BA_PATH_PTS]; /* points at k / (EF_BA_PATH_PTS + 1) of the piece */
     float l, r, c, psi, err;
     int arc;
 } ef_ba_piece_t;
@@ -171,8 +140,6 @@ static void ba_piece(ef_vec3_t start, const ef_prim_t *pr, float len, float sa, 
         pc->pb = ef_v3_axpy(f.p, pc->l, f.t);
         pc->cm = pc->ex = pc->ey = pc->a = f.p;
         pc->r = pc->c = pc->psi = pc->err = 0.0f;
-        for (int k = 0; k < EF_BA_PATH_PTS; k++)
-            pc->q[k] = ef_v3_axpy(f.p, pc->l * ((float)(k + 1) / (float)(EF_BA_PATH_PTS + 1)), f.t);
         return;
     }
     ef_prim_frame(start, pr, sb, &f);
@@ -192,12 +159,6 @@ static void ba_piece(ef_vec3_t start, const ef_prim_t *pr, float len, float sa, 
     pc->c = h / asw;
     pc->psi = 0.5f * asw * ((sb - sa) / len);
     pc->err = r0 * asw * (sb / len) * (EF_BA_ANGLE_ULP * 1.1920929e-7f);
-    for (int k = 0; k < EF_BA_PATH_PTS; k++) {
-        float th = pc->psi * ((float)(2 * (k + 1)) / (float)(EF_BA_PATH_PTS + 1) - 1.0f);
-        float sn = ba_sin(th), cs = ba_cos(th);
-        ef_vec3_t rad = ef_v3_axpy(ef_v3_scale(ex, cs), sn, pc->ey);
-        pc->q[k] = ef_v3_axpy(ef_v3_axpy(pc->cm, r0, rad), pc->c * th, a);
-    }
 }
 
 /* Distance from q to a piece, or an upper bound of it (the distance to a point of the
@@ -351,11 +312,10 @@ int ef_blend_arc_piece(const ef_table_t *g2, ef_vec3_t start, const ef_prim_t *p
  *
  * D = 5 (p1 - p0), with the degree-4 Bernstein combinations u0 = B0 + B1 - 2 B2,
  * w0 = B1 - B2, u1 = B3 + B4 - 2 B2, w1 = B2 - B3: five fixed vectors per trial weighted by
- * scalars that depend only on t and the DOFs. ba_even() evaluates every candidate curve's
- * speed that way at fixed nodes, from these tables, with no control points built. Rows:
- * B2, u0, w0, u1, w1 at the 16 Gauss-Legendre nodes of ef_bezier_h4_length() (the pairs
- * 1/2 -+ offset; last column the weight) and at t = i / EF_SEG_SPEED_SAMPLES
- * (ef_seg_speed_stats()'s samples; EF_SEG_SPEED_SAMPLES must be 16). */
+ * scalars that depend only on t and the DOFs. ba_even_ends() evaluates a trial curve's
+ * speed that way at fixed nodes, with no control points built. Rows: B2, u0, w0, u1, w1 at
+ * the 16 Gauss-Legendre nodes of ef_bezier_h4_length() (the pairs 1/2 -+ offset; last
+ * column the weight). */
 static const float ba_gl_basis[16][6] = {
     {3.682600273e-01f, -3.496051143e-01f, -7.120300264e-02f, -4.916950222e-01f, 1.653577987e-01f,
      9.472530523e-02f},
@@ -390,27 +350,6 @@ static const float ba_gl_basis[16][6] = {
     {1.667289496e-04f, -3.328649152e-04f, -1.661367543e-04f, 9.994992202e-01f, -2.069616341e-02f,
      1.357622971e-02f},
 };
-_Static_assert(EF_SEG_SPEED_SAMPLES == 16, "ba_uni_basis holds ef_seg_speed_stats()'s 17 samples");
-static const float ba_uni_basis[17][5] = {
-    {0.000000000e+00f, 1.000000000e+00f, 0.000000000e+00f, 0.000000000e+00f, 0.000000000e+00f},
-    {2.059936523e-02f, 9.372711182e-01f, 1.853942871e-01f, -4.026794434e-02f, 1.968383789e-02f},
-    {7.177734375e-02f, 7.775878906e-01f, 2.631835938e-01f, -1.364746094e-01f, 6.494140625e-02f},
-    {1.392517090e-01f, 5.595855713e-01f, 2.630310059e-01f, -2.558441162e-01f, 1.178283691e-01f},
-    {2.109375000e-01f, 3.164062500e-01f, 2.109375000e-01f, -3.710937500e-01f, 1.640625000e-01f},
-    {2.769470215e-01f, 7.569885254e-02f, 1.292419434e-01f, -4.604339600e-01f, 1.930236816e-01f},
-    {3.295898438e-01f, -1.403808594e-01f, 3.662109375e-02f, -5.075683594e-01f, 1.977539062e-01f},
-    {3.633728027e-01f, -3.151702881e-01f, -5.191040039e-02f, -5.016937256e-01f, 1.749572754e-01f},
-    {3.750000000e-01f, -4.375000000e-01f, -1.250000000e-01f, -4.375000000e-01f, 1.250000000e-01f},
-    {3.633728027e-01f, -5.016937256e-01f, -1.749572754e-01f, -3.151702881e-01f, 5.191040039e-02f},
-    {3.295898438e-01f, -5.075683594e-01f, -1.977539062e-01f, -1.403808594e-01f, -3.662109375e-02f},
-    {2.769470215e-01f, -4.604339600e-01f, -1.930236816e-01f, 7.569885254e-02f, -1.292419434e-01f},
-    {2.109375000e-01f, -3.710937500e-01f, -1.640625000e-01f, 3.164062500e-01f, -2.109375000e-01f},
-    {1.392517090e-01f, -2.558441162e-01f, -1.178283691e-01f, 5.595855713e-01f, -2.630310059e-01f},
-    {7.177734375e-02f, -1.364746094e-01f, -6.494140625e-02f, 7.775878906e-01f, -2.631835938e-01f},
-    {2.059936523e-02f, -4.026794434e-02f, -1.968383789e-02f, 9.372711182e-01f, -1.853942871e-01f},
-    {0.000000000e+00f, 0.000000000e+00f, 0.000000000e+00f, 1.000000000e+00f, 0.000000000e+00f},
-};
-
 /* The five vectors of the hodograph (above) for a trial's end frames. */
 static void ba_hodo_vectors(const ef_frame_t *f0, const ef_frame_t *f1, ef_vec3_t *v)
 {
@@ -421,60 +360,14 @@ static void ba_hodo_vectors(const ef_frame_t *f0, const ef_frame_t *f1, ef_vec3_
     v[4] = ef_v3_scale(f1->n, 0.25f * f1->kappa);
 }
 
-/* f'(t) at a node r (a row of the tables above) for DOFs x = (x10, x20, x11, x21); with dd,
- * also d f'/d s where both end speeds move together (x10 = x11 = s). */
-static ef_vec3_t ba_hodo_at(const ef_vec3_t *v, const float *r, const float *x, ef_vec3_t *dd)
-{
-    ef_vec3_t d = ef_v3_scale(v[0], r[0]);
-    d = ef_v3_axpy(d, x[0] * r[1] + 0.25f * x[1] * r[2], v[1]);
-    d = ef_v3_axpy(d, x[0] * x[0] * r[2], v[2]);
-    d = ef_v3_axpy(d, x[2] * r[3] + 0.25f * x[3] * r[4], v[3]);
-    d = ef_v3_axpy(d, x[2] * x[2] * r[4], v[4]);
-    if (dd) {
-        ef_vec3_t e = ef_v3_scale(v[1], r[1]);
-        e = ef_v3_axpy(e, 2.0f * x[0] * r[2], v[2]);
-        e = ef_v3_axpy(e, r[3], v[3]);
-        *dd = ef_v3_axpy(e, 2.0f * x[2] * r[4], v[4]);
-    }
-    return d;
-}
-
-/* Arc length L of the curve with DOFs x (16-node Gauss-Legendre, ef_seg_length()'s rule);
- * with dl, also dL/ds for both end speeds moving together (integral of <f', df'/ds> / |f'|
- * at the same nodes). */
-static float ba_len(const ef_vec3_t *v, const float *x, float *dl)
-{
-    float len = 0.0f, dlen = 0.0f;
-    for (int i = 0; i < 16; i++) {
-        ef_vec3_t dd;
-        ef_vec3_t d = ba_hodo_at(v, ba_gl_basis[i], x, dl ? &dd : 0);
-        float sp = ef_v3_norm(d);
-        len += ba_gl_basis[i][5] * sp;
-        if (dl)
-            dlen += ba_gl_basis[i][5] * (ef_v3_dot(d, dd) / ef_maxf(sp, 1e-30f));
-    }
-    if (dl)
-        *dl = dlen;
-    return len;
-}
-
-/* ef_seg_speed_stats()'s evenness: the largest | |f'(t)| / len - 1 | at t = i / 16. */
-static float ba_spread(const ef_vec3_t *v, const float *x, float len)
-{
-    float inv = 1.0f / ef_maxf(len, 1e-30f), m = 0.0f;
-    for (int i = 0; i <= 16; i++)
-        m = ef_maxf(m, ef_fabsf(ef_v3_norm(ba_hodo_at(v, ba_uni_basis[i], x, 0)) * inv - 1.0f));
-    return m;
-}
-
-/* A candidate of ba_even(): both end speeds s = L (the curve's own length) with tangential
- * DOFs x20, x21, by EF_BA_NEWTON Newton steps on g(s) = L(s) - s from s0 (g' = L' - 1, near
- * -1: L moves little with s; a flat g' takes the fixed-point step instead). With both end
- * speeds s, f'(t) = a + s q + s^2 r at each node, so |f'|^2 is a quartic in s whose
- * coefficients (dot products of a, q, r) are computed once; each step is then a few
- * multiplies and a square root per node. x gets the DOFs, *len the curve's length at them;
- * returns its speed spread (ba_spread()). */
-static float ba_even_ends(const ef_vec3_t *v, float s0, float x20, float x21, float *x, float *len)
+/* Both end speeds s = L (the curve's own length) with tangential DOFs x20, x21, by
+ * EF_BA_NEWTON Newton steps on g(s) = L(s) - s from s0 (g' = L' - 1, near -1: L moves
+ * little with s; a flat g' takes the fixed-point step instead). With both end speeds s,
+ * f'(t) = a + s q + s^2 r at each node, so |f'|^2 is a quartic in s whose coefficients (dot
+ * products of a, q, r) are computed once; each step is then a few multiplies and a square
+ * root per node. x gets the DOFs, *len the curve's length at them (the last pass only
+ * measures). */
+static void ba_even_ends(const ef_vec3_t *v, float s0, float x20, float x21, float *x, float *len)
 {
     float c[16][5];
     for (int i = 0; i < 16; i++) {
@@ -501,7 +394,7 @@ static float ba_even_ends(const ef_vec3_t *v, float s0, float x20, float x21, fl
             l += ba_gl_basis[i][5] * sp;
             dl += ba_gl_basis[i][5] * (0.5f * ds2 / ef_maxf(sp, 1e-30f));
         }
-        *len = l; /* the last pass only measures: L at the final s */
+        *len = l;
         float g = l - s, dg = dl - 1.0f;
         float sn = s - g / ef_selectf(dg < -0.1f, dg, -1.0f);
         int step = (it < EF_BA_NEWTON) & (sn > 0.0f);
@@ -511,7 +404,6 @@ static float ba_even_ends(const ef_vec3_t *v, float s0, float x20, float x21, fl
     x[1] = x20;
     x[2] = s;
     x[3] = x21;
-    return ba_spread(v, x, *len);
 }
 
 /* Control points of the G2 quintic with DOFs x between exact frames (ef_seg.h's formulas;
@@ -536,182 +428,152 @@ static float ba_end_err(const ef_vec3_t *b, float len)
     return ef_maxf(e0, ef_fabsf(ef_v3_norm(ef_v3_sub(b[5], b[4])) * inv - 1.0f));
 }
 
-/* ef_seg_g2_even()'s choice for a blend between exact frames, with its criteria (ef_seg.h:
- * the table's curve while its end speeds are within EF_SEG_END_SPEED_REL of its length, the
- * table's x2 with x1 = L, or the arc-length choice x1 = L, x2 = 0; the smallest spread of
- * |f'| / L over 17 equal steps wins) at a fraction of the cost: every speed from the
- * hodograph's five vectors (ba_hodo_at()), x1 = L by Newton steps with dL/dx from the same
- * nodes instead of five secant curves, control points built once, from the frames, for the
- * winner only. *uneven: the kept curve's end speed error relative to its length, from its
- * stored control points (ba_try() refuses it above EF_SEG_END_SPEED_REL). */
-static void ba_even(const ef_frame_t *f0, const ef_frame_t *f1, ef_seg_t *seg, float *uneven)
+/* What every trial of one corner shares (ef_blend_prims()): the primitives, the vertex v and
+ * its frames fi, fo on the two primitives (unit tangents u_in = fi.t, u_out = fo.t),
+ * 2 sin(phi) = |u_out - u_in|, the table's tangential DOF per unit trim x2u, the largest
+ * curvature kap of the two primitives (constant along a line, arc or helix), eps_t the
+ * float32 error of the frames' tangents (rad), m0 the part of the bound that does not
+ * depend on the trim (control point rounding and the incoming arc's end gap); per side the
+ * radius r, the sweep per unit length w, the trim limit cap, and the float32 error of the
+ * frames' points (ba_piece()'s err): in all on the incoming side (ang_in), per unit trim on
+ * the outgoing one (ang_out). */
+typedef struct {
+    ef_vec3_t start_in, v, ui, uo;
+    ef_frame_t fi, fo;
+    const ef_prim_t *in, *out;
+    float len_in, len_out, two_sin, x2u, kap, eps_t, m0;
+    float r_in, r_out, w_in, w_out, ang_in, ang_out, cap_in, cap_out;
+} ef_ba_corner_t;
+
+/* The two halves of the quintic b at t = 1/2 (de Casteljau): lh on [0, 1/2], rh on [1/2, 1],
+ * each as a quintic in its own parameter. */
+static void ba_halves(const ef_vec3_t *b, ef_vec3_t *lh, ef_vec3_t *rh)
 {
-    ef_vec3_t v[5];
-    ba_hodo_vectors(f0, f1, v);
-    float xt[4] = {seg->dof[0], seg->dof[1], seg->dof[2], seg->dof[3]};
-    float l_t = ba_len(v, xt, 0);
-    float d_t = ba_spread(v, xt, l_t);
-    float end_t = ba_end_err(seg->b, l_t);
-    float xa[4], xb[4], l_a, l_b; /* l_a, l_b: the candidates' lengths (unused here) */
-    float d_a = ba_even_ends(v, l_t, xt[1], xt[3], xa, &l_a);
-    float d_b = ba_even_ends(v, l_t, 0.0f, 0.0f, xb, &l_b);
-    float d = ef_selectf(end_t <= EF_SEG_END_SPEED_REL, d_t, 3.4e38f);
-    int pick = d_a < d ? 1 : 0;
-    d = ef_minf(d, d_a);
-    pick = d_b < d ? 2 : pick;
-    const float *x = pick == 2 ? xb : xa;
-    if (pick != 0) {
-        ba_build(f0, f1, x, seg->b);
-        for (int k = 0; k < 4; k++)
-            seg->dof[k] = x[k];
+    ef_vec3_t w[6];
+    for (int i = 0; i < 6; i++)
+        w[i] = b[i];
+    lh[0] = w[0];
+    rh[5] = w[5];
+    for (int r = 1; r <= 5; r++) {
+        for (int i = 0; i + r <= 5; i++)
+            w[i] = ef_v3_scale(ef_v3_add(w[i], w[i + 1]), 0.5f);
+        lh[r] = w[0];
+        rh[5 - r] = w[5 - r];
     }
-    /* The winner's end speeds against the length of the curve as stored, as
-     * ef_seg_g2_even() measures them: on a tiny blend far from the origin the float32
-     * control points move |f'(0)| and |f'(1)| by up to a few 1e-3 of L. */
-    *uneven = ba_end_err(seg->b, ef_seg_length(seg->b, 0));
 }
 
-/* One trial blend for trims (li, lo): end frames, the quintic, its measured deviation. */
+/* The arc-length Hermite quintic of a primitive's piece of length l between its frames f0,
+ * f1 (ef_blend_arc_piece()'s curve: x1 = l, x2 = 0); its largest difference from the
+ * quintic q at equal parameters. */
+static float ba_hermite_diff(const ef_frame_t *f0, const ef_frame_t *f1, float l,
+                             const ef_vec3_t *q)
+{
+    float x[4] = {l, 0.0f, l, 0.0f};
+    ef_vec3_t h[6];
+    ba_build(f0, f1, x, h);
+    float d = 0.0f;
+    for (int i = 0; i < 6; i++)
+        d = ef_maxf(d, ef_v3_norm(ef_v3_sub(q[i], h[i])));
+    return d;
+}
+
+/* One trial blend for trim l on both sides: its curve, DOFs per unit trim (x), the
+ * reference's deviation per unit trim (g), its deviation bound, and whether it is usable. */
 typedef struct {
     ef_seg_t seg;
-    ef_vec3_t pa, pb;
-    float li, lo, dev;
+    float l, li, lo, x, g, dev;
     int ok;
 } ef_ba_trial_t;
 
-/* Upper bounds of min(fa, fb) on each interval [i, i + 1] of n samples: each f by its linear
- * interpolant plus E = (largest |second difference| at the interval's two ends) / 8, the
- * interpolation error of a smooth function (second differences at the first and last sample
- * taken from their neighbours); the largest value of the smaller of the two bounds is at an
- * end or where they cross. */
-static void ba_interval_bounds(const float *fa, const float *fb, int n, float *bnd)
+/* Build the trial blend for trim l, starting the evening from x1 = x l, and bound its
+ * deviation (the file's closed form, see ef_blend_prims()). */
+static void ba_corner_try(const ef_ba_corner_t *k, float l, float x, ef_ba_trial_t *tr)
 {
-    for (int i = 0; i + 1 < n; i++) {
-        int k0 = i < 1 ? 1 : i, k1 = i + 1 > n - 2 ? n - 2 : i + 1;
-        float ea = ef_maxf(ef_fabsf(fa[k0 - 1] - 2.0f * fa[k0] + fa[k0 + 1]),
-                           ef_fabsf(fa[k1 - 1] - 2.0f * fa[k1] + fa[k1 + 1]));
-        float eb = ef_maxf(ef_fabsf(fb[k0 - 1] - 2.0f * fb[k0] + fb[k0 + 1]),
-                           ef_fabsf(fb[k1 - 1] - 2.0f * fb[k1] + fb[k1 + 1]));
-        float a0 = fa[i] + 0.125f * ea, a1 = fa[i + 1] + 0.125f * ea;
-        float b0 = fb[i] + 0.125f * eb, b1 = fb[i + 1] + 0.125f * eb;
-        float m = ef_maxf(ef_minf(a0, b0), ef_minf(a1, b1));
-        /* crossing of a0 + (a1 - a0) x and b0 + (b1 - b0) x, x in (0, 1) */
-        float g0 = a0 - b0, g1 = a1 - b1;
-        int cross = (g0 * g1) < 0.0f;
-        float x = g0 / ef_selectf(cross, g0 - g1, 1.0f);
-        bnd[i] = ef_maxf(m, ef_selectf(cross, a0 + (a1 - a0) * x, 0.0f));
-    }
-}
-
-/* Distance from x to the quintic (samples cs[0..n-1] at i / (n - 1), hodographs h1, h2),
- * from above: the nearest sample, then one Newton step on |f(t) - x|^2 from it; the smaller
- * distance. */
-static float ba_dist_curve(const ef_vec3_t *b, const ef_vec3_t *h1, const ef_vec3_t *h2,
-                           const ef_vec3_t *cs, int n, ef_vec3_t x)
-{
-    int j = 0;
-    float d2 = 3.4e38f;
-    for (int i = 0; i < n; i++) {
-        ef_vec3_t w = ef_v3_sub(cs[i], x);
-        float e = ef_v3_dot(w, w);
-        j = e < d2 ? i : j;
-        d2 = ef_minf(d2, e);
-    }
-    float t = (float)j / (float)(n - 1);
-    ef_vec3_t der1, der2;
-    ba_d12(h1, h2, t, &der1, &der2);
-    ef_vec3_t w = ef_v3_sub(cs[j], x);
-    float g = ef_v3_dot(w, der1);
-    float gg = ef_maxf(ef_v3_dot(der1, der1) + ef_v3_dot(w, der2), 1e-30f);
-    float tn = ef_minf(ef_maxf(t - g / gg, 0.0f), 1.0f);
-    return ef_minf(ef_v3_norm(ef_v3_sub(ba_q5(b, tn), x)), ef_sqrtf(d2));
-}
-
-/* Build one trial blend for trims (li, lo) and bound its two-way deviation. */
-static void ba_try(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in, float len_in,
-                   const ef_prim_t *out, float len_out, float li, float lo, ef_ba_trial_t *tr)
-{
-    ef_vec3_t v = in->end;
+    /* A side whose own limit is within EF_BA_CAP_SNAP of l takes that limit: two blends that
+     * each take half of a primitive then meet, instead of leaving between them a sliver of
+     * half the difference of the neighbours' lengths (arcs equal but for rounding left
+     * pieces of a few ulp, whose quintic's curvature is rounding noise). */
+    float li = ef_selectf(l >= EF_BA_CAP_SNAP * k->cap_in, k->cap_in, l);
+    float lo = ef_selectf(l >= EF_BA_CAP_SNAP * k->cap_out, k->cap_out, l);
+    li = ef_maxf(li, l);
+    lo = ef_maxf(lo, l);
     ef_frame_t ga, gb;
-    ef_prim_frame(start_in, in, len_in - li, &ga);
-    ef_prim_frame(v, out, lo, &gb);
-    ef_endpoint_t e0 = ef_frame_endpoint(&ga), e1 = ef_frame_endpoint(&gb);
-    int rc = ef_seg_g2_quintic(g2, &e0, &e1, &tr->seg);
-    float uneven = 0.0f;
-    if (rc == EF_OK)
-        ba_even(&ga, &gb, &tr->seg, &uneven);
-    tr->pa = ga.p;
-    tr->pb = gb.p;
+    ef_prim_frame(k->start_in, k->in, k->len_in - li, &ga);
+    ef_prim_frame(k->v, k->out, lo, &gb);
+    ef_vec3_t hv[5];
+    ba_hodo_vectors(&ga, &gb, hv);
+    float x2l = k->x2u * l, xs[4], len;
+    ba_even_ends(hv, x * l, x2l, -x2l, xs, &len);
+    ef_vec3_t *b = tr->seg.b;
+    ba_build(&ga, &gb, xs, b);
+    /* the line–line blend with the same DOFs on the tangent lines through v */
+    float s = xs[0], a = 0.4f * s + 0.05f * x2l;
+    ef_vec3_t pa = ef_v3_axpy(k->v, -l, k->ui), pb = ef_v3_axpy(k->v, l, k->uo);
+    ef_vec3_t c[6] = {pa,
+                      ef_v3_axpy(pa, 0.2f * s, k->ui),
+                      ef_v3_axpy(pa, a, k->ui),
+                      ef_v3_axpy(pb, -a, k->uo),
+                      ef_v3_axpy(pb, -0.2f * s, k->uo),
+                      pb};
+    float db = 0.0f;
+    for (int i = 0; i < 6; i++)
+        db = ef_maxf(db, ef_v3_norm(ef_v3_sub(b[i], c[i])));
+    float il = 1.0f / ef_maxf(l, 1e-30f);
+    float g = ef_fabsf(16.0f - (s + 10.0f * a) * il) * k->two_sin * (1.0f / 32.0f);
+    /* (symmetric trims only) */
+    float dev_ll = ef_selectf(li == lo, g * l + db + 0.5f * k->kap * l * l, 3.4e38f);
+    /* each half of the blend against its side's own Hermite quintic (to v) */
+    ef_vec3_t lh[6], rh[6];
+    ba_halves(b, lh, rh);
+    float si = k->w_in * li, so = k->w_out * lo;
+    float si2 = si * si, so2 = so * so;
+    float h_in = k->r_in * si2 * si2 * si2 * EF_BA_HERMITE_K;
+    float h_out = k->r_out * so2 * so2 * so2 * EF_BA_HERMITE_K;
+    float d_in = ba_hermite_diff(&ga, &k->fi, li, lh) + h_in + k->ang_in;
+    float d_out = ba_hermite_diff(&k->fo, &gb, lo, rh) + h_out + k->ang_out * lo;
+    float dev_split = ef_maxf(d_in, d_out);
+    float dev = ef_minf(dev_ll, dev_split) + k->eps_t * ef_maxf(li, lo) + k->m0;
+    float uneven = ef_fabsf(s / ef_maxf(len, 1e-30f) - 1.0f);
+    tr->seg.degree = 5;
+    tr->seg.ndof = 4;
+    for (int i = 0; i < 4; i++)
+        tr->seg.dof[i] = xs[i];
+    tr->l = l;
     tr->li = li;
     tr->lo = lo;
-    ef_ba_piece_t pin, pout;
-    ba_piece(start_in, in, len_in, len_in - li, len_in, &pin);
-    ba_piece(v, out, len_out, 0.0f, lo, &pout);
-    const ef_vec3_t *b = tr->seg.b;
-    /* Deviation, blend to path: max_t min(f_in(t), f_out(t)), f the distances to the replaced
-     * pieces (each an upper bound, see ba_dist_piece()); its top is usually a kink where
-     * the two cross, not a sample. EF_BLEND_DEV_SAMPLES + 2 samples (ends included) and a
-     * bound per interval (ba_interval_bounds()); then the interval with the largest bound
-     * is sampled EF_BA_REFINE - 1 times more and its bound replaced by the finer one. */
-    enum { NS = EF_BLEND_DEV_SAMPLES + 2 };
-    float fa[NS], fb[NS], bnd[NS - 1];
-    ef_vec3_t cs[NS];
-    const float h = 1.0f / (float)(NS - 1);
-    for (int i = 0; i < NS; i++) {
-        cs[i] = ba_q5(b, (float)i * h);
-        fa[i] = ba_dist_piece(cs[i], &pin);
-        fb[i] = ba_dist_piece(cs[i], &pout);
-    }
-    ba_interval_bounds(fa, fb, NS, bnd);
-    int jm = 0;
-    for (int i = 1; i < NS - 1; i++)
-        jm = bnd[i] > bnd[jm] ? i : jm;
-    float ga_[EF_BA_REFINE + 1], gb_[EF_BA_REFINE + 1], gbnd[EF_BA_REFINE];
-    ga_[0] = fa[jm];
-    gb_[0] = fb[jm];
-    ga_[EF_BA_REFINE] = fa[jm + 1];
-    gb_[EF_BA_REFINE] = fb[jm + 1];
-    for (int k = 1; k < EF_BA_REFINE; k++) {
-        float t = ((float)jm + (float)k * (1.0f / (float)EF_BA_REFINE)) * h;
-        ef_vec3_t pt = ba_q5(b, t);
-        ga_[k] = ba_dist_piece(pt, &pin);
-        gb_[k] = ba_dist_piece(pt, &pout);
-    }
-    ba_interval_bounds(ga_, gb_, EF_BA_REFINE + 1, gbnd);
-    float fine = 0.0f;
-    for (int k = 0; k < EF_BA_REFINE; k++)
-        fine = ef_maxf(fine, gbnd[k]);
-    bnd[jm] = fine;
-    float dev = 0.0f;
-    for (int i = 0; i < NS - 1; i++)
-        dev = ef_maxf(dev, bnd[i]);
-    /* The other way: the path's points must be within the tolerance of the blend too (a
-     * lopsided hairpin blend could otherwise cut the tip short while staying close to one of
-     * the two nearly parallel pieces). Checked for the vertex and EF_BA_PATH_PTS points of
-     * each replaced piece, by ba_dist_curve() (an upper bound). */
-    ef_vec3_t h1[5], h2[4];
-    for (int i = 0; i < 5; i++)
-        h1[i] = ef_v3_scale(ef_v3_sub(b[i + 1], b[i]), 5.0f);
-    for (int i = 0; i < 4; i++)
-        h2[i] = ef_v3_scale(ef_v3_sub(h1[i + 1], h1[i]), 4.0f);
-    dev = ef_maxf(dev, ba_dist_curve(b, h1, h2, cs, NS, v));
-    for (int k = 0; k < EF_BA_PATH_PTS; k++) {
-        dev = ef_maxf(dev, ba_dist_curve(b, h1, h2, cs, NS, pin.q[k]) + pin.err);
-        dev = ef_maxf(dev, ba_dist_curve(b, h1, h2, cs, NS, pout.q[k]) + pout.err);
-    }
-    tr->dev = dev * EF_BA_DEV_REL;
-    /* A configuration whose tangent angles the table had to clamp (a lopsided hairpin: a
-     * tangent beyond 90 degrees from the chord) gives a poor curve; such a trial does not
-     * count. (A clamped curvature, a tight arc, is fine: the curve still meets the end data
-     * exactly and its deviation is measured.) Nor does one whose end speeds ba_even()
-     * could not bring within EF_SEG_END_SPEED_REL of its mean. */
-    uint32_t bad = EF_LOOKUP_CLAMP_ALPHA | EF_LOOKUP_CLAMP_BETA;
-    int even = uneven <= EF_SEG_END_SPEED_REL;
-    tr->ok = (rc == EF_OK) & (tr->seg.degree == 5) & ba_finite(tr->dev) &
-             ((tr->seg.clamp & bad) == 0u) & even;
+    tr->x = s * il;
+    tr->g = g;
+    tr->dev = dev;
+    tr->ok = ba_finite(dev) & (uneven <= EF_SEG_END_SPEED_REL);
 }
 
-/* G2 blend of a corner or tangent join with arc ends (contract in ef_blend.h). */
+/* G2 blend of a corner or tangent join with arc ends (contract in ef_blend.h).
+ *
+ * The blend trims l on both sides (symmetric, as ef_blend_corner()) and is the G2 quintic
+ * between the primitives' exact frames at arc length l before and after the vertex v, with
+ * the line–line blend's DOFs for the vertex tangents (the table's optimum for (phi, -phi,
+ * 0, 0)): x2 = +-x2u l, and both end speeds x1 set to the curve's own length
+ * (ba_even_ends(); why: ef_seg_g2_even()). Its deviation is bounded in closed form, both
+ * ways (blend to path and path to blend), by comparing three curves at equal parameters:
+ *
+ *   - r, the line–line blend with the same DOFs on the tangent lines through v (control
+ *     points c_i: v - l u_in + (0, x1/5, a) u_in, v + l u_out - (a, x1/5, 0) u_out), whose
+ *     deviation from the two line pieces is its midpoint's distance from v,
+ *     l |16 - (x1 + 10 a) / l| 2 sin(phi) / 32 (docs/math.md, "Corner blends": symmetry,
+ *     plus the numerical check that the midpoint is the nearest point to v);
+ *   - |f(t) - r(t)| <= max_i |b_i - c_i|: the Bernstein weights are positive and sum to 1;
+ *   - the primitive's piece against its tangent line piece, point for point at equal arc
+ *     length s: |P(s) - v - s u| <= kap s^2 / 2 for a unit-speed curve of curvature at most
+ *     kap (|t(u) - t(0)| <= kap u), plus s eps_t for the float32 vertex tangent, plus the
+ *     incoming arc's end gap (ef_prim_end_gap(): the frames put its end on v, its model
+ *     circle misses v by that much).
+ *
+ * Together with 4 eps of the coordinates for the control points' rounding,
+ * dev = g l + max|b_i - c_i| + kap l^2 / 2 + eps_t l + m0, no samples. Most of it is
+ * O(kap l^2) with small coefficients (the G2 end data follow the arc), so near the line–line
+ * trim the bound is close to the true deviation (tests/blend/test_prim.c prints the ratio).
+ * The trim: EF_BLEND_ITER trials, each fitting dev ~ m0 + g l + A l^2 to the last one and
+ * solving it for 0.99 tol (later 0.97 tol); the longest feasible trial is kept. */
 int ef_blend_prims(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in, float len_in,
                    const ef_prim_t *out, float len_out, float tol, float max_in, float max_out,
                    ef_blend_t *res)
@@ -754,14 +616,21 @@ int ef_blend_prims(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in
     if (in->kind == EF_PRIM_LINE && out->kind == EF_PRIM_LINE)
         return ef_blend_corner(g2, v, fi.t, fo.t, tol, max_in, max_out, res);
 
-    /* The line–line blend with the vertex tangents: turn, outcome for reversals and straight
-     * corners, gain g and the first trim estimate (no neighbour limit). */
-    ef_blend_t ll;
-    rc = ef_blend_corner(g2, v, fi.t, fo.t, tol, EF_MAX_COORD, EF_MAX_COORD, &ll);
+    /* The vertex turn (as ef_blend_corner()) and the line–line blend's DOFs per unit trim:
+     * the table at (phi, -phi, 0, 0), x1 and x2 per unit chord times the chord per unit
+     * trim, 2 cos(phi). */
+    ef_vec3_t ui = fi.t, uo = fo.t;
+    float theta = ef_atan2f(ef_v3_norm(ef_v3_cross(ui, uo)), ef_v3_dot(ui, uo));
+    if (!(theta <= EF_BLEND_MAX_TURN))
+        return ba_fail_blend(res, EF_ERR_REVERSAL);
+    float two_cos = ef_v3_norm(ef_v3_add(ui, uo));
+    float phi = 0.5f * theta;
+    float cq[4] = {phi, -phi, 0.0f, 0.0f}, d[4];
+    uint32_t tclamp = 0;
+    rc = ef_table_lookup_g2(g2, cq, d, &tclamp);
     if (rc != EF_OK)
         return ba_fail_blend(res, rc);
-    float theta = ll.turn;
-    int straight = (ll.flags & EF_BLEND_STRAIGHT) != 0u;
+    int straight = theta < EF_BLEND_MIN_TURN;
     /* A tangent join: straight, but the curvature vectors differ (a line tangent to an arc,
      * arcs of different radii or turning ways): blended for G2 like a corner, or left
      * straight (G1, safe) when no blend fits; never a stop. Lines have kappa 0, n 0. */
@@ -772,80 +641,113 @@ int ef_blend_prims(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in
     int tangent = straight & jump_tol & jump_rel;
 
     /* Arc sides are trimmed by at most EF_ARC_PIECE_SWEEP of their sweep, so the replaced
-     * piece stays a gentle curve the table can follow. */
+     * piece stays a gentle curve; both sides by the same l, within both limits. */
     float cap_in = max_in, cap_out = max_out;
     if (in->kind == EF_PRIM_ARC)
         cap_in = ef_minf(cap_in, len_in * (EF_ARC_PIECE_SWEEP / ef_fabsf(in->sweep)));
     if (out->kind == EF_PRIM_ARC)
         cap_out = ef_minf(cap_out, len_out * (EF_ARC_PIECE_SWEEP / ef_fabsf(out->sweep)));
-    float r_in = ba_radius(start_in, in), r_out = ba_radius(v, out);
-    float scale = ba_maxabs(v) + r_in + r_out;
-    float tol_geo = tol - EF_BA_ROUND_MARGIN * scale;
+    cap_in = ef_minf(cap_in, EF_MAX_COORD);
+    cap_out = ef_minf(cap_out, EF_MAX_COORD);
+    float cap = ef_minf(cap_in, cap_out);
 
-    /* Trims as a scale lambda of the line–line trim, each side clamped by its own limit.
-     * Fixed EF_BLEND_ITER steps: secant through the origin towards 0.99 (tol - q), kept
-     * inside the bracket [feasible, infeasible] (geometric bisection when it leaves it);
-     * the longest feasible trial is the result. A tangent join has no line–line trim (its
-     * turn is ~0): it starts from sqrt(EF_BA_TANGENT_GAIN tol / dk), where the deviation
-     * of a curvature jump's transition is about tol, and its secant takes the square root
-     * (deviation ~ dk L^2, quadratic in lambda). */
-    float l0 = ll.trim_in;
-    int have_l0 = (ll.flags & (EF_BLEND_STRAIGHT | EF_BLEND_STOP)) == 0u;
-    float l_tan = ef_sqrtf(EF_BA_TANGENT_GAIN * tol / ef_maxf(dk, 1e-30f));
-    float l_none = ef_selectf(tangent, l_tan, ef_minf(cap_in, cap_out));
-    l0 = have_l0 ? l0 : l_none; /* STOP from line–line: still try */
-    l0 = ef_minf(ef_maxf(l0, 1e-30f), EF_MAX_COORD);
-    float lam_cap = ef_maxf(cap_in, cap_out) / l0;
-    float lam_sym = ef_minf(cap_in, cap_out) / l0; /* largest lambda with equal trims */
-    float lam = ef_minf(1.0f, lam_cap), lo_ok = 0.0f, hi_bad = 3.4e38f;
+    ef_ba_corner_t k;
+    k.start_in = start_in;
+    k.v = v;
+    k.ui = ui;
+    k.uo = uo;
+    k.in = in;
+    k.out = out;
+    k.len_in = len_in;
+    k.len_out = len_out;
+    k.cap_in = cap_in;
+    k.cap_out = cap_out;
+    k.two_sin = ef_v3_norm(ef_v3_sub(uo, ui));
+    k.x2u = 0.5f * (d[1] - d[3]) * two_cos;
+    /* kappa is constant along each primitive; 1e-5 for its float32 rounding */
+    k.kap = ef_maxf(fi.kappa, fo.kappa) * (1.0f + 1e-5f);
+    /* the frames' tangent angle: EF_BA_ANGLE_ULP ulp of the sweep, plus normalization */
+    float sw_in = ef_selectf(in->kind == EF_PRIM_ARC, ef_fabsf(in->sweep), 0.0f);
+    float sw_out = ef_selectf(out->kind == EF_PRIM_ARC, ef_fabsf(out->sweep), 0.0f);
+    k.eps_t = (EF_BA_ANGLE_ULP * (sw_in + sw_out) + 4.0f) * 1.1920929e-7f;
+    float r_in = ba_radius(start_in, in), r_out = ba_radius(v, out);
+    k.fi = fi;
+    k.fo = fo;
+    k.r_in = r_in;
+    k.r_out = r_out;
+    k.w_in = sw_in / len_in;
+    k.w_out = sw_out / len_out;
+    k.ang_in = r_in * sw_in * (EF_BA_ANGLE_ULP * 1.1920929e-7f);
+    k.ang_out = r_out * k.w_out * (EF_BA_ANGLE_ULP * 1.1920929e-7f);
+    float scale = ba_maxabs(v) + r_in + r_out;
+    k.m0 = EF_BA_ROUND_MARGIN * scale + ef_prim_end_gap(start_in, in);
+
+    /* First trim: the line–line trim for the table's DOFs (its deviation per unit trim g0),
+     * or for a tangent join sqrt(EF_BA_TANGENT_GAIN tol / dk), where a curvature jump's
+     * transition deviates by about tol. */
+    float x = 0.5f * (d[0] + d[2]) * two_cos;
+    float a0 = 0.4f * x + 0.05f * k.x2u;
+    float g0 = ef_fabsf(16.0f - x - 10.0f * a0) * k.two_sin * (1.0f / 32.0f);
+    float room = 0.99f * tol - k.m0;
+    float l_tan = ef_sqrtf(EF_BA_TANGENT_GAIN * ef_maxf(room, 0.0f) / ef_maxf(dk, 1e-30f));
+    float l_corner = ef_maxf(room, 0.0f) / ef_maxf(g0, 1e-30f);
+    float l = ef_minf(ef_selectf(straight, l_tan, l_corner), cap);
     ef_ba_trial_t tr = {0}, best = {0};
     for (int it = 0; it < EF_BLEND_ITER; it++) {
-        float li = ef_minf(lam * l0, cap_in), lo = ef_minf(lam * l0, cap_out);
-        ba_try(g2, start_in, in, len_in, out, len_out, li, lo, &tr);
-        int feasible = tr.ok & (tr.dev <= tol_geo);
-        if (feasible && lam > lo_ok) {
-            lo_ok = lam;
+        l = ef_maxf(l, 1e-30f);
+        ba_corner_try(&k, l, x, &tr);
+        int feasible = tr.ok & (tr.dev <= tol);
+        int better = feasible & (tr.l > best.l);
+        if (better)
             best = tr;
-        }
-        if (!feasible)
-            hi_bad = ef_minf(hi_bad, lam);
-        float ratio = 0.99f * tol_geo / ef_maxf(tr.dev, 1e-30f);
-        int grow_tan = tangent & (ratio > 1.0f);
-        float next = lam * ef_selectf(grow_tan, ef_sqrtf(ratio), ratio);
-        /* a failed trial: back towards symmetric trims (in the table's domain), or halve */
-        float back = lam > lam_sym ? ef_maxf(lam_sym, 0.5f * lam) : 0.5f * lam;
-        next = tr.ok ? next : back;
-        next = ef_minf(next, lam_cap);
-        int inside = (next > lo_ok) & (next < hi_bad);
-        float mid = tr.ok ? 0.5f * ef_minf(hi_bad, lam) : back;
-        mid = lo_ok > 0.0f ? ef_sqrtf(lo_ok * ef_minf(hi_bad, lam_cap)) : mid;
-        lam = inside ? next : mid;
-        lam = ef_maxf(lam, 1e-30f);
+        /* dev ~ m0 + g l + A l^2 through this trial, solved for the next target; a trial that
+         * failed shrinks by at least a tenth */
+        float A = ef_maxf(tr.dev - k.m0 - tr.g * l, 0.0f) / (l * l);
+        float goal = ef_maxf((it == 0 ? 0.99f : 0.97f) * tol - k.m0, 0.0f);
+        float next = 2.0f * goal / (tr.g + ef_sqrtf(tr.g * tr.g + 4.0f * A * goal) + 1e-30f);
+        next = ef_selectf(feasible, next, ef_minf(next, 0.9f * l));
+        next = ef_selectf(next >= EF_BA_CAP_SNAP * cap, cap, next);
+        l = ef_minf(next, cap);
+        x = ef_selectf(ba_finite(tr.x) & (tr.x > 0.0f), tr.x, x);
     }
-
-    int blend = best.ok & ((straight ^ 1) | tangent) & (tol_geo > 0.0f);
+    /* The winner's end speeds against the length of the curve as stored, as
+     * ef_seg_g2_even() measures them: on a tiny blend far from the origin the float32
+     * control points move |f'(0)| and |f'(1)| by up to a few 1e-3 of L. */
+    int even = ba_end_err(best.seg.b, ef_seg_length(best.seg.b, 0)) <= EF_SEG_END_SPEED_REL;
+    int blend = best.ok & even & ((straight ^ 1) | tangent);
     int stop = (straight ^ 1) & (blend ^ 1);
     if (!blend) {
         ef_blend_t zero = {0};
         *res = zero;
         res->p_in = v;
         res->p_out = v;
-        res->gain = ll.gain;
+        res->gain = g0;
         res->turn = theta;
         res->flags = (uint32_t)straight * EF_BLEND_STRAIGHT + (uint32_t)stop * EF_BLEND_STOP;
         return EF_OK;
     }
     res->seg = best.seg;
-    res->p_in = best.pa;
-    res->p_out = best.pb;
+    res->seg.flags = (uint32_t)(tclamp != 0u) * EF_SEG_CLAMPED;
+    res->seg.clamp = tclamp;
+    /* the configuration the DOFs were looked up for: the vertex tangents' corner */
+    res->seg.norm.alpha = phi;
+    res->seg.norm.beta = -phi;
+    res->seg.norm.k0 = 0.0f;
+    res->seg.norm.k1 = 0.0f;
+    res->seg.norm.chord = ef_v3_norm(ef_v3_sub(best.seg.b[5], best.seg.b[0]));
+    res->seg.norm.e1 = ef_v3_scale(ef_v3_add(ui, uo), 1.0f / ef_maxf(two_cos, 1e-30f));
+    res->seg.norm.t0 = ui;
+    res->seg.norm.t1 = uo;
+    res->p_in = best.seg.b[0];
+    res->p_out = best.seg.b[5];
     res->trim_in = best.li;
     res->trim_out = best.lo;
     res->dev = best.dev;
-    res->gain = ll.gain;
+    res->gain = best.g;
     res->turn = theta;
-    /* A limit, not the tolerance, bounded a side: max_in / max_out or the arc cap. */
-    int clamped = (best.li >= cap_in) | (best.lo >= cap_out);
-    res->flags = (uint32_t)clamped * EF_BLEND_CLAMPED +
-                 (uint32_t)((best.seg.flags & EF_SEG_CLAMPED) != 0u) * EF_BLEND_TBL_CLAMPED;
+    /* A limit, not the tolerance, bounded the trim: max_in / max_out or the arc cap. */
+    int clamped = best.l >= cap;
+    res->flags =
+        (uint32_t)clamped * EF_BLEND_CLAMPED + (uint32_t)(tclamp != 0u) * EF_BLEND_TBL_CLAMPED;
     return EF_OK;
 }

@@ -57,24 +57,36 @@
  * blend is built and tested like any other.
  *
  * ## Corners with arc ends (ef_blend_prims())
- * When either side is an arc or helix, the blend runs from the point at distance L_in
- * before the vertex on the incoming primitive to the point at distance L_out after it on
- * the outgoing one, with the primitives' tangents and curvature vectors there (an arc end
- * has curvature 1/r towards the centre), through the G2 table in its general,
- * asymmetric configuration. There is no closed form for the deviation, so it is measured:
- * the largest distance from the blend's points (::EF_BLEND_DEV_SAMPLES of them) to the
- * replaced pieces of the two primitives, plus a bound for what lies between samples. The
- * trims start from the line–line estimate with the vertex tangents and are shrunk in a
- * fixed number of steps (::EF_BLEND_ITER) until the measured deviation is within
- * tol - q; if none is, the outcome is ::EF_BLEND_STOP. Trims are limited by max_in and
- * max_out separately (asymmetric trims: a short neighbour on one side shortens only that
- * side, the other keeps the trim the tolerance allows). Every trial's curve is evened as
- * ef_seg_g2_even() evens a segment: its end speeds |f'(0)|, |f'(1)| are set to its arc
- * length (the table's for a lopsided corner were up to 60 % off), and of the candidates that
- * do, the most even is kept: a stepper that steps the parameter uniformly (the drives'
- * segment mode) would otherwise jump in feed at both junctions. The same candidates and
- * criteria, computed in ef_blend_arc.c at about a fifth of the cost (every speed from the
- * hodograph's five fixed vectors, x1 = L by Newton steps on a per-node quartic).
+ * When either side is an arc or helix, the blend runs from the point at arc length L before
+ * the vertex on the incoming primitive to the point at arc length L after it on the
+ * outgoing one (the same L on both sides, as for two lines), with the primitives' tangents
+ * and curvature vectors there (an arc end has curvature 1/r towards the centre). Its DOFs
+ * are the line–line blend's for the vertex tangents, the table at (phi, -phi, 0, 0), with
+ * both end speeds then set to the curve's own length (Newton steps on a per-node quartic of
+ * the hodograph): a stepper that steps the parameter uniformly (the drives' segment mode)
+ * would otherwise jump in feed at both junctions (ef_seg_g2_even() says why).
+ * Its deviation is bounded in closed form, both ways, as the smaller of two bounds, each a
+ * chain of distances between points at equal parameters:
+ * - against the line–line blend r with the same DOFs on the tangent lines through v:
+ *   r's own deviation (its midpoint's distance from v, as for two lines), plus
+ *   max |b_i - c_i| over the two curves' control points (Bernstein weights are positive and
+ *   sum to 1), plus kappa L^2 / 2 (a curve of curvature at most kappa stays that close to
+ *   its tangent line over arc length L);
+ * - each half of the blend (split at t = 1/2) against its side's own arc-length Hermite
+ *   quintic from the trim point to v (ef_blend_arc_piece()'s curve, within
+ *   r sigma^6 / 46080 of the arc): the largest control point difference plus that bound.
+ *   This one is close to the true deviation for tangent joins and tight arcs, where the
+ *   first one counts the arc's sagitta twice.
+ * Plus the float32 terms: the frames' tangent angle, ef_prim_frame()'s angle on each arc
+ * (2 ulp of it times the radius), the incoming arc's end gap (ef_prim_end_gap()) and
+ * q = 4 eps (max|v_i| + r_in + r_out) for the control points' rounding. No samples: the cost
+ * is the same for every corner of a pair of kinds (to rounding of the loop bounds, 1 %).
+ * L: ::EF_BLEND_ITER trials, each fitting dev ~ m + g L + A L^2 through the last one and
+ * solving it for 0.99 tol (later 0.97 tol); the longest trial within tol is kept, and if
+ * none is, the outcome is ::EF_BLEND_STOP. L is at most max_in and max_out (and, on an arc,
+ * EF_ARC_PIECE_SWEEP of its sweep); a side whose own limit is within 2 % of L takes that
+ * limit, so two blends that each take half of a primitive meet without a sliver between
+ * them. A short neighbour on one side therefore shortens both sides.
  *
  * ## Tangent joins (ef_blend_prims())
  * A vertex whose tangents turn by less than ::EF_BLEND_MIN_TURN but whose curvature vectors
@@ -83,8 +95,8 @@
  * enough to matter (dk tol >= EF_BLEND_MIN_TURN^2: the transition that deviates by tol
  * turns the tangent by about sqrt(dk tol), at least a corner's worth; and dk above 1e-4 of
  * the larger curvature, far above float32's rounding of the curvature vectors), the join is
- * blended exactly like a corner with arc ends (same G2 quintic, measured deviation within
- * tol - q, trim search and limits), and flagged as a normal blend. The trims start from
+ * blended exactly like a corner with arc ends (same construction, bound and trim search),
+ * and flagged as a normal blend. The trims start from
  * sqrt(tol / dk) (where a transition's deviation, about dk L^2, reaches tol) instead of the
  * line–line trim, bounded by max_in / max_out and the arc cap. If no blend fits the outcome
  * is ::EF_BLEND_STRAIGHT (the G1 pass-through is safe), never ::EF_BLEND_STOP. Straight
@@ -163,52 +175,40 @@ typedef struct {
 int ef_blend_corner(const ef_table_t *g2, ef_vec3_t v, ef_vec3_t u_in, ef_vec3_t u_out, float tol,
                     float max_in, float max_out, ef_blend_t *out);
 
-/** Samples of the blend used to measure its deviation (ef_blend_prims()). */
+/** Samples of a smooth section's curve used to measure its deviation (ef_smooth.c). */
 #ifndef EF_BLEND_DEV_SAMPLES
 #define EF_BLEND_DEV_SAMPLES 16
 #endif
-/** Fixed number of trim refinement steps in ef_blend_prims(). */
+/** Trials of the trim search in ef_blend_prims() (each a frame pair, an evening and the
+ *  closed-form bound). */
 #ifndef EF_BLEND_ITER
-#define EF_BLEND_ITER 6
+#define EF_BLEND_ITER 3
 #endif
 
 /**
  * @brief Blend the corner between two checked primitives (lines, arcs, helices). For two
- * lines this is ef_blend_corner() with the lines' directions; otherwise the measured
- * construction of the file comment. Fixed instruction count per pair of kinds (fixed
- * iteration and sample counts; only keeping the best trial and the outcome differ).
+ * lines this is ef_blend_corner() with the lines' directions; otherwise the construction of
+ * "Corners with arc ends" above. Instruction count fixed per pair of kinds (fixed trial,
+ * node and step counts; only keeping the best trial and the outcome differ: within 1 %).
  *
- * Details of the measured construction (firmware/src/blend/ef_blend_arc.c):
+ * Details (firmware/src/blend/ef_blend_arc.c):
  * - both primitives are checked again (ef_prim_check(); its error codes are returned) and
  *   len_in / len_out must be their lengths to 1e-5 relative (else EF_ERR_ARG);
  * - vertex tangents turning by less than EF_BLEND_MIN_TURN: a tangent join (see the file
  *   comment) when the curvature vectors differ by dk with dk tol >= EF_BLEND_MIN_TURN^2 and
- *   dk > 1e-4 max(kappa_in, kappa_out): blended as below (trims from sqrt(tol / dk), the
- *   secant growing lambda by the square root of the deviation ratio), STRAIGHT if no trial
- *   fits (never STOP); otherwise outcome STRAIGHT;
- * - the trim on an arc side is also at most EF_ARC_PIECE_SWEEP of its sweep;
- * - trims are lambda x (the line–line trim for the vertex tangents), each side clamped by
- *   its own limit; EF_BLEND_ITER trials (secant towards 0.99 (tol - q), bracketed), the
- *   longest feasible one is kept. q = 4 eps (max|v_i| + r_in + r_out), r = 0 for lines;
- * - a trial is feasible if the table did not clamp its tangent angles (a lopsided hairpin,
- *   a tangent beyond 90 degrees from the chord, would; a clamped curvature is accepted) and
- *   its measured deviation is within tol - q. The deviation is two-sided:
- *   (a) blend to path: the distances of EF_BLEND_DEV_SAMPLES + 2 blend points (ends
- *   included) to each replaced piece, in closed form: exact for lines and circles (for an
- *   arc the radial and axial offset when the point's angle about the axis is inside the
- *   piece, else the nearer end), for helices the distance to an actual point of the piece
- *   (an upper bound); on an arc plus 2 ulp of the arc's angle at the piece's far end times
- *   its radius (the float32 frames place the blend's ends up to that far off the exact
- *   piece); per interval each distance is bounded by its linear interpolant plus
- *   (local max |second difference|) / 8, and the top of the smaller of the two bounds
- *   (at an end or at their crossing, the blend's middle) is the interval's bound; the
- *   interval with the largest bound is sampled 7 times more and bounded again; times 1.02;
- *   (b) path to blend: the vertex and 3 points of each replaced piece to the blend (nearest
- *   sample plus one Newton step, an upper bound). Without (b) a blend between two nearly
- *   parallel pieces could cut a hairpin's tip short and still be close to the path;
- * - res->dev is that measured deviation, res->gain the line–line g(turn) of the vertex
- *   tangents (for information), EF_BLEND_CLAMPED when max_in, max_out or the arc cap
- *   limited a trim.
+ *   dk > 1e-4 max(kappa_in, kappa_out): blended as below (first trim sqrt(tol / dk)),
+ *   STRAIGHT if no trial fits (never STOP); otherwise outcome STRAIGHT;
+ * - one trim L on both sides, at most max_in, max_out and, on an arc side,
+ *   EF_ARC_PIECE_SWEEP of its sweep; a side whose own limit is within 2 % of L takes it;
+ * - a trial is feasible if its closed-form deviation bound (both ways, see above) is within
+ *   tol and Newton's evening left its end speeds within EF_SEG_END_SPEED_REL of its length;
+ *   the kept trial must also pass that on its stored control points (float32 rounding of a
+ *   tiny blend far from the origin), else no blend;
+ * - res->dev is that bound (tests/blend/test_prim.c measures the true deviation in double:
+ *   at most 0.998 of it over 6000 random corners), res->gain the reference line–line
+ *   blend's deviation per unit trim, EF_BLEND_CLAMPED when a limit, not the tolerance,
+ *   bounded L; seg.norm is the configuration the DOFs were looked up for, the vertex
+ *   tangents' corner (alpha = phi, beta = -phi, k0 = k1 = 0).
  * @param g2       G2 quintic table
  * @param start_in where the incoming primitive starts
  * @param in       incoming primitive (ends at the vertex)
@@ -219,13 +219,14 @@ int ef_blend_corner(const ef_table_t *g2, ef_vec3_t v, ef_vec3_t u_in, ef_vec3_t
  * @param max_in   longest trim allowed on the incoming primitive, in (0, len_in]
  * @param max_out  longest trim allowed on the outgoing primitive, in (0, len_out]
  * @param res      the blend (seg degree 5, p_in / p_out on the primitives, trims, dev
- *                 measured, turn between the vertex tangents)
+ *                 bounded, turn between the vertex tangents)
  * @retval EF_OK            res valid; see res->flags (STRAIGHT, STOP, CLAMPED)
  * @retval EF_ERR_ARG       NULL pointer, tol, max_in or max_out out of range
  * @retval EF_ERR_KIND      not a G2 quintic table
  * @retval EF_ERR_NONFINITE non-finite input
  * @retval EF_ERR_REVERSAL  the vertex tangents turn by more than EF_BLEND_MAX_TURN: stop
  *                          exactly at the vertex
+ * @retval others           as ef_prim_check() and ef_table_lookup_g2()
  */
 int ef_blend_prims(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in, float len_in,
                    const ef_prim_t *out, float len_out, float tol, float max_in, float max_out,
