@@ -702,7 +702,7 @@ int ef_blend_prims(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in
             best = tr;
         /* dev ~ m0 + g l + A l^2 through this trial, solved for the next target; a trial that
          * failed shrinks by at least a tenth */
-        float A = ef_maxf(tr.dev - k.m0 - tr.g * l, 0.0f) / (l * l);
+        float A = ef_maxf(tr.dev - k.m0 - tr.g * l, 0.0f) / ef_maxf(l * l, 1e-36f);
         float goal = ef_maxf((it == 0 ? 0.99f : 0.97f) * tol - k.m0, 0.0f);
         float next = 2.0f * goal / (tr.g + ef_sqrtf(tr.g * tr.g + 4.0f * A * goal) + 1e-30f);
         next = ef_selectf(feasible, next, ef_minf(next, 0.9f * l));
