@@ -12,6 +12,14 @@
 #include "evenfeed/motion/ef_plan.h"
 #include "evenfeed/core/ef_err.h"
 
+/** The ramp helpers inside the cruise-speed bisection of a pull's time law (64 calls): at
+ *  -Os gcc kept them out of line, and the calls alone put the worst M4 pull at 5.5 k. */
+#ifdef __GNUC__
+#define EF_PL_INLINE static inline __attribute__((always_inline))
+#else
+#define EF_PL_INLINE static inline
+#endif
+
 /** Bisection steps for every speed search (float32 has 24 mantissa bits). */
 #define EF_PLAN_BISECT 32
 /** Safeguarded Newton steps where a released group's law reaches a member's end
@@ -72,7 +80,7 @@ int ef_limits_check(const ef_limits_t *lim)
  *  (0: none). With a jerk limit it is the time-optimal S-curve from and to zero
  *  acceleration: dv / a + a / j when the speed change reaches a (dv >= a^2 / j), else
  *  2 sqrt(dv / j) (a triangular acceleration peaking at sqrt(dv j) < a). */
-static float pl_ramp_time(float dv, float a, float j)
+EF_PL_INLINE float pl_ramp_time(float dv, float a, float j)
 {
     if (!(j > 0.0f))
         return dv / a;
@@ -83,7 +91,7 @@ static float pl_ramp_time(float dv, float a, float j)
 
 /** Distance of a ramp from va to vb (either direction): the S-curve's speed is point
  *  symmetric about its midpoint, so the mean speed is (va + vb) / 2. */
-static float pl_ramp_dist(float va, float vb, float a, float j)
+EF_PL_INLINE float pl_ramp_dist(float va, float vb, float a, float j)
 {
     return 0.5f * (va + vb) * pl_ramp_time(ef_fabsf(vb - va), a, j);
 }
