@@ -474,6 +474,31 @@ static void test_lookup(void)
     }
     printf("G2 synthetic lookup: full vs mirror max difference %.3g\n", emax);
     EF_CHECK(emax < 1e-5);
+    /* The symmetric corner's lookup equals the general one at (phi, -phi, 0, 0): on tables
+     * with curvature 0 on a node (its bilinear path) and without (8 curvature nodes: the
+     * general path), mirrored or not, inside and beyond the range (clamp flags too). */
+    uint32_t gn8[4] = {9, 9, 8, 8};
+    ef_table_t g2e = make_table(EF_TABLE_G2_QUINTIC, EF_SYM_NONE, 4, glo, ghi, gn8, 0, g2_full);
+    const ef_table_t *ctab[3] = {&g2, &g2h, &g2e};
+    long corner_checks = 0;
+    for (int t = 0; t < 3; t++) {
+        for (int i = -60; i <= 60; i++) {
+            float ph = (float)(i * 0.03 + 0.001 * t), cc[4] = {ph, -ph, 0.0f, 0.0f};
+            float a[4], b[4];
+            uint32_t f1 = 99, f2 = 98;
+            EF_CHECK_EQ(ef_table_lookup_g2_corner(ctab[t], ph, a, &f1), EF_OK);
+            EF_CHECK_EQ(ef_table_lookup_g2(ctab[t], cc, b, &f2), EF_OK);
+            EF_CHECK_EQ(f1, f2);
+            for (int k = 0; k < 4; k++)
+                EF_CHECK(a[k] == b[k]);
+            corner_checks++;
+        }
+    }
+    EF_CHECK_EQ(corner_checks, 363);
+    float dc[4];
+    EF_CHECK_EQ(ef_table_lookup_g2_corner(NULL, 0.1f, dc, NULL), EF_ERR_ARG);
+    EF_CHECK_EQ(ef_table_lookup_g2_corner(&g2, 0.1f, NULL, NULL), EF_ERR_ARG);
+    EF_CHECK_EQ(ef_table_lookup_g2_corner(&full, 0.1f, dc, NULL), EF_ERR_KIND);
     /* A 4-linear interpolant is exact for functions linear in each coordinate. */
     float c[4] = {0.3f, -0.7f, 3.5f, -2.5f}, o[4];
     uint32_t f;

@@ -41,6 +41,30 @@ static inline int bl_finite(float x)
     return (x == x) & (x - x == 0.0f);
 }
 
+/* The vertex turn and the line–line blend's table DOFs (contract in ef_blend.h). */
+int ef_blend_vertex(const ef_table_t *g2, ef_vec3_t ui, ef_vec3_t uo, ef_blend_vertex_t *vx)
+{
+    /* The turn from |u_in x u_out| and <u_in, u_out> (accurate at both ends of [0, pi]);
+     * 2 cos(phi) and 2 sin(phi) as |ui + uo| and |uo - ui|, likewise. */
+    float theta = ef_atan2f(ef_v3_norm(ef_v3_cross(ui, uo)), ef_v3_dot(ui, uo));
+    if (!(theta <= EF_BLEND_MAX_TURN))
+        return EF_ERR_REVERSAL;
+    vx->theta = theta;
+    vx->sum = ef_v3_add(ui, uo);
+    vx->two_cos = ef_v3_norm(vx->sum);
+    vx->two_sin = ef_v3_norm(ef_v3_sub(uo, ui));
+    vx->phi = 0.5f * theta;
+    /* DOFs per unit chord for (phi, -phi, 0, 0), symmetrized (reversal symmetry). */
+    float d[4];
+    vx->tclamp = 0;
+    int rc = ef_table_lookup_g2_corner(g2, vx->phi, d, &vx->tclamp);
+    if (rc != EF_OK)
+        return rc;
+    vx->x1c = 0.5f * (d[0] + d[2]);
+    vx->x2c = 0.5f * (d[1] - d[3]);
+    return EF_OK;
+}
+
 int ef_blend_corner(const ef_table_t *g2, ef_vec3_t v, ef_vec3_t u_in, ef_vec3_t u_out, float tol,
                     float max_in, float max_out, ef_blend_t *out)
 {
@@ -64,27 +88,19 @@ int ef_blend_corner(const ef_table_t *g2, ef_vec3_t v, ef_vec3_t u_in, ef_vec3_t
     if (!bl_hidei(unit))
         return bl_fail(out, EF_ERR_TANGENT);
 
-    /* Unit directions; the turn from |u_in x u_out| and <u_in, u_out> (accurate at both
-     * ends of [0, pi]); 2 cos(phi) and 2 sin(phi) as |ui + uo| and |uo - ui|, likewise. */
+    /* Unit directions, the turn and the table's DOFs (ef_blend_vertex()). */
     ef_vec3_t ui = ef_v3_scale(u_in, 1.0f / ef_sqrtf(ii));
     ef_vec3_t uo = ef_v3_scale(u_out, 1.0f / ef_sqrtf(oo));
-    float theta = ef_atan2f(ef_v3_norm(ef_v3_cross(ui, uo)), ef_v3_dot(ui, uo));
-    if (!(theta <= EF_BLEND_MAX_TURN))
-        return bl_fail(out, EF_ERR_REVERSAL);
-    ef_vec3_t sum = ef_v3_add(ui, uo);
-    float two_cos = ef_v3_norm(sum);               /* chord per unit trim, 2 cos(phi) */
-    float two_sin = ef_v3_norm(ef_v3_sub(uo, ui)); /* 2 sin(phi) */
-    float phi = 0.5f * theta;
-
-    /* DOFs per unit chord for (phi, -phi, 0, 0), symmetrized (reversal symmetry). */
-    float c[4] = {phi, -phi, 0.0f, 0.0f}, d[4];
-    uint32_t tclamp = 0;
-    int rc = ef_table_lookup_g2(g2, c, d, &tclamp);
+    ef_blend_vertex_t vx;
+    int rc = ef_blend_vertex(g2, ui, uo, &vx);
     if (rc != EF_OK)
         return bl_fail(out, rc);
+    float theta = vx.theta, two_cos = vx.two_cos, two_sin = vx.two_sin, phi = vx.phi;
+    ef_vec3_t sum = vx.sum;
+    uint32_t tclamp = vx.tclamp;
     /* Per unit trim (L = 1): x1, x2 in program units are the table's times the chord. */
-    float x1 = 0.5f * (d[0] + d[2]) * two_cos;
-    float x2 = 0.5f * (d[1] - d[3]) * two_cos;
+    float x1 = vx.x1c * two_cos;
+    float x2 = vx.x2c * two_cos;
     /* End speeds equal to the arc length (as ef_seg_g2_even(), which says why): x1 = L of
      * the unit-trim curve with the corner at the origin, solved by ef_seg_even_next() over
      * EF_SEG_EVEN_ITER curves (L moves with x1). The table's x1 was up to 1.2 % off L at sharp

@@ -62,16 +62,8 @@ static void prim_sincosf(float x, float *s, float *c)
     *c = csel[q];
 }
 
-/* An arc's frame: the axis point `base` level with the start, radial unit e_u towards the
- * start, e_v = axis x e_u, start radius r0, axial rise h of the end, length len. Computed
- * without validation (ef_prim_check() validates). */
-typedef struct {
-    ef_vec3_t a, base, eu, ev;
-    float r0, h, len;
-} ef_arc_geo_t;
-
-/* Fill an arc's frame (ef_arc_geo_t) from its start point, shared by check and frame. */
-static void prim_arc_geo(ef_vec3_t start, const ef_prim_t *pr, ef_arc_geo_t *g)
+/* Fill an arc's frame (ef_prim_geo_t) from its start point, shared by check and frame. */
+static void prim_arc_geo(ef_vec3_t start, const ef_prim_t *pr, ef_prim_geo_t *g)
 {
     float aa = ef_v3_dot(pr->axis, pr->axis);
     ef_vec3_t a = ef_v3_scale(pr->axis, 1.0f / ef_sqrtf(ef_maxf(aa, 1e-30f)));
@@ -95,7 +87,7 @@ static void prim_arc_geo(ef_vec3_t start, const ef_prim_t *pr, ef_arc_geo_t *g)
 /* An arc's model point at the angle with sine sn and cosine cs and axial fraction frac of the
  * rise; rad: the outward radial unit there. Shared by ef_prim_frame() and ef_prim_end_gap(),
  * which must agree on where the model ends. */
-static inline ef_vec3_t prim_arc_point(const ef_arc_geo_t *g, float sn, float cs, float frac,
+static inline ef_vec3_t prim_arc_point(const ef_prim_geo_t *g, float sn, float cs, float frac,
                                        ef_vec3_t *rad)
 {
     *rad = ef_v3_add(ef_v3_scale(g->eu, cs), ef_v3_scale(g->ev, sn));
@@ -139,7 +131,7 @@ int ef_prim_check(ef_vec3_t start, const ef_prim_t *pr, float *len)
     float asw = ef_fabsf(pr->sweep);
     if (!(asw > 0.0f) || !(asw <= EF_ARC_MAX_SWEEP))
         return EF_ERR_ARC;
-    ef_arc_geo_t g;
+    ef_prim_geo_t g;
     prim_arc_geo(start, pr, &g);
     if (!(g.r0 >= EF_MIN_CHORD))
         return EF_ERR_DEGENERATE;
@@ -171,14 +163,40 @@ int ef_prim_check(ef_vec3_t start, const ef_prim_t *pr, float *len)
     return EF_OK;
 }
 
+/* An arc's geometry for repeated frames (contract in ef_path.h). */
+void ef_prim_geo(ef_vec3_t start, const ef_prim_t *pr, ef_prim_geo_t *g)
+{
+    if (!g)
+        return;
+    ef_prim_geo_t zero = {{0.0f, 0.0f, 0.0f},
+                          {0.0f, 0.0f, 0.0f},
+                          {0.0f, 0.0f, 0.0f},
+                          {0.0f, 0.0f, 0.0f},
+                          0.0f,
+                          0.0f,
+                          0.0f};
+    *g = zero;
+    if (pr && pr->kind == EF_PRIM_ARC)
+        prim_arc_geo(start, pr, g);
+}
+
 /* Exact position, tangent, normal, curvature at arc length s (contract in ef_path.h). */
 int ef_prim_frame(ef_vec3_t start, const ef_prim_t *pr, float s, ef_frame_t *out)
+{
+    ef_prim_geo_t g;
+    ef_prim_geo(start, pr, &g);
+    return ef_prim_frame_geo(start, pr, &g, s, out);
+}
+
+/* The same with the arc's geometry from ef_prim_geo() (contract in ef_path.h). */
+int ef_prim_frame_geo(ef_vec3_t start, const ef_prim_t *pr, const ef_prim_geo_t *geo, float s,
+                      ef_frame_t *out)
 {
     if (!out)
         return EF_ERR_ARG;
     ef_frame_t zero = {{0.0f, 0.0f, 0.0f}, {0.0f, 0.0f, 0.0f}, {0.0f, 0.0f, 0.0f}, 0.0f};
     *out = zero;
-    if (!pr || (pr->kind != EF_PRIM_LINE && pr->kind != EF_PRIM_ARC))
+    if (!pr || (pr->kind != EF_PRIM_LINE && pr->kind != EF_PRIM_ARC) || !geo)
         return EF_ERR_ARG;
     if (pr->kind == EF_PRIM_LINE) {
         ef_vec3_t d = ef_v3_sub(pr->end, start);
@@ -194,8 +212,7 @@ int ef_prim_frame(ef_vec3_t start, const ef_prim_t *pr, float s, ef_frame_t *out
         out->t = u;
         return EF_OK;
     }
-    ef_arc_geo_t g;
-    prim_arc_geo(start, pr, &g);
+    const ef_prim_geo_t g = *geo;
     float len = g.len;
     float sc = ef_minf(ef_maxf(s, 0.0f), len);
     float frac = sc / ef_maxf(len, 1e-30f);
@@ -224,10 +241,17 @@ int ef_prim_frame(ef_vec3_t start, const ef_prim_t *pr, float s, ef_frame_t *out
 /* Distance of an arc's end from its model's end (contract in ef_path.h). */
 float ef_prim_end_gap(ef_vec3_t start, const ef_prim_t *pr)
 {
-    if (!pr || pr->kind != EF_PRIM_ARC)
+    ef_prim_geo_t g;
+    ef_prim_geo(start, pr, &g);
+    return ef_prim_end_gap_geo(pr, &g);
+}
+
+/* The same with the arc's geometry from ef_prim_geo() (contract in ef_path.h). */
+float ef_prim_end_gap_geo(const ef_prim_t *pr, const ef_prim_geo_t *geo)
+{
+    if (!pr || pr->kind != EF_PRIM_ARC || !geo)
         return 0.0f;
-    ef_arc_geo_t g;
-    prim_arc_geo(start, pr, &g);
+    const ef_prim_geo_t g = *geo;
     float sn, cs;
     prim_sincosf(pr->sweep, &sn, &cs);
     ef_vec3_t rad;

@@ -188,3 +188,43 @@ int ef_table_lookup_g2(const ef_table_t *tbl, const float c[4], float dof[4], ui
                  cl[2] * EF_LOOKUP_CLAMP_K0 | cl[3] * EF_LOOKUP_CLAMP_K1;
     return EF_OK;
 }
+
+/* The symmetric corner (phi, -phi, 0, 0) (contract in ef_table.h). */
+int ef_table_lookup_g2_corner(const ef_table_t *tbl, float phi, float dof[4], uint32_t *flags)
+{
+    if (!tbl || !dof || !tbl->data)
+        return EF_ERR_ARG;
+    if (tbl->kind != EF_TABLE_G2_QUINTIC || tbl->naxes != 4 || tbl->ndof != 4)
+        return EF_ERR_KIND;
+    float f[4];
+    uint32_t cl[4], base = 0;
+    float x0 = tl_bound(phi), x1 = tl_bound(-phi);
+    /* the mirror maps (phi, -phi) with phi < 0 to (-phi, phi), as ef_table_lookup_g2() */
+    if (tbl->symmetry == EF_SYM_G2_MIRROR) {
+        float m = ef_selectf(x0 < 0.0f, -1.0f, 1.0f);
+        x0 *= m;
+        x1 *= m;
+    }
+    const float x[4] = {x0, x1, 0.0f, 0.0f};
+    for (int a = 0; a < 4; a++)
+        base += tl_axis_cell(&tbl->axis[a], x[a], &f[a], &cl[a]) * tbl->axis[a].stride;
+    /* Curvature 0 on a node of both curvature axes (a property of the table, so the count is
+     * still fixed per table): the lerps along them have weight 0 and are left out, leaving
+     * a bilinear lerp of 4 rows, the same values as the 4-linear one. Otherwise the general
+     * lookup. */
+    if (!(f[2] == 0.0f && f[3] == 0.0f)) {
+        const float c[4] = {phi, -phi, 0.0f, 0.0f};
+        return ef_table_lookup_g2(tbl, c, dof, flags);
+    }
+    const float *p = tbl->data + 4u * base;
+    const uint32_t s0 = 4u * tbl->axis[0].stride, s1 = 4u * tbl->axis[1].stride;
+    for (int k = 0; k < 4; k++) {
+        float r0 = p[k] + f[0] * (p[s0 + k] - p[k]);
+        float r1 = p[s1 + k] + f[0] * (p[s1 + s0 + k] - p[s1 + k]);
+        dof[k] = r0 + f[1] * (r1 - r0);
+    }
+    if (flags)
+        *flags = cl[0] * EF_LOOKUP_CLAMP_ALPHA | cl[1] * EF_LOOKUP_CLAMP_BETA |
+                 cl[2] * EF_LOOKUP_CLAMP_K0 | cl[3] * EF_LOOKUP_CLAMP_K1;
+    return EF_OK;
+}

@@ -185,6 +185,33 @@ int ef_blend_corner(const ef_table_t *g2, ef_vec3_t v, ef_vec3_t u_in, ef_vec3_t
 #define EF_BLEND_ITER 3
 #endif
 
+/** The turn at a vertex and the line–line blend's table DOFs there (ef_blend_vertex()). */
+typedef struct {
+    ef_vec3_t sum;   /**< u_in + u_out; its length is two_cos */
+    float theta;     /**< turn angle (rad), in [0, EF_BLEND_MAX_TURN] */
+    float phi;       /**< theta / 2 */
+    float two_cos;   /**< 2 cos(phi) = |u_in + u_out|: the blend's chord per unit trim */
+    float two_sin;   /**< 2 sin(phi) = |u_out - u_in| */
+    float x1c;       /**< x1 per unit chord at (phi, -phi, 0, 0), symmetrized (table's) */
+    float x2c;       /**< x2 per unit chord there, symmetrized */
+    uint32_t tclamp; /**< EF_LOOKUP_CLAMP_* bits of the lookup */
+} ef_blend_vertex_t;
+
+/**
+ * @brief The turn between two unit tangents at a vertex and the line–line blend's DOFs for
+ * it (ef_table_lookup_g2_corner()), shared by ef_blend_corner() and ef_blend_prims(). The
+ * turn comes from |u_in x u_out| and <u_in, u_out>, accurate at both ends of [0, pi].
+ * Fixed instruction count.
+ * @param g2 G2 quintic table
+ * @param ui unit incoming tangent (not checked)
+ * @param uo unit outgoing tangent (not checked)
+ * @param vx out (undefined on error)
+ * @retval EF_OK
+ * @retval EF_ERR_REVERSAL the turn exceeds EF_BLEND_MAX_TURN (or is NaN)
+ * @retval others          as ef_table_lookup_g2_corner()
+ */
+int ef_blend_vertex(const ef_table_t *g2, ef_vec3_t ui, ef_vec3_t uo, ef_blend_vertex_t *vx);
+
 /**
  * @brief Blend the corner between two checked primitives (lines, arcs, helices). For two
  * lines this is ef_blend_corner() with the lines' directions; otherwise the construction of

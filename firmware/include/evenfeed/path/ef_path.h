@@ -168,6 +168,40 @@ int ef_prim_frame(ef_vec3_t start, const ef_prim_t *pr, float s, ef_frame_t *out
  */
 float ef_prim_end_gap(ef_vec3_t start, const ef_prim_t *pr);
 
+/**
+ * An arc's geometry as ef_prim_frame() computes it on every call: the unit axis a, the axis
+ * point `base` level with the start, the radial unit eu towards the start, ev = a x eu, the
+ * start radius r0, the axial rise h of the end, the length len (ef_prim_check()'s).
+ * ef_prim_geo() fills it once, so several frames of one arc (a blend's trials) skip it;
+ * all zero for a line, NULL or an unknown kind.
+ */
+typedef struct {
+    ef_vec3_t a, base, eu, ev;
+    float r0, h, len;
+} ef_prim_geo_t;
+
+/**
+ * @brief Fill an arc's geometry for ef_prim_frame_geo() and ef_prim_end_gap_geo(); g zero
+ * for a line, NULL or an unknown kind (no validation, as ef_prim_frame()). Nothing for a
+ * NULL g.
+ */
+void ef_prim_geo(ef_vec3_t start, const ef_prim_t *pr, ef_prim_geo_t *g);
+
+/**
+ * @brief ef_prim_frame() with the arc's geometry from ef_prim_geo(start, pr): the same
+ * operations in the same order, so the same bits (ef_prim_frame() is ef_prim_geo() then
+ * this).
+ * @retval EF_OK
+ * @retval EF_ERR_ARG NULL pointer or unknown kind (out zero)
+ */
+int ef_prim_frame_geo(ef_vec3_t start, const ef_prim_t *pr, const ef_prim_geo_t *geo, float s,
+                      ef_frame_t *out);
+
+/**
+ * @brief ef_prim_end_gap() with the arc's geometry from ef_prim_geo(); 0 for a line or NULL.
+ */
+float ef_prim_end_gap_geo(const ef_prim_t *pr, const ef_prim_geo_t *geo);
+
 /** Move kinds. */
 typedef enum {
     EF_MOVE_LINE = 1,   /**< a straight piece (degree 1), exact constant speed */

@@ -192,6 +192,22 @@ int ef_table_lookup_g1(const ef_table_t *tbl, float alpha, float beta, float dof
  */
 int ef_table_lookup_g2(const ef_table_t *tbl, const float c[4], float dof[4], uint32_t *flags);
 
+/**
+ * @brief ef_table_lookup_g2() at the symmetric corner (phi, -phi, 0, 0), the configuration
+ * of every corner blend: the same DOFs (values equal; a zero may differ in sign), in about a
+ * quarter of the work when curvature 0 is a node of both curvature axes (the shipped
+ * tables: 9 nodes on [-2, 2]), since the 4-linear lerp then has weight 0 along them;
+ * otherwise the general lookup. Fixed instruction count per table.
+ * @param tbl   a G2 quintic table
+ * @param phi   half the turn (rad), finite
+ * @param dof   out: x1_0, x2_0, x1_1, x2_1 per unit chord
+ * @param flags out: EF_LOOKUP_CLAMP_* bits; may be NULL
+ * @retval EF_OK
+ * @retval EF_ERR_ARG  NULL pointer
+ * @retval EF_ERR_KIND not a G2 quintic table
+ */
+int ef_table_lookup_g2_corner(const ef_table_t *tbl, float phi, float dof[4], uint32_t *flags);
+
 #ifdef __cplusplus
 }
 #endif
