@@ -20,6 +20,8 @@
  * the per-move building functions of the runtime smoother (figures, not a constant-time
  * check):
  *   bprim_la  ef_blend_prims, a line into an arc       bprim_aa  the same, arc into arc
+ *   bprim_la_v, bprim_aa_v  the same corners through ef_blend_prims_valid (the smoother's
+ *             call: the primitives were checked when pushed)
  *   arcpiece  ef_blend_arc_piece                        measure   ef_move_measure (quintics)
  *   smooth    a stream of N CAM-like primitives through ef_smooth_push / ef_smooth_pull; every
  *             push and every pull is one dump, and stdout lists them in order ("call push",
@@ -407,8 +409,10 @@ static double sgn_rand(unsigned long long *rs)
     return ef_t_rng(rs) & 1u ? 1.0 : -1.0;
 }
 
-/* ef_blend_prims on N random corners: line -> arc (arcs 0) or arc -> arc (arcs 1). */
-static int run_bprim(const ef_table_t *tbl, long n, int dump, int arcs, unsigned long long *rs)
+/* ef_blend_prims (valid 0) or ef_blend_prims_valid (valid 1) on N random corners:
+ * line -> arc (arcs 0) or arc -> arc (arcs 1). */
+static int run_bprim(const ef_table_t *tbl, long n, int dump, int arcs, int valid,
+                     unsigned long long *rs)
 {
     long outcome[4] = {0};
     for (long i = 0; i < n; i++) {
@@ -444,8 +448,12 @@ static int run_bprim(const ef_table_t *tbl, long n, int dump, int arcs, unsigned
         ef_blend_t bl;
         if (dump)
             CALLGRIND_ZERO_STATS;
-        rc = ef_blend_prims(tbl, s_in, &in, len_in, &out, len_out, tol, 0.5f * len_in,
-                            0.5f * len_out, &bl);
+        if (valid)
+            rc = ef_blend_prims_valid(tbl, s_in, &in, len_in, &out, len_out, tol, 0.5f * len_in,
+                                      0.5f * len_out, &bl);
+        else
+            rc = ef_blend_prims(tbl, s_in, &in, len_in, &out, len_out, tol, 0.5f * len_in,
+                                0.5f * len_out, &bl);
         if (dump)
             CALLGRIND_DUMP_STATS;
         if (rc != EF_OK) {
@@ -454,8 +462,9 @@ static int run_bprim(const ef_table_t *tbl, long n, int dump, int arcs, unsigned
         }
         outcome[blend_outcome(bl.flags)]++;
     }
-    printf("bench_ct %s: %ld calls OK; blend %ld, straight %ld, stop %ld, clamped %ld\n",
-           arcs ? "bprim_aa" : "bprim_la", n, outcome[0], outcome[1], outcome[2], outcome[3]);
+    printf("bench_ct %s%s: %ld calls OK; blend %ld, straight %ld, stop %ld, clamped %ld\n",
+           arcs ? "bprim_aa" : "bprim_la", valid ? "_v" : "", n, outcome[0], outcome[1], outcome[2],
+           outcome[3]);
     return 0;
 }
 
@@ -702,9 +711,10 @@ int main(int argc, char **argv)
 {
     int path_kind = -1;
 #ifdef EF_BENCH_PATH
-    static const char *const path_kinds[7] = {"bprim_la", "bprim_aa", "arcpiece", "measure",
-                                              "smooth",   "interp",   "interp_c"};
-    for (int k = 0; k < 7; k++)
+    static const char *const path_kinds[9] = {"bprim_la", "bprim_aa",   "arcpiece",
+                                              "measure",  "smooth",     "interp",
+                                              "interp_c", "bprim_la_v", "bprim_aa_v"};
+    for (int k = 0; k < 9; k++)
         if (argc > 1 && strcmp(argv[1], path_kinds[k]) == 0)
             path_kind = k;
 #endif
@@ -714,11 +724,13 @@ int main(int argc, char **argv)
     if (argc < 3 || (path_kind < 0 && g1_path == 0 && strcmp(argv[1], "g1") != 0 &&
                      strcmp(argv[1], "g2") != 0 && strcmp(argv[1], "blend") != 0)) {
 #ifdef EF_BENCH_PATH
-        fprintf(stderr,
-                "usage: %s "
-                "g1|g1p|g1_3d|g2|blend|bprim_la|bprim_aa|arcpiece|measure|smooth|interp|interp_c N "
-                "[dump|nodump] [seed]\n",
-                argv[0]);
+        fprintf(
+            stderr,
+            "usage: %s "
+            "g1|g1p|g1_3d|g2|blend|bprim_la|bprim_aa|bprim_la_v|bprim_aa_v|arcpiece|measure|smooth|"
+            "interp|interp_c N "
+            "[dump|nodump] [seed]\n",
+            argv[0]);
 #else
         fprintf(stderr, "usage: %s g1|g1p|g1_3d|g2|blend N [dump|nodump] [seed]\n", argv[0]);
 #endif
@@ -747,9 +759,13 @@ int main(int argc, char **argv)
 #ifdef EF_BENCH_PATH
     switch (path_kind) {
     case 0:
-        return run_bprim(tbl, n, dump, 0, &rs);
+        return run_bprim(tbl, n, dump, 0, 0, &rs);
     case 1:
-        return run_bprim(tbl, n, dump, 1, &rs);
+        return run_bprim(tbl, n, dump, 1, 0, &rs);
+    case 7:
+        return run_bprim(tbl, n, dump, 0, 1, &rs);
+    case 8:
+        return run_bprim(tbl, n, dump, 1, 1, &rs);
     case 2:
         return run_arcpiece(tbl, n, dump, &rs);
     case 3:

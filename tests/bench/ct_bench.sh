@@ -10,6 +10,7 @@
 #             data, each checked on its own), g2 or blend (ef_blend_corner) (several may be given; each is run and checked);
 #             with the bench_ct_path binary also, as figures only (min / median / mean / max,
 #             never a failure): bprim_la, bprim_aa (ef_blend_prims line->arc, arc->arc),
+#             bprim_la_v, bprim_aa_v (the same through ef_blend_prims_valid, the smoother's call),
 #             arcpiece (ef_blend_arc_piece), measure (ef_move_measure on quintics), smooth
 #             (N primitives through ef_smooth_push / ef_smooth_pull: per push, per pulled
 #             move, and push+pull instructions per move), interp, interp_c (the same stream
@@ -56,7 +57,7 @@ while [ $# -gt 0 ]; do
     esac
 done
 if [ $# -lt 3 ]; then
-    echo "usage: ct_bench.sh [--targets] [--verify] [--keep DIR] BENCH N g1|g1p|g1_3d|g2|blend|bprim_la|bprim_aa|arcpiece|measure|smooth|interp|interp_c..." >&2
+    echo "usage: ct_bench.sh [--targets] [--verify] [--keep DIR] BENCH N g1|g1p|g1_3d|g2|blend|bprim_la|bprim_aa|bprim_la_v|bprim_aa_v|arcpiece|measure|smooth|interp|interp_c..." >&2
     exit 2
 fi
 bench=$1
@@ -129,12 +130,14 @@ for kind in "$@"; do
     blend) fn=ef_blend_corner; label="corner blend"; target=$TARGET_BLEND ;;
     bprim_la) fn=ef_blend_prims; label="blend prims line-arc"; info=1 ;;
     bprim_aa) fn=ef_blend_prims; label="blend prims arc-arc"; info=1 ;;
+    bprim_la_v) fn=ef_blend_prims_valid; label="blend prims valid line-arc"; info=1 ;;
+    bprim_aa_v) fn=ef_blend_prims_valid; label="blend prims valid arc-arc"; info=1 ;;
     arcpiece) fn=ef_blend_arc_piece; label="arc piece"; info=1 ;;
     measure) fn=ef_move_measure; label="move measure (quintic)"; info=1 ;;
     smooth) fn=ef_smooth_push,ef_smooth_pull; label="smoother"; info=2 ;;
     interp) fn=ef_interp_process; label="interpolator period (uniform)"; info=3 ;;
     interp_c) fn=ef_interp_process; label="interpolator period (corrected)"; info=3 ;;
-    *) echo "ct_bench.sh: kind must be g1, g1p, g1_3d, g2, blend, bprim_la, bprim_aa, arcpiece, measure, smooth, interp or interp_c, not $kind" >&2; exit 2 ;;
+    *) echo "ct_bench.sh: kind must be g1, g1p, g1_3d, g2, blend, bprim_la, bprim_aa, bprim_la_v, bprim_aa_v, arcpiece, measure, smooth, interp or interp_c, not $kind" >&2; exit 2 ;;
     esac
     if [ "$info" -eq 2 ]; then
         # The log lists the calls in dump order: "call push", "call pull" (a move), "call pull0".

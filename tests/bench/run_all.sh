@@ -69,7 +69,7 @@ if [ -x "$b/tests/bench_smooth" ]; then
         echo "== Per-call instructions of the per-move functions (callgrind, firmware at -O2, default"
         echo "   tables), 1000 random inputs each: min / median / max, max/min; ef_interp_process per"
         echo "   1 ms period over the moves of 1000 CAM-like primitives (target <= 1000 per period)"
-        sh tests/bench/ct_bench.sh "$b/tests/bench_ct_path" 1000 bprim_la bprim_aa arcpiece \
+        sh tests/bench/ct_bench.sh "$b/tests/bench_ct_path" 1000 bprim_la bprim_aa bprim_la_v bprim_aa_v arcpiece \
             measure smooth interp interp_c | tee -a "$x86log"
     fi
 else

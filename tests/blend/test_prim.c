@@ -407,6 +407,23 @@ static void test_check(void)
 
 /* ---- ef_prim_frame ---------------------------------------------------------------------- */
 
+/* Two blends equal field by field, bit for bit (padding aside). */
+static int same_blend(const ef_blend_t *a, const ef_blend_t *b)
+{
+    const ef_seg_t *x = &a->seg, *y = &b->seg;
+    int s = memcmp(x->b, y->b, sizeof x->b) == 0 && x->degree == y->degree && x->ndof == y->ndof &&
+            x->flags == y->flags && x->clamp == y->clamp &&
+            memcmp(x->dof, y->dof, sizeof x->dof) == 0 &&
+            memcmp(&x->norm, &y->norm, sizeof x->norm) == 0;
+    return s && memcmp(&a->p_in, &b->p_in, sizeof a->p_in) == 0 &&
+           memcmp(&a->p_out, &b->p_out, sizeof a->p_out) == 0 &&
+           memcmp(&a->trim_in, &b->trim_in, sizeof(float)) == 0 &&
+           memcmp(&a->trim_out, &b->trim_out, sizeof(float)) == 0 &&
+           memcmp(&a->dev, &b->dev, sizeof(float)) == 0 &&
+           memcmp(&a->gain, &b->gain, sizeof(float)) == 0 &&
+           memcmp(&a->turn, &b->turn, sizeof(float)) == 0 && a->flags == b->flags;
+}
+
 static void test_frame(void)
 {
     ef_frame_t f;
@@ -429,6 +446,16 @@ static void test_frame(void)
     EF_CHECK(memcmp(&f.p, &st, sizeof f.p) == 0);
     EF_CHECK_EQ(ef_prim_frame(st, NULL, 0.0f, &f), EF_ERR_ARG);
     EF_CHECK_EQ(ef_prim_frame(st, &l, 0.0f, NULL), EF_ERR_ARG);
+    ef_prim_geo_t lg;
+    ef_prim_geo(st, &l, &lg); /* a line's geometry is all zero; frames still right */
+    EF_CHECK(lg.r0 == 0.0f && lg.len == 0.0f);
+    ef_frame_t fl;
+    EF_CHECK_EQ(ef_prim_frame_geo(st, &l, &lg, 6.5f, &fl), EF_OK);
+    EF_CHECK_EQ(ef_prim_frame(st, &l, 6.5f, &f), EF_OK);
+    EF_CHECK(memcmp(&fl, &f, sizeof f) == 0);
+    EF_CHECK_EQ(ef_prim_frame_geo(st, &l, NULL, 0.0f, &fl), EF_ERR_ARG);
+    EF_CHECK(ef_prim_end_gap_geo(&l, &lg) == 0.0f);
+    ef_prim_geo(st, &l, NULL); /* nothing to fill: no crash */
     ef_prim_t bad = l;
     bad.kind = 0;
     EF_CHECK_EQ(ef_prim_frame(st, &bad, 0.0f, &f), EF_ERR_ARG);
@@ -455,9 +482,16 @@ static void test_frame(void)
         dprim_t m = dprim(sf, &pr);
         EF_CHECK_NEAR(len, m.len, 2e-6 * m.len + 1e-6);
         double scale = dnorm(c) + r + fabs(rise);
+        /* the arc's geometry once for all its frames gives the same bits as each call */
+        ef_prim_geo_t geo;
+        ef_prim_geo(sf, &pr, &geo);
+        EF_CHECK(ef_prim_end_gap_geo(&pr, &geo) == ef_prim_end_gap(sf, &pr));
         for (int k = 0; k <= 8; k++) {
             double s = k == 8 ? (double)len : m.len * k / 8.0;
             EF_CHECK_EQ(ef_prim_frame(sf, &pr, (float)s, &f), EF_OK);
+            ef_frame_t fg;
+            EF_CHECK_EQ(ef_prim_frame_geo(sf, &pr, &geo, (float)s, &fg), EF_OK);
+            EF_CHECK(memcmp(&fg, &f, sizeof f) == 0);
             dv3 p, t, kv;
             dprim_at(&m, s, &p, &t, &kv);
             if (k == 8)
@@ -873,9 +907,14 @@ static void corner_case(stats_t *st, unsigned long long *seed, int in_arc, int o
         max_in = (float)fmin(len_in, L0 * log_uniform(seed, 1e-3, 1.0));
     if (lim == 3)
         max_out = (float)fmin(len_out, L0 * log_uniform(seed, 1e-3, 1.0));
-    ef_blend_t bl;
+    ef_blend_t bl, bv;
     int rc =
         ef_blend_prims(G2, start_in, &in, len_in, &out, len_out, (float)tol, max_in, max_out, &bl);
+    /* the smoother's call (no second check of the primitives) gives the same blend */
+    int rcv = ef_blend_prims_valid(G2, start_in, &in, len_in, &out, len_out, (float)tol, max_in,
+                                   max_out, &bv);
+    EF_CHECK_EQ(rcv, rc);
+    EF_CHECK(same_blend(&bl, &bv));
     int wide = lim <= 1;
     st->nwide += wide;
     st->bwide += wide & (rc == EF_OK) & !(bl.flags & (EF_BLEND_STRAIGHT | EF_BLEND_STOP));
@@ -1230,6 +1269,20 @@ static void test_blend_prims_args(void)
     bad.sweep = 0.0f;
     EF_CHECK_EQ(ef_blend_prims(G2, s, &in, li, &bad, lo, 0.01f, li, lo, &b), EF_ERR_ARC);
     EF_CHECK_EQ(b.seg.degree, 0);
+    /* ef_blend_prims_valid(): the arguments it still checks, each with its code and a zero
+     * result */
+    EF_CHECK_EQ(ef_blend_prims_valid(G2, s, &in, li, &out, lo, 0.01f, li, lo, NULL), EF_ERR_ARG);
+    EF_CHECK_EQ(ef_blend_prims_valid(NULL, s, &in, li, &out, lo, 0.01f, li, lo, &b), EF_ERR_ARG);
+    EF_CHECK_EQ(ef_blend_prims_valid(G2, s, &in, li, NULL, lo, 0.01f, li, lo, &b), EF_ERR_ARG);
+    EF_CHECK_EQ(ef_blend_prims_valid(G2, s, &in, li, &out, lo, -1.0f, li, lo, &b), EF_ERR_ARG);
+    EF_CHECK_EQ(ef_blend_prims_valid(G2, s, &in, li, &out, lo, 0.01f, li * 1.5f, lo, &b),
+                EF_ERR_ARG);
+    EF_CHECK_EQ(ef_blend_prims_valid(G2, s, &in, li, &out, lo, 0.01f, li, -lo, &b), EF_ERR_ARG);
+    EF_CHECK_EQ(ef_blend_prims_valid(G2, s, &in, NAN, &out, lo, 0.01f, li, lo, &b),
+                EF_ERR_NONFINITE);
+    EF_CHECK_EQ(ef_blend_prims_valid(&t1, s, &in, li, &out, lo, 0.01f, li, lo, &b), EF_ERR_KIND);
+    EF_CHECK_EQ(b.seg.degree, 0);
+    EF_CHECK_EQ(b.flags, 0);
     /* a 90 degree line-arc corner: blend */
     ef_prim_t out2 = mk_arc_d(d3(1, 0, 0), d3(0, 0, 0), d3(0, 0, 1), 1.0, 0);
     EF_CHECK_EQ(ef_prim_check(in.end, &out2, &lo), EF_OK);

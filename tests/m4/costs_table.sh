@@ -22,6 +22,8 @@ awk '
         else if (lab == "corner blend") m = "ef_blend_corner"
         else if (lab == "blend prims line-arc") m = "ef_blend_prims/line-arc"
         else if (lab == "blend prims arc-arc") m = "ef_blend_prims/arc-arc"
+        else if (lab == "blend prims valid line-arc") m = "ef_blend_prims_valid/line-arc"
+        else if (lab == "blend prims valid arc-arc") m = "ef_blend_prims_valid/arc-arc"
         else if (lab == "arc piece") m = "ef_blend_arc_piece"
         else if (lab == "move measure (quintic)") m = "ef_move_measure"
         else if (lab == "smoother push") m = "ef_smooth_push/cam"
@@ -66,6 +68,8 @@ awk '
             printf "%-30s %9s %8s | %9s %8s | %9s %8s | %-12s %s\n", f, d(xmax, f), d(xr, f),
                    d(amax, f), d(ar, f), d(smax, f), d(sr, f), target(f), met(f)
         }
+        print "ef_blend_prims_valid is the smoother'"'"'s call (primitives checked when pushed); ef_blend_prims"
+        print "adds the public call'"'"'s second ef_prim_check() of both primitives"
         print "max/min target 1.02: the segment, corner, arc-piece, measure and ef_blend_prims calls"
         print "are constant; the smoother and the interpolator are not (their bound is the max column)"
     }' "$x86" "$o2" "$os"

@@ -76,12 +76,24 @@ static ef_smooth_t costs_sm;
 static ef_interp_t costs_ip;
 
 /* Entry points whose stack high-water is reported. */
-enum { CS_G1, CS_G2, CS_CORNER, CS_PRIMS, CS_PIECE, CS_MEASURE, CS_SSTREAM, CS_ISTREAM, CS_COUNT };
+enum {
+    CS_G1,
+    CS_G2,
+    CS_CORNER,
+    CS_PRIMS,
+    CS_PRIMS_VALID,
+    CS_PIECE,
+    CS_MEASURE,
+    CS_SSTREAM,
+    CS_ISTREAM,
+    CS_COUNT
+};
 static const char *const costs_stack_name[CS_COUNT] = {
     "ef_seg_g1_cubic",
     "ef_seg_g2_quintic",
     "ef_blend_corner",
     "ef_blend_prims",
+    "ef_blend_prims_valid",
     "ef_blend_arc_piece",
     "ef_move_measure",
     "ef_smooth_push+ef_smooth_pull+ef_smooth_finish",
@@ -221,7 +233,9 @@ __attribute__((noinline)) static void costs_corner(void)
     costs_report("ef_blend_corner", costs_v, COSTS_N);
 }
 
-__attribute__((noinline)) static void costs_bprim(const char *name, int kind)
+/* ef_blend_prims() (valid 0) or ef_blend_prims_valid() (valid 1, the smoother's call) on
+ * COSTS_N corners of one kind. */
+__attribute__((noinline)) static void costs_bprim(const char *name, int kind, int valid)
 {
     unsigned long long rs = CT_SEED;
     for (long i = 0; i < COSTS_N; i++) {
@@ -235,15 +249,18 @@ __attribute__((noinline)) static void costs_bprim(const char *name, int kind)
     for (long i = 0; i < COSTS_N; i++) {
         const ct_bprim_t *c = &costs_in.bprim[i];
         uint32_t t0 = ef_m4_icount_begin();
-        int rc = ef_blend_prims(&ef_tbl_g2_default, c->s_in, &c->in, c->len_in, &c->out, c->len_out,
-                                c->tol, c->max_in, c->max_out, &bl);
+        int rc = valid
+                     ? ef_blend_prims_valid(&ef_tbl_g2_default, c->s_in, &c->in, c->len_in, &c->out,
+                                            c->len_out, c->tol, c->max_in, c->max_out, &bl)
+                     : ef_blend_prims(&ef_tbl_g2_default, c->s_in, &c->in, c->len_in, &c->out,
+                                      c->len_out, c->tol, c->max_in, c->max_out, &bl);
         costs_v[i] = ef_m4_icount_end(t0);
         /* A reversal (turn beyond EF_BLEND_MAX_TURN at an arc end) is valid input too. */
         if (rc != EF_OK && rc != EF_ERR_REVERSAL) {
             costs_fail(name, i, rc);
         }
     }
-    costs_stack_note(CS_PRIMS, ef_m4_stack_used());
+    costs_stack_note(valid ? CS_PRIMS_VALID : CS_PRIMS, ef_m4_stack_used());
     costs_report(name, costs_v, COSTS_N);
 }
 
@@ -500,10 +517,14 @@ int main(void)
     costs_seg("ef_seg_g1_cubic/3d", 2);
     costs_seg("ef_seg_g2_quintic", 0);
     costs_corner();
-    costs_bprim("ef_blend_prims/line-arc", CT_BPRIM_LA);
-    costs_bprim("ef_blend_prims/arc-line", CT_BPRIM_AL);
-    costs_bprim("ef_blend_prims/arc-arc", CT_BPRIM_AA);
-    costs_bprim("ef_blend_prims/helix-helix", CT_BPRIM_HH);
+    costs_bprim("ef_blend_prims/line-arc", CT_BPRIM_LA, 0);
+    costs_bprim("ef_blend_prims/arc-line", CT_BPRIM_AL, 0);
+    costs_bprim("ef_blend_prims/arc-arc", CT_BPRIM_AA, 0);
+    costs_bprim("ef_blend_prims/helix-helix", CT_BPRIM_HH, 0);
+    costs_bprim("ef_blend_prims_valid/line-arc", CT_BPRIM_LA, 1);
+    costs_bprim("ef_blend_prims_valid/arc-line", CT_BPRIM_AL, 1);
+    costs_bprim("ef_blend_prims_valid/arc-arc", CT_BPRIM_AA, 1);
+    costs_bprim("ef_blend_prims_valid/helix-helix", CT_BPRIM_HH, 1);
     costs_piece();
     costs_measure();
     costs_cam();

@@ -707,8 +707,9 @@ static void sm_decide_vertex(ef_smooth_t *s, ef_smooth_prim_t *a, ef_smooth_prim
     /* Each side gives at most half its length, so the blends at its two ends cannot
      * overlap (ef_smooth.h). */
     float max_in = 0.5f * a->len, max_out = 0.5f * b->len;
-    int rc = ef_blend_prims(s->cfg.g2, a->start, &a->pr, a->len, &b->pr, b->len, tol, max_in,
-                            max_out, &a->blend);
+    /* both primitives were checked when pushed, a->len and b->len are ef_prim_check()'s */
+    int rc = ef_blend_prims_valid(s->cfg.g2, a->start, &a->pr, a->len, &b->pr, b->len, tol, max_in,
+                                  max_out, &a->blend);
     if (rc == EF_ERR_REVERSAL) {
         s->st.stops++;
         s->st.reversals++;

@@ -63,8 +63,9 @@
  * and curvature vectors there (an arc end has curvature 1/r towards the centre). Its DOFs
  * are the line–line blend's for the vertex tangents, the table at (phi, -phi, 0, 0), with
  * both end speeds then set to the curve's own length (Newton steps on a per-node quartic of
- * the hodograph): a stepper that steps the parameter uniformly (the drives' segment mode)
- * would otherwise jump in feed at both junctions (ef_seg_g2_even() says why).
+ * the hodograph, 8 Gauss–Legendre nodes; the first guess is the table's x1 per unit chord
+ * times the trial's chord): a stepper that steps the parameter uniformly (the drives'
+ * segment mode) would otherwise jump in feed at both junctions (ef_seg_g2_even() says why).
  * Its deviation is bounded in closed form, both ways, as the smaller of two bounds, each a
  * chain of distances between points at equal parameters:
  * - against the line–line blend r with the same DOFs on the tangent lines through v:
@@ -81,11 +82,14 @@
  * (2 ulp of it times the radius), the incoming arc's end gap (ef_prim_end_gap()) and
  * q = 4 eps (max|v_i| + r_in + r_out) for the control points' rounding. No samples: the cost
  * is the same for every corner of a pair of kinds (to rounding of the loop bounds, 1 %).
- * L: ::EF_BLEND_ITER trials, each fitting dev ~ m + g L + A L^2 through the last one and
- * solving it for 0.99 tol (later 0.97 tol); the longest trial within tol is kept, and if
- * none is, the outcome is ::EF_BLEND_STOP. L is at most max_in and max_out (and, on an arc,
- * EF_ARC_PIECE_SWEEP of its sweep); a side whose own limit is within 2 % of L takes that
- * limit, so two blends that each take half of a primitive meet without a sliver between
+ * L: ::EF_BLEND_ITER (2) trials, the first at the line–line trim for 0.99 tol, the second
+ * fitting dev ~ m + g L + A L^2 through the first and solving it for 0.99 tol (later ones,
+ * if EF_BLEND_ITER is raised, 0.97 tol); the longest trial within tol is kept. Its end speeds are
+ * measured once more on the stored control points (8-node length; a tiny blend far from the origin
+ * rounds them by a few 1e-3), and its chord must be one float32 resolves (as ef_blend_corner()); if
+ * no trial is kept or these fail, the outcome is ::EF_BLEND_STOP. L is at most max_in and max_out
+ * (and, on an arc, EF_ARC_PIECE_SWEEP of its sweep); a side whose own limit is within 2 % of L
+ * takes that limit, so two blends that each take half of a primitive meet without a sliver between
  * them. A short neighbour on one side therefore shortens both sides.
  *
  * ## Tangent joins (ef_blend_prims())
@@ -97,10 +101,11 @@
  * the larger curvature, far above float32's rounding of the curvature vectors), the join is
  * blended exactly like a corner with arc ends (same construction, bound and trim search),
  * and flagged as a normal blend. The trims start from
- * sqrt(tol / dk) (where a transition's deviation, about dk L^2, reaches tol) instead of the
- * line–line trim, bounded by max_in / max_out and the arc cap. If no blend fits the outcome
- * is ::EF_BLEND_STRAIGHT (the G1 pass-through is safe), never ::EF_BLEND_STOP. Straight
- * vertices between two lines, an arc continued by the same circle and negligible jumps stay
+ * sqrt(48 tol / dk) (where a transition's deviation, measured about dk L^2 / 53 on
+ * tests/blend/test_prim.c's joins, reaches tol) instead of the line–line trim, bounded by max_in /
+ * max_out and the arc cap. If no blend fits the outcome is ::EF_BLEND_STRAIGHT (the G1 pass-through
+ * is safe), never ::EF_BLEND_STOP. Straight vertices between two lines, an arc continued by the
+ * same circle and negligible jumps stay
  * ::EF_BLEND_STRAIGHT.
  */
 #ifndef EF_BLEND_H
@@ -182,7 +187,7 @@ int ef_blend_corner(const ef_table_t *g2, ef_vec3_t v, ef_vec3_t u_in, ef_vec3_t
 /** Trials of the trim search in ef_blend_prims() (each a frame pair, an evening and the
  *  closed-form bound). */
 #ifndef EF_BLEND_ITER
-#define EF_BLEND_ITER 3
+#define EF_BLEND_ITER 2
 #endif
 
 /** The turn at a vertex and the line–line blend's table DOFs there (ef_blend_vertex()). */
@@ -220,7 +225,8 @@ int ef_blend_vertex(const ef_table_t *g2, ef_vec3_t ui, ef_vec3_t uo, ef_blend_v
  *
  * Details (firmware/src/blend/ef_blend_arc.c):
  * - both primitives are checked again (ef_prim_check(); its error codes are returned) and
- *   len_in / len_out must be their lengths to 1e-5 relative (else EF_ERR_ARG);
+ *   len_in / len_out must be their lengths to 1e-5 relative (else EF_ERR_ARG); then
+ *   ef_blend_prims_valid() (the smoother's call) with ef_prim_check()'s lengths;
  * - vertex tangents turning by less than EF_BLEND_MIN_TURN: a tangent join (see the file
  *   comment) when the curvature vectors differ by dk with dk tol >= EF_BLEND_MIN_TURN^2 and
  *   dk > 1e-4 max(kappa_in, kappa_out): blended as below (first trim sqrt(tol / dk)),
@@ -228,9 +234,10 @@ int ef_blend_vertex(const ef_table_t *g2, ef_vec3_t ui, ef_vec3_t uo, ef_blend_v
  * - one trim L on both sides, at most max_in, max_out and, on an arc side,
  *   EF_ARC_PIECE_SWEEP of its sweep; a side whose own limit is within 2 % of L takes it;
  * - a trial is feasible if its closed-form deviation bound (both ways, see above) is within
- *   tol and Newton's evening left its end speeds within EF_SEG_END_SPEED_REL of its length;
- *   the kept trial must also pass that on its stored control points (float32 rounding of a
- *   tiny blend far from the origin), else no blend;
+ *   tol; the kept trial's stored control points must have end speeds within
+ *   EF_SEG_END_SPEED_REL of their curve's length (this covers both Newton's residual and
+ *   float32 rounding of a tiny blend far from the origin) and a chord of at least
+ *   max(EF_MIN_CHORD, EF_MIN_CHORD_REL max|v_i|), else no blend;
  * - res->dev is that bound (tests/blend/test_prim.c measures the true deviation in double:
  *   at most 0.998 of it over 6000 random corners), res->gain the reference line–line
  *   blend's deviation per unit trim, EF_BLEND_CLAMPED when a limit, not the tolerance,
@@ -258,6 +265,27 @@ int ef_blend_vertex(const ef_table_t *g2, ef_vec3_t ui, ef_vec3_t uo, ef_blend_v
 int ef_blend_prims(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in, float len_in,
                    const ef_prim_t *out, float len_out, float tol, float max_in, float max_out,
                    ef_blend_t *res);
+
+/**
+ * @brief ef_blend_prims() for primitives the caller has validated: the same result, bit for
+ * bit, without checking the primitives again (ef_prim_check(), about 0.5 k instructions per
+ * arc). The smoother calls this on its hot path; it checked each primitive when it was
+ * pushed and keeps the length ef_prim_check() gave.
+ *
+ * Precondition (not checked): ef_prim_check(start_in, in, &len_in) and
+ * ef_prim_check(in->end, out, &len_out) returned EF_OK with exactly these lengths. Violating
+ * it gives an unspecified blend, never a crash (every loop has a fixed count); the
+ * arguments below are still checked.
+ * @retval EF_OK            as ef_blend_prims()
+ * @retval EF_ERR_ARG       NULL pointer; tol <= 0; max_in, max_out not in (0, len]
+ * @retval EF_ERR_KIND      not a G2 quintic table
+ * @retval EF_ERR_NONFINITE a non-finite length, tol or limit
+ * @retval EF_ERR_REVERSAL  as ef_blend_prims()
+ * @retval others           as ef_table_lookup_g2()
+ */
+int ef_blend_prims_valid(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in,
+                         float len_in, const ef_prim_t *out, float len_out, float tol, float max_in,
+                         float max_out, ef_blend_t *res);
 
 /**
  * @brief One piece of a checked arc/helix primitive, from arc length s0 to s1 along it, as a
