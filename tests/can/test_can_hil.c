@@ -2014,19 +2014,18 @@ static void part_io_latency(void)
  *  defaults it checks. */
 #define GS_SDO       "--sdo-timeout 1000"
 #define GS_USB_SLOW  "--can-opts timeout=10000"
-#define GS_SEG_EXTRA GS_SEG_CYCLE " " GS_SDO " " GS_USB_SLOW
-#define GS_CSP_EXTRA GS_CSP_CYCLE " " GS_SDO " " GS_USB_SLOW
+#define GS_SEG_VCAN  GS_SEG_CYCLE " " GS_SDO
+#define GS_CSP_VCAN  GS_CSP_CYCLE " " GS_SDO
+#define GS_SEG_EXTRA GS_SEG_VCAN " " GS_USB_SLOW
+#define GS_CSP_EXTRA GS_CSP_VCAN " " GS_USB_SLOW
 
-static const char *gs_extra(const char *mode)
+/* A mode's options through the adapter (usb 1) or, for the benchmark's comparison, the same
+ * stream on vcan0 (usb 0: --can-opts is refused there, it is for gs_usb adapters). */
+static const char *gs_mode_extra(const char *mode, int usb)
 {
-    return strcmp(mode, "csp") ? GS_SEG_EXTRA : GS_CSP_EXTRA;
-}
-
-/* The same stream's options on vcan0 (the benchmark's comparison): --can-opts is refused
- * there (it is for gs_usb adapters). */
-static const char *gs_vcan_extra(const char *mode)
-{
-    return strcmp(mode, "csp") ? GS_SEG_CYCLE " " GS_SDO : GS_CSP_CYCLE " " GS_SDO;
+    static const char *const opts[2][2] = {{GS_SEG_VCAN, GS_CSP_VCAN},
+                                           {GS_SEG_EXTRA, GS_CSP_EXTRA}};
+    return opts[usb != 0][strcmp(mode, "csp") == 0];
 }
 
 /* The sample profile at half its feeds (F1200 -> F600, F300 -> F150), into OUT and g_prog:
@@ -2153,7 +2152,7 @@ static void part_gsusb_stream(const char *mode)
      * the stream detaches it while in use and hands it back at the end. */
     EF_CHECK(gs_kernel_can0(5000));
     g_can = "gsusb:" GS_SERIAL "@1000000";
-    g_can_extra = gs_extra(mode);
+    g_can_extra = gs_mode_extra(mode, 1);
     g_ferr_steps = !strcmp(mode, "csp");
     if (!gs_program()) {
         gs_stop(&a);
@@ -2643,10 +2642,10 @@ static void part_gsusb_bench(void)
     static const char *modes[] = {"segment", "csp"};
     for (int k = 0; k < 2; k++) {
         /* the same stream through both (the adapter's transfer bounds aside) */
-        g_can_extra = gs_vcan_extra(modes[k]);
+        g_can_extra = gs_mode_extra(modes[k], 0);
         g_can = "vcan0";
         gb_stream("SocketCAN", modes[k]);
-        g_can_extra = gs_extra(modes[k]);
+        g_can_extra = gs_mode_extra(modes[k], 1);
         g_can = "gsusb:" GS_SERIAL "@1000000";
         gb_stream("gs_usb", modes[k]);
     }
