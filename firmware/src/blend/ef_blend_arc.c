@@ -186,6 +186,20 @@ static float ba_dist_piece(ef_vec3_t q, const ef_ba_piece_t *pc)
     return ef_sqrtf(ef_minf(e2, ef_selectf(inside, din, 3.4e38f))) + pc->err;
 }
 
+/* Control points of the G2 quintic with DOFs x between exact frames (ef_seg.h's formulas;
+ * ef_seg_from_dofs()'s curve without its normalization). */
+static void ba_build(const ef_frame_t *f0, const ef_frame_t *f1, const float *x, ef_vec3_t *b)
+{
+    ef_vec3_t d2a = ef_v3_axpy(ef_v3_scale(f0->t, x[1]), f0->kappa * x[0] * x[0], f0->n);
+    ef_vec3_t d2b = ef_v3_axpy(ef_v3_scale(f1->t, x[3]), f1->kappa * x[2] * x[2], f1->n);
+    b[0] = f0->p;
+    b[5] = f1->p;
+    b[1] = ef_v3_axpy(f0->p, 0.2f * x[0], f0->t);
+    b[4] = ef_v3_axpy(f1->p, -0.2f * x[2], f1->t);
+    b[2] = ef_v3_axpy(ef_v3_sub(ef_v3_scale(b[1], 2.0f), f0->p), 0.05f, d2a);
+    b[3] = ef_v3_axpy(ef_v3_sub(ef_v3_scale(b[4], 2.0f), f1->p), 0.05f, d2b);
+}
+
 /* Largest gap between an arc's end and its model circle (ef_prim_end_gap()) that the
  * closed-form piece carries, relative to the piece's length: the quintic's end speeds then
  * differ from its length by about that much, well within EF_SEG_END_SPEED_REL. */
@@ -283,14 +297,8 @@ int ef_blend_arc_piece(const ef_table_t *g2, ef_vec3_t start, const ef_prim_t *p
     float gap = ef_selectf(s1 >= len, ef_prim_end_gap_geo(pr, &geo), 0.0f);
     if (!(gap <= EF_BA_PIECE_GAP_REL * x1))
         return ba_piece_table(g2, start, pr, &geo, len, s0, s1, &f0, &f1, gap, m);
-    ef_vec3_t d2a = ef_v3_scale(f0.n, f0.kappa * x1 * x1);
-    ef_vec3_t d2b = ef_v3_scale(f1.n, f1.kappa * x1 * x1);
-    m->b[0] = f0.p;
-    m->b[5] = f1.p;
-    m->b[1] = ef_v3_axpy(f0.p, 0.2f * x1, f0.t);
-    m->b[4] = ef_v3_axpy(f1.p, -0.2f * x1, f1.t);
-    m->b[2] = ef_v3_axpy(ef_v3_sub(ef_v3_scale(m->b[1], 2.0f), f0.p), 0.05f, d2a);
-    m->b[3] = ef_v3_axpy(ef_v3_sub(ef_v3_scale(m->b[4], 2.0f), f1.p), 0.05f, d2b);
+    const float x[4] = {x1, 0.0f, x1, 0.0f};
+    ba_build(&f0, &f1, x, m->b);
     /* The bound, plus what float32 adds: ef_prim_frame()'s angle (EF_BA_ANGLE_ULP ulp of the
      * angle at s1, times the radius, as ba_piece()) and the control points' rounding at the
      * coordinates' magnitude. */
@@ -391,20 +399,6 @@ static void ba_even_ends(const ef_vec3_t *v, float s0, float x20, float x21, int
     x[1] = x20;
     x[2] = s;
     x[3] = x21;
-}
-
-/* Control points of the G2 quintic with DOFs x between exact frames (ef_seg.h's formulas;
- * ef_seg_from_dofs()'s curve without its normalization). */
-static void ba_build(const ef_frame_t *f0, const ef_frame_t *f1, const float *x, ef_vec3_t *b)
-{
-    ef_vec3_t d2a = ef_v3_axpy(ef_v3_scale(f0->t, x[1]), f0->kappa * x[0] * x[0], f0->n);
-    ef_vec3_t d2b = ef_v3_axpy(ef_v3_scale(f1->t, x[3]), f1->kappa * x[2] * x[2], f1->n);
-    b[0] = f0->p;
-    b[5] = f1->p;
-    b[1] = ef_v3_axpy(f0->p, 0.2f * x[0], f0->t);
-    b[4] = ef_v3_axpy(f1->p, -0.2f * x[2], f1->t);
-    b[2] = ef_v3_axpy(ef_v3_sub(ef_v3_scale(b[1], 2.0f), f0->p), 0.05f, d2a);
-    b[3] = ef_v3_axpy(ef_v3_sub(ef_v3_scale(b[4], 2.0f), f1->p), 0.05f, d2b);
 }
 
 /* Largest | |f'| / L - 1 | at the two ends of the stored control points b, L their curve's
