@@ -564,6 +564,27 @@ static void ba_corner_try(const ef_ba_corner_t *k, float l, float x, int steps, 
     tr->ok = ba_finite(dev);
 }
 
+/* The checks both blend calls make first, in their order: NULL pointers, the table's kind,
+ * finite numbers. */
+static int ba_args(const ef_table_t *g2, const ef_prim_t *in, const ef_prim_t *out, float len_in,
+                   float len_out, float tol, float max_in, float max_out)
+{
+    if (!g2 || !in || !out)
+        return EF_ERR_ARG;
+    if (g2->kind != EF_TABLE_G2_QUINTIC)
+        return EF_ERR_KIND;
+    int finite = ba_finite(len_in) & ba_finite(len_out) & ba_finite(tol) & ba_finite(max_in) &
+                 ba_finite(max_out);
+    return finite ? EF_OK : EF_ERR_NONFINITE;
+}
+
+/* tol > 0 and both trim limits in (0, their primitive's length]. */
+static int ba_range(float tol, float max_in, float max_out, float len_in, float len_out)
+{
+    return (tol > 0.0f) & (max_in > 0.0f) & (max_out > 0.0f) & (max_in <= len_in) &
+           (max_out <= len_out);
+}
+
 /* G2 blend of a corner or tangent join with arc ends (contract in ef_blend.h).
  *
  * The blend trims l on both sides (symmetric, as ef_blend_corner()) and is the G2 quintic
@@ -600,16 +621,11 @@ int ef_blend_prims(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in
 {
     if (!res)
         return EF_ERR_ARG;
-    if (!g2 || !in || !out)
-        return ba_fail_blend(res, EF_ERR_ARG);
-    if (g2->kind != EF_TABLE_G2_QUINTIC)
-        return ba_fail_blend(res, EF_ERR_KIND);
-    int finite = ba_finite(len_in) & ba_finite(len_out) & ba_finite(tol) & ba_finite(max_in) &
-                 ba_finite(max_out);
-    if (!finite)
-        return ba_fail_blend(res, EF_ERR_NONFINITE);
+    int rc = ba_args(g2, in, out, len_in, len_out, tol, max_in, max_out);
+    if (rc != EF_OK)
+        return ba_fail_blend(res, rc);
     float cl_in, cl_out;
-    int rc = ef_prim_check(start_in, in, &cl_in);
+    rc = ef_prim_check(start_in, in, &cl_in);
     if (rc != EF_OK)
         return ba_fail_blend(res, rc);
     rc = ef_prim_check(in->end, out, &cl_out);
@@ -619,9 +635,7 @@ int ef_blend_prims(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in
     int lens_in = ef_fabsf(len_in - cl_in) <= 1e-5f * cl_in;
     int lens_out = ef_fabsf(len_out - cl_out) <= 1e-5f * cl_out;
     int lens = lens_in & lens_out;
-    int range = (tol > 0.0f) & (max_in > 0.0f) & (max_out > 0.0f) & (max_in <= len_in) &
-                (max_out <= len_out);
-    if (!(lens & range))
+    if (!(lens & ba_range(tol, max_in, max_out, len_in, len_out)))
         return ba_fail_blend(res, EF_ERR_ARG);
     /* From here on the lengths as this code computes them, so s = len is exactly the end. */
     return ef_blend_prims_valid(g2, start_in, in, cl_in, out, cl_out, tol, ef_minf(max_in, cl_in),
@@ -635,17 +649,10 @@ int ef_blend_prims_valid(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim
 {
     if (!res)
         return EF_ERR_ARG;
-    if (!g2 || !in || !out)
-        return ba_fail_blend(res, EF_ERR_ARG);
-    if (g2->kind != EF_TABLE_G2_QUINTIC)
-        return ba_fail_blend(res, EF_ERR_KIND);
-    int finite = ba_finite(len_in) & ba_finite(len_out) & ba_finite(tol) & ba_finite(max_in) &
-                 ba_finite(max_out);
-    if (!finite)
-        return ba_fail_blend(res, EF_ERR_NONFINITE);
-    int range = (tol > 0.0f) & (max_in > 0.0f) & (max_out > 0.0f) & (max_in <= len_in) &
-                (max_out <= len_out);
-    if (!range)
+    int rc = ba_args(g2, in, out, len_in, len_out, tol, max_in, max_out);
+    if (rc != EF_OK)
+        return ba_fail_blend(res, rc);
+    if (!ba_range(tol, max_in, max_out, len_in, len_out))
         return ba_fail_blend(res, EF_ERR_ARG);
 
     ef_vec3_t v = in->end;
@@ -663,7 +670,7 @@ int ef_blend_prims_valid(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim
      * per unit trim, 2 cos(phi), per unit trim. */
     ef_vec3_t ui = fi.t, uo = fo.t;
     ef_blend_vertex_t vx;
-    int rc = ef_blend_vertex(g2, ui, uo, &vx);
+    rc = ef_blend_vertex(g2, ui, uo, &vx);
     if (rc != EF_OK)
         return ba_fail_blend(res, rc);
     float theta = vx.theta, two_cos = vx.two_cos, phi = vx.phi;
