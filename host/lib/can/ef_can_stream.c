@@ -239,13 +239,22 @@ static void cs_error_text(const cs_t *S, char *buf, size_t n)
      * say which it was. */
     if (e0.what == EF_COM_WHAT_BUS && e0.value == 0)
         e0.value = S->bus_seen;
+    /* ... and the pump may not have passed the condition on yet when the stream stopped (a
+     * gs_usb adapter pulled while transfers were failing: "bus error (0x0)" was all the user
+     * got, hil_gsusb_unplug's first tries in CI): ask the transport itself, now. */
+    if (e0.what == EF_COM_WHAT_BUS && e0.value == 0) {
+        ef_canif_status_t st;
+        ef_canif_status(&S->ci, 0, &st);
+        e0.value = st.seen & EF_CANIF_BAD;
+    }
     ef_can_error_text(e, &S->mc, S->c->iface, buf, n);
-    /* "interface down" or "adapter fault" alone hides why: the transport knows (a USB
-     * adapter unplugged, a malformed frame from it). */
+    /* "interface down" or "adapter fault" alone hides why, and so does a bus error without
+     * detail: the transport knows (a USB adapter unplugged, a malformed frame from it). */
     const char *why = ef_canif_error(&S->ci);
     size_t k = strlen(buf);
-    if (e->what == EF_COM_WHAT_BUS && (e->value & (EF_CANIF_DOWN | EF_CANIF_FAULT)) && why[0] &&
-        k + 4 < n)
+    int bus = e->what == EF_COM_WHAT_BUS;
+    int hidden = (e->value & (EF_CANIF_DOWN | EF_CANIF_FAULT)) || e->value == 0;
+    if (bus && hidden && why[0] && k + 4 < n)
         snprintf(buf + k, n - k, " (%s)", why);
 }
 
