@@ -310,40 +310,7 @@ int ef_blend_arc_piece(const ef_table_t *g2, ef_vec3_t start, const ef_prim_t *p
                            m);
 }
 
-/* The hodograph of the G2 quintic between end frames (p0, t0, kappa0 n0) and (p1, t1,
- * kappa1 n1) with DOFs (x10, x20, x11, x21) (ef_seg.h's control points) is
- *
- *     f'(t) = B2 D + (x10 u0 + x20 w0 / 4) t0 + x10^2 w0 (kappa0 / 4) n0
- *                  + (x11 u1 + x21 w1 / 4) t1 + x11^2 w1 (kappa1 / 4) n1,
- *
- * D = 5 (p1 - p0), with the degree-4 Bernstein combinations u0 = B0 + B1 - 2 B2,
- * w0 = B1 - B2, u1 = B3 + B4 - 2 B2, w1 = B2 - B3: five fixed vectors per trial weighted by
- * scalars that depend only on t and the DOFs. ba_even_ends() evaluates a trial curve's
- * speed that way at fixed nodes, with no control points built. Rows: B2, u0, w0, u1, w1 at
- * the 8 Gauss-Legendre nodes on [0, 1] (the pairs 1/2 -+ offset, innermost first; last
- * column the weight; nodes by Newton's method on P8 in double, rounded to float). 8 nodes
- * integrate these speeds well within EF_SEG_END_SPEED_REL; 6 did not (tests/blend/test_prim.c
- * then saw end speeds 0.7 % off their length pass), 16 (ef_seg_length()'s) cost twice as much. */
-#define EF_BA_GL 8
-static const float ba_gl_basis[EF_BA_GL][6] = {
-    {3.501883762e-01f, -2.394380231e-01f, -1.184023543e-02f, -5.115038578e-01f, 1.891026199e-01f,
-     1.813418917e-01f},
-    {3.501883762e-01f, -5.115038578e-01f, -1.891026199e-01f, -2.394380231e-01f, 1.184023543e-02f,
-     1.813418917e-01f},
-    {1.964659303e-01f, 3.666985297e-01f, 2.246589268e-01f, -3.490281812e-01f, 1.557296750e-01f,
-     1.568533229e-01f},
-    {1.964659303e-01f, -3.490281812e-01f, -1.557296750e-01f, 3.666985297e-01f, -2.246589268e-01f,
-     1.568533229e-01f},
-    {5.004770489e-02f, 8.459740285e-01f, 2.447685245e-01f, -9.621255296e-02f, 4.627168366e-02f,
-     1.111905172e-01f},
-    {5.004770489e-02f, -9.621255296e-02f, -4.627168366e-02f, 8.459740285e-01f, -2.447685245e-01f,
-     1.111905172e-01f},
-    {2.272347601e-03f, 9.931521141e-01f, 7.251055938e-02f, -4.513852065e-03f, 2.241659877e-03f,
-     5.061426815e-02f},
-    {2.272347601e-03f, -4.513852065e-03f, -2.241659877e-03f, 9.931521141e-01f, -7.251055938e-02f,
-     5.061426815e-02f},
-};
-/* The five vectors of the hodograph (above) for a trial's end frames. */
+/* The five vectors of a trial's hodograph (ef_seg_even_speed()) from its end frames. */
 static void ba_hodo_vectors(const ef_frame_t *f0, const ef_frame_t *f1, ef_vec3_t *v)
 {
     v[0] = ef_v3_scale(ef_v3_sub(f1->p, f0->p), 5.0f);
@@ -354,77 +321,19 @@ static void ba_hodo_vectors(const ef_frame_t *f0, const ef_frame_t *f1, ef_vec3_
 }
 
 /* Both end speeds s = L (the curve's own length) with tangential DOFs x20, x21, by `steps`
- * Newton steps on g(s) = L(s) - s from s0 (g' = L' - 1, near -1: L moves little with s; a
- * flat g' takes the fixed-point step instead). With both end speeds s, f'(t) = a + s q +
- * s^2 r at each node, so |f'|^2 is a quartic in s whose coefficients (dot products of a, q,
- * r) are computed once; each step is then a few multiplies and a square root per node.
- * Newton's error squares with each step. The first trial starts from the table's x1 per unit
- * chord times its chord and takes EF_BA_NEWTON0 (2) steps (one step left 3 % more of
- * test_prim's corners uneven, a stop); later trials start from the previous trial's ratio
- * and take EF_BA_NEWTON (1). The winner's stored control points are measured once more at
- * the end (ef_blend_prims_valid()), so a step that fell short is a stop, never an uneven
+ * Newton steps of ef_seg_even_speed() from s0. The first trial starts from the table's x1
+ * per unit chord times its chord and takes EF_BA_NEWTON0 (2) steps (one step left 3 % more
+ * of test_prim's corners uneven, a stop); later trials start from the previous trial's
+ * ratio and take EF_BA_NEWTON (1). The winner's stored control points are measured once
+ * more at the end (ef_seg_end_err()), so a step that fell short is a stop, never an uneven
  * blend. x gets the DOFs. */
 static void ba_even_ends(const ef_vec3_t *v, float s0, float x20, float x21, int steps, float *x)
 {
-    float c[EF_BA_GL][5];
-    for (int i = 0; i < EF_BA_GL; i++) {
-        const float *r = ba_gl_basis[i];
-        ef_vec3_t a = ef_v3_scale(v[0], r[0]);
-        a = ef_v3_axpy(a, 0.25f * x20 * r[2], v[1]);
-        a = ef_v3_axpy(a, 0.25f * x21 * r[4], v[3]);
-        ef_vec3_t q = ef_v3_axpy(ef_v3_scale(v[1], r[1]), r[3], v[3]);
-        ef_vec3_t rr = ef_v3_axpy(ef_v3_scale(v[2], r[2]), r[4], v[4]);
-        c[i][0] = ef_v3_dot(a, a);
-        c[i][1] = 2.0f * ef_v3_dot(a, q);
-        c[i][2] = ef_v3_dot(q, q) + 2.0f * ef_v3_dot(a, rr);
-        c[i][3] = 2.0f * ef_v3_dot(q, rr);
-        c[i][4] = ef_v3_dot(rr, rr);
-    }
-    float s = s0;
-    for (int it = 0; it < steps; it++) {
-        float l = 0.0f, dl = 0.0f;
-        for (int i = 0; i < EF_BA_GL; i++) {
-            const float *k = c[i];
-            float s2 = k[0] + s * (k[1] + s * (k[2] + s * (k[3] + s * k[4])));
-            float ds2 = k[1] + s * (2.0f * k[2] + s * (3.0f * k[3] + s * 4.0f * k[4]));
-            float sp = ef_sqrtf(ef_maxf(s2, 0.0f));
-            l += ba_gl_basis[i][5] * sp;
-            dl += ba_gl_basis[i][5] * (0.5f * ds2 / ef_maxf(sp, 1e-30f));
-        }
-        float g = l - s, dg = dl - 1.0f;
-        float sn = s - g / ef_selectf(dg < -0.1f, dg, -1.0f);
-        s = ef_selectf(sn > 0.0f, sn, s);
-    }
+    float s = ef_seg_even_speed(v, s0, x20, x21, steps);
     x[0] = s;
     x[1] = x20;
     x[2] = s;
     x[3] = x21;
-}
-
-/* Largest | |f'| / L - 1 | at the two ends of the stored control points b, L their curve's
- * length by ba_even_ends()'s 8-node rule (the degree-4 Bernstein weights from
- * ba_gl_basis's rows: B0 = u0 - w0 + B2, B1 = w0 + B2, B3 = B2 - w1, B4 = u1 + w1 + B2).
- * tests/blend/test_prim.c measures the kept blends' end speeds against a 4000-point length in
- * double: within 2e-3 plus the float32 allowance of tiny blends far from the origin. */
-static float ba_end_err(const ef_vec3_t *b)
-{
-    ef_vec3_t h[5];
-    for (int i = 0; i < 5; i++)
-        h[i] = ef_v3_sub(b[i + 1], b[i]);
-    float len = 0.0f;
-    for (int i = 0; i < EF_BA_GL; i++) {
-        const float *r = ba_gl_basis[i];
-        ef_vec3_t d = ef_v3_scale(h[0], r[1] - r[2] + r[0]);
-        d = ef_v3_axpy(d, r[2] + r[0], h[1]);
-        d = ef_v3_axpy(d, r[0], h[2]);
-        d = ef_v3_axpy(d, r[0] - r[4], h[3]);
-        d = ef_v3_axpy(d, r[3] + r[4] + r[0], h[4]);
-        len += r[5] * ef_v3_norm(d);
-    }
-    /* h is f' / 5, so len is L / 5 and |f'(0)| / L = |h0| / len */
-    float inv = 1.0f / ef_maxf(len, 1e-30f);
-    float e0 = ef_fabsf(ef_v3_norm(h[0]) * inv - 1.0f);
-    return ef_maxf(e0, ef_fabsf(ef_v3_norm(h[4]) * inv - 1.0f));
 }
 
 /* What every trial of one corner shares (ef_blend_prims()): the primitives, their geometry
@@ -760,7 +669,7 @@ int ef_blend_prims_valid(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim
      * ef_seg_g2_even() measures them: on a tiny blend far from the origin the float32
      * control points move |f'(0)| and |f'(1)| by up to a few 1e-3 of L. */
     const ef_ba_trial_t *best = &trs[bi];
-    int even = ba_end_err(best->seg.b) <= EF_SEG_END_SPEED_REL;
+    int even = ef_seg_end_err(best->seg.b) <= EF_SEG_END_SPEED_REL;
     /* As ef_blend_corner(): a chord float32 cannot resolve at the corner's coordinates is no
      * blend, whatever the rounding noise made its end speeds look like. */
     float bchord = ef_v3_norm(ef_v3_sub(best->seg.b[5], best->seg.b[0]));

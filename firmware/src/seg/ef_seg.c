@@ -380,40 +380,118 @@ static int seg_finite(float x)
     return (x == x) & (x - x == 0.0f);
 }
 
-/* A quintic with end speeds x1 = its own length (x1 = L solved by ef_seg_even_next() over
- * EF_SEG_EVEN_ITER curves, from len, the length of a neighbouring candidate), tangential
- * DOFs x20, x21. The curves are ef_seg_from_dofs()'s for nm, the normalization of (e0, e1)
- * (which the DOFs do not change: made once by the caller, nm_ok its success), bit for bit.
- * 0 when it cannot be built; else *dev and *dev_ends as ef_seg_speed_stats() gives them
- * for the result, from the length its last pass measured. */
+/* ef_seg_even_speed()'s rows (ef_seg.h has the hodograph they weight): B2, u0, w0, u1, w1
+ * at the 8 Gauss-Legendre nodes on [0, 1] (the pairs 1/2 -+ offset, innermost first; last
+ * column the weight; nodes by Newton's method on P8 in double, rounded to float). */
+static const float seg_gl8[EF_SEG_EVEN_GL][6] = {
+    {3.501883762e-01f, -2.394380231e-01f, -1.184023543e-02f, -5.115038578e-01f, 1.891026199e-01f,
+     1.813418917e-01f},
+    {3.501883762e-01f, -5.115038578e-01f, -1.891026199e-01f, -2.394380231e-01f, 1.184023543e-02f,
+     1.813418917e-01f},
+    {1.964659303e-01f, 3.666985297e-01f, 2.246589268e-01f, -3.490281812e-01f, 1.557296750e-01f,
+     1.568533229e-01f},
+    {1.964659303e-01f, -3.490281812e-01f, -1.557296750e-01f, 3.666985297e-01f, -2.246589268e-01f,
+     1.568533229e-01f},
+    {5.004770489e-02f, 8.459740285e-01f, 2.447685245e-01f, -9.621255296e-02f, 4.627168366e-02f,
+     1.111905172e-01f},
+    {5.004770489e-02f, -9.621255296e-02f, -4.627168366e-02f, 8.459740285e-01f, -2.447685245e-01f,
+     1.111905172e-01f},
+    {2.272347601e-03f, 9.931521141e-01f, 7.251055938e-02f, -4.513852065e-03f, 2.241659877e-03f,
+     5.061426815e-02f},
+    {2.272347601e-03f, -4.513852065e-03f, -2.241659877e-03f, 9.931521141e-01f, -7.251055938e-02f,
+     5.061426815e-02f},
+};
+/* Newton steps on g(s) = L(s) - s (contract in ef_seg.h). With both end speeds s,
+ * f'(t) = a + s q + s^2 r at each node, so |f'|^2 is a quartic in s whose coefficients (dot
+ * products of a, q, r) are computed once; each step is then a few multiplies and a square
+ * root per node. g' = L' - 1 is near -1 (L moves little with s); a flat g' takes the
+ * fixed-point step instead, and a step to s <= 0 is not taken. */
+float ef_seg_even_speed(const ef_vec3_t *v, float s0, float x20, float x21, int steps)
+{
+    float c[EF_SEG_EVEN_GL][5];
+    for (int i = 0; i < EF_SEG_EVEN_GL; i++) {
+        const float *r = seg_gl8[i];
+        ef_vec3_t a = ef_v3_scale(v[0], r[0]);
+        a = ef_v3_axpy(a, 0.25f * x20 * r[2], v[1]);
+        a = ef_v3_axpy(a, 0.25f * x21 * r[4], v[3]);
+        ef_vec3_t q = ef_v3_axpy(ef_v3_scale(v[1], r[1]), r[3], v[3]);
+        ef_vec3_t rr = ef_v3_axpy(ef_v3_scale(v[2], r[2]), r[4], v[4]);
+        c[i][0] = ef_v3_dot(a, a);
+        c[i][1] = 2.0f * ef_v3_dot(a, q);
+        c[i][2] = ef_v3_dot(q, q) + 2.0f * ef_v3_dot(a, rr);
+        c[i][3] = 2.0f * ef_v3_dot(q, rr);
+        c[i][4] = ef_v3_dot(rr, rr);
+    }
+    float s = s0;
+    for (int it = 0; it < steps; it++) {
+        float l = 0.0f, dl = 0.0f;
+        for (int i = 0; i < EF_SEG_EVEN_GL; i++) {
+            const float *k = c[i];
+            float s2 = k[0] + s * (k[1] + s * (k[2] + s * (k[3] + s * k[4])));
+            float ds2 = k[1] + s * (2.0f * k[2] + s * (3.0f * k[3] + s * 4.0f * k[4]));
+            float sp = ef_sqrtf(ef_maxf(s2, 0.0f));
+            l += seg_gl8[i][5] * sp;
+            dl += seg_gl8[i][5] * (0.5f * ds2 / ef_maxf(sp, 1e-30f));
+        }
+        float g = l - s, dg = dl - 1.0f;
+        float sn = s - g / ef_selectf(dg < -0.1f, dg, -1.0f);
+        s = ef_selectf(sn > 0.0f, sn, s);
+    }
+    return s;
+}
+
+/* End speeds against the 8-node length (contract in ef_seg.h): the degree-4 Bernstein
+ * weights from seg_gl8's rows, B0 = u0 - w0 + B2, B1 = w0 + B2, B3 = B2 - w1,
+ * B4 = u1 + w1 + B2. */
+float ef_seg_end_err(const ef_vec3_t *b)
+{
+    ef_vec3_t h[5];
+    for (int i = 0; i < 5; i++)
+        h[i] = ef_v3_sub(b[i + 1], b[i]);
+    float len = 0.0f;
+    for (int i = 0; i < EF_SEG_EVEN_GL; i++) {
+        const float *r = seg_gl8[i];
+        ef_vec3_t d = ef_v3_scale(h[0], r[1] - r[2] + r[0]);
+        d = ef_v3_axpy(d, r[2] + r[0], h[1]);
+        d = ef_v3_axpy(d, r[0], h[2]);
+        d = ef_v3_axpy(d, r[0] - r[4], h[3]);
+        d = ef_v3_axpy(d, r[3] + r[4] + r[0], h[4]);
+        len += r[5] * ef_v3_norm(d);
+    }
+    /* h is f' / 5, so len is L / 5 and |f'(0)| / L = |h0| / len */
+    float inv = 1.0f / ef_maxf(len, 1e-30f);
+    float e0 = ef_fabsf(ef_v3_norm(h[0]) * inv - 1.0f);
+    return ef_maxf(e0, ef_fabsf(ef_v3_norm(h[4]) * inv - 1.0f));
+}
+
+/* A quintic with end speeds x1 = its own length (ef_seg_even_speed(), EF_SEG_EVEN_NEWTON
+ * steps from len, the length of a neighbouring candidate), tangential DOFs x20, x21, built
+ * once. The curve is ef_seg_from_dofs()'s for nm, the normalization of (e0, e1) (which the
+ * DOFs do not change: made once by the caller, nm_ok its success), bit for bit. 0 when it
+ * cannot be built; else *dev and *dev_ends as ef_seg_speed_stats() gives them. */
 static int seg_even_ends(const ef_endpoint_t *e0, const ef_endpoint_t *e1, const ef_norm_t *nm,
                          int nm_ok, float len, float x20, float x21, ef_seg_t *c, float *dev,
                          float *dev_ends)
 {
-    int ok = nm_ok & seg_finite(x20) & seg_finite(x21);
-    float xa = len, ga = 0.0f, x = len, l = 0.0f;
-    ef_vec3_t h[5];
-    for (int it = 0; it < EF_SEG_EVEN_ITER; it++) {
-        ok &= seg_finite(x) & (x > 0.0f);
-        if (ok) {
-            c->dof[0] = c->dof[2] = x;
-            c->dof[1] = x20;
-            c->dof[3] = x21;
-            c->flags = 0;
-            c->clamp = 0;
-            seg_quintic(e0, e1, nm, c);
-        }
-        seg_hodo(c->b, h);
-        l = ef_bezier_h4_length(h, 0);
-        float g = l - x;
-        float xn = it == 0 ? x + g : ef_seg_even_next(xa, ga, x, g);
-        xa = x;
-        ga = g;
-        x = ef_selectf(xn > 0.0f, xn, x); /* the last curve built is the result */
-    }
-    if (ok)
-        *dev = seg_speed_dev(h, l, dev_ends);
-    return ok;
+    ef_vec3_t v[5];
+    v[0] = ef_v3_scale(ef_v3_sub(e1->p, e0->p), 5.0f);
+    v[1] = nm->t0;
+    v[2] = ef_v3_scale(e0->n, 0.25f * e0->kappa);
+    v[3] = nm->t1;
+    v[4] = ef_v3_scale(e1->n, 0.25f * e1->kappa);
+    float x = ef_seg_even_speed(v, len, x20, x21, EF_SEG_EVEN_NEWTON);
+    int ok = nm_ok & seg_finite(x20) & seg_finite(x21) & seg_finite(x) & (x > 0.0f);
+    if (!ok)
+        return 0;
+    c->dof[0] = c->dof[2] = x;
+    c->dof[1] = x20;
+    c->dof[3] = x21;
+    c->flags = 0;
+    c->clamp = 0;
+    seg_quintic(e0, e1, nm, c);
+    float l;
+    *dev = ef_seg_speed_stats(c->b, &l, dev_ends);
+    return seg_finite(*dev);
 }
 
 /* Three candidates measured, the most even with even ends kept (contract in ef_seg.h). */
@@ -436,8 +514,10 @@ int ef_seg_g2_even(const ef_endpoint_t *e0, const ef_endpoint_t *e1, ef_seg_t *s
     float d_a = 3.4e38f, d_b = 3.4e38f;
     int ok_a = seg_even_ends(e0, e1, &nm, nm_ok, len, seg->dof[1], seg->dof[3], &a, &d_a, &end_a);
     int ok_b = seg_even_ends(e0, e1, &nm, nm_ok, len, 0.0f, 0.0f, &b, &d_b, &end_b);
-    d_a = ok_a ? d_a : 3.4e38f;
-    d_b = ok_b ? d_b : 3.4e38f;
+    /* Newton's length is the 8-node one; a candidate whose ends are not within
+     * EF_SEG_END_SPEED_REL of the 16-node length is not taken. */
+    d_a = ok_a && end_a <= EF_SEG_END_SPEED_REL ? d_a : 3.4e38f;
+    d_b = ok_b && end_b <= EF_SEG_END_SPEED_REL ? d_b : 3.4e38f;
     int pick = EF_SEG_EVEN_TABLE;
     float d = end_t <= EF_SEG_END_SPEED_REL ? d_t : 3.4e38f, e = end_t;
     if (d_a < d) {

@@ -109,26 +109,50 @@ int ef_seg_from_dofs(const ef_endpoint_t *e0, const ef_endpoint_t *e1, int degre
 #ifndef EF_SEG_SPEED_SAMPLES
 #define EF_SEG_SPEED_SAMPLES 16
 #endif
-/** Curves ef_seg_g2_even() builds per candidate with x1 = L, and ef_blend_corner() per
- *  corner: L moves with x1, so x1 = L is solved for by ef_seg_even_next() (a fixed-point
- *  step, then secant steps; fixed-point steps alone left 1.3 % at hairpins). */
-#ifndef EF_SEG_EVEN_ITER
-#define EF_SEG_EVEN_ITER 5
+/** Newton steps ef_seg_g2_even() takes per candidate (ef_seg_even_speed()) from the table
+ *  curve's length: the error squares with each step; the 16-node length of the result is
+ *  then the check (ef_seg_g2_even()). */
+#ifndef EF_SEG_EVEN_NEWTON
+#define EF_SEG_EVEN_NEWTON 2
 #endif
 
+/** Gauss-Legendre nodes of ef_seg_even_speed() and ef_seg_end_err(): 8 integrate the
+ *  speeds of blends and sections well within ::EF_SEG_END_SPEED_REL; 6 did not
+ *  (tests/blend/test_prim.c then saw end speeds 0.7 % off their length pass); 16
+ *  (ef_seg_length()'s) cost twice as much. */
+#define EF_SEG_EVEN_GL 8
+
 /**
- * @brief Next end speed x1 in the search for x1 = L(x1): the secant step through (xa, ga) and
- * (xb, gb) of g(x) = L(x) - x, or the fixed-point step xb + gb where the secant is flat or
- * would leave [xb / 2, 2 xb].
+ * @brief End speed s = x10 = x11 of a G2 quintic whose end speeds equal its own length L(s),
+ * by Newton steps on g(s) = L(s) - s, no control points built.
+ *
+ * The hodograph of the G2 quintic between end data (p0, t0, kappa0 n0) and (p1, t1,
+ * kappa1 n1) with DOFs (x10, x20, x11, x21) (ef_seg_from_dofs()'s control points) is
+ *
+ *     f'(t) = B2 D + (x10 u0 + x20 w0 / 4) t0 + x10^2 w0 (kappa0 / 4) n0
+ *                  + (x11 u1 + x21 w1 / 4) t1 + x11^2 w1 (kappa1 / 4) n1,
+ *
+ * D = 5 (p1 - p0), with the degree-4 Bernstein combinations u0 = B0 + B1 - 2 B2,
+ * w0 = B1 - B2, u1 = B3 + B4 - 2 B2, w1 = B2 - B3: five fixed vectors weighted by scalars
+ * that depend only on t and the DOFs, so L(s) at ::EF_SEG_EVEN_GL nodes is a square root of
+ * a quartic in s per node. Why end speeds equal to L: ef_seg_g2_even(). Shared by
+ * ef_seg_g2_even() and the arc blends (ef_blend_prims()); constant instruction count.
+ * @param v     the five vectors D, t0, kappa0 n0 / 4, t1, kappa1 n1 / 4
+ * @param s0    first guess (> 0)
+ * @param x20   tangential DOF at the start
+ * @param x21   tangential DOF at the end
+ * @param steps Newton steps (the error squares with each from a guess within a few %)
+ * @return s; a step that would make s non-positive is not taken (NaN in, NaN out)
  */
-static inline float ef_seg_even_next(float xa, float ga, float xb, float gb)
-{
-    float den = gb - ga;
-    int usable = ef_fabsf(den) > 1e-30f;
-    float sec = xb - gb * (xb - xa) / ef_selectf(usable, den, 1.0f);
-    int inside = usable & (sec >= 0.5f * xb) & (sec <= 2.0f * xb);
-    return ef_selectf(inside, sec, xb + gb);
-}
+float ef_seg_even_speed(const ef_vec3_t *v, float s0, float x20, float x21, int steps);
+
+/**
+ * @brief Largest | |f'| / L - 1 | at the two ends of the quintic b, L its length by the
+ * ::EF_SEG_EVEN_GL-node rule of ef_seg_even_speed(): whether stored control points kept the
+ * end speeds that rule set (float32 rounding of a tiny curve far from the origin moves them).
+ * @param b the 6 control points
+ */
+float ef_seg_end_err(const ef_vec3_t *b);
 
 /**
  * @brief Arc length of a quintic, 16-node Gauss–Legendre on |f'| (6 nodes were off by up to
@@ -183,8 +207,10 @@ enum {
  *   by the fuzzer: a step in the feed at each junction);
  * - where the curvature changes much along the curve (a corner between lines) the table's
  *   optimum is the most even and is kept.
- * x1 = L is a fixed point (L moves with x1): EF_SEG_EVEN_ITER passes. flags and clamp stay
- * as the lookup set them.
+ * x1 = L is a fixed point (L moves with x1): ::EF_SEG_EVEN_NEWTON steps of
+ * ef_seg_even_speed() from the table curve's length, then the candidate is built once and
+ * measured; one whose end speeds are then not within ::EF_SEG_END_SPEED_REL of its 16-node
+ * length is not taken. flags and clamp stay as the lookup set them.
  *
  * @param e0,e1    the end data seg was built for
  * @param seg      a valid G2 quintic (degree 5); replaced in place by the winner
