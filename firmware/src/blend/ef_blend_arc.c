@@ -235,7 +235,13 @@ static int ba_piece_table(const ef_table_t *g2, ef_vec3_t start, const ef_prim_t
     int rc = ef_seg_g2_quintic(g2, &e0, &e1, &seg);
     if (rc != EF_OK)
         return rc;
-    ef_seg_g2_even(&e0, &e1, &seg, 0, 0);
+    float ends = 0.0f;
+    ef_seg_g2_even(&e0, &e1, &seg, 0, &ends);
+    /* End data that admit no quintic with end speeds equal to its length (ef_seg_g2_even():
+     * the fuzzer's piece of an arc of radius 1.7e-5 whose end lies far off the circle)
+     * would step the feed at both junctions in segment mode: refused. */
+    if (!(ends <= ef_seg_end_allow(f0->p, f1->p)))
+        return EF_ERR_DOMAIN;
     float dev = 0.0f;
     ef_ba_piece_t pc;
     ba_piece(start, pr, geo, len, s0, s1, &pc);

@@ -289,8 +289,16 @@ static int sm_smooth_move(ef_smooth_t *s, ef_move_t *m, const ef_frame_t *f0, co
                                        : ef_seg_g1_cubic(s->cfg.g1, &e0, &e1, &seg);
     if (rc != EF_OK)
         return rc;
-    if (seg.degree == 5) /* even ends; short near-circular pieces: x2 = 0 is more even */
-        ef_seg_g2_even(&e0, &e1, &seg, 0, 0);
+    if (seg.degree == 5) { /* even ends; short near-circular pieces: x2 = 0 is more even */
+        float ends = 0.0f;
+        ef_seg_g2_even(&e0, &e1, &seg, 0, &ends);
+        /* Some end data admit no quintic whose end speeds equal its length (a curvature so
+         * large against the chord that L(x1) > x1 for every x1: the fuzzer's frames of
+         * 1.7e-5 mm radius on a 1.8e-3 mm chord). Such a section would step the feed at
+         * both junctions in segment mode: it does not fit, the vertex is a corner. */
+        if (!(ends <= ef_seg_end_allow(e0.p, e1.p)))
+            return EF_ERR_DOMAIN;
+    }
     ef_move_t zero = {0};
     *m = zero;
     for (int i = 0; i <= seg.degree; i++)

@@ -401,16 +401,63 @@ static const float seg_gl8[EF_SEG_EVEN_GL][6] = {
     {2.272347601e-03f, -4.513852065e-03f, -2.241659877e-03f, 9.931521141e-01f, -7.251055938e-02f,
      5.061426815e-02f},
 };
-/* Newton steps on g(s) = L(s) - s (contract in ef_seg.h). With both end speeds s,
- * f'(t) = a + s q + s^2 r at each node, so |f'|^2 is a quartic in s whose coefficients (dot
- * products of a, q, r) are computed once; each step is then a few multiplies and a square
- * root per node. g' = L' - 1 is near -1 (L moves little with s); a flat g' takes the
- * fixed-point step instead, and a step to s <= 0 is not taken. */
-float ef_seg_even_speed(const ef_vec3_t *v, float s0, float x20, float x21, int steps)
+/* The same rows at the 16 Gauss-Legendre nodes (ef_seg_length()'s rule): the rule
+ * ef_seg_g2_even() solves x1 = L with, so the 16-node length it checks the result against
+ * agrees to rounding. The 8-node rule was off by 0.2-0.3 % on a fuzzed arc piece whose
+ * speed varies by +-35 %, which put its ends outside EF_SEG_END_SPEED_REL. */
+static const float seg_gl16[16][6] = {
+    {3.682600273e-01f, -3.496051143e-01f, -7.120300265e-02f, -4.916950222e-01f, 1.653577987e-01f,
+     9.472530523e-02f},
+    {3.682600273e-01f, -4.916950222e-01f, -1.653577987e-01f, -3.496051143e-01f, 7.120300265e-02f,
+     9.472530523e-02f},
+    {3.178827972e-01f, -8.908715969e-02f, 6.018117390e-02f, -5.003268262e-01f, 1.990910577e-01f,
+     9.130170752e-02f},
+    {3.178827972e-01f, -5.003268262e-01f, -1.990910577e-01f, -8.908715969e-02f, -6.018117390e-02f,
+     9.130170752e-02f},
+    {2.341682423e-01f, 2.340713598e-01f, 1.857970654e-01f, -4.049125715e-01f, 1.761372418e-01f,
+     8.457825970e-02f},
+    {2.341682423e-01f, -4.049125715e-01f, -1.761372418e-01f, 2.340713598e-01f, -1.857970654e-01f,
+     8.457825970e-02f},
+    {1.433276364e-01f, 5.461162761e-01f, 2.612295691e-01f, -2.627544581e-01f, 1.207594106e-01f,
+     7.479799441e-02f},
+    {1.433276364e-01f, -2.627544581e-01f, -1.207594106e-01f, 5.461162761e-01f, -2.612295691e-01f,
+     7.479799441e-02f},
+    {6.913259960e-02f, 7.859566037e-01f, 2.616328877e-01f, -1.316196017e-01f, 6.271070653e-02f,
+     6.231448563e-02f},
+    {6.913259960e-02f, -1.316196017e-01f, -6.271070653e-02f, 7.859566037e-01f, -2.616328877e-01f,
+     6.231448563e-02f},
+    {2.356566626e-02f, 9.281511103e-01f, 1.945645498e-01f, -4.597944161e-02f, 2.243414922e-02f,
+     4.757925584e-02f},
+    {2.356566626e-02f, -4.597944161e-02f, -2.243414922e-02f, 9.281511103e-01f, -1.945645498e-01f,
+     4.757925584e-02f},
+    {4.356038566e-03f, 9.868485229e-01f, 9.753116421e-02f, -8.628715750e-03f, 4.273266980e-03f,
+     3.112676197e-02f},
+    {4.356038566e-03f, -8.628715750e-03f, -4.273266980e-03f, 9.868485229e-01f, -9.753116421e-02f,
+     3.112676197e-02f},
+    {1.667289499e-04f, 9.994992202e-01f, 2.069616343e-02f, -3.328649157e-04f, 1.661367546e-04f,
+     1.357622971e-02f},
+    {1.667289499e-04f, -3.328649157e-04f, -1.661367546e-04f, 9.994992202e-01f, -2.069616343e-02f,
+     1.357622971e-02f},
+};
+
+/* Newton steps on g(s) = L(s) - s with L by the n-node rows r (contract of
+ * ef_seg_even_speed() in ef_seg.h). With both end speeds s, f'(t) = a + s q + s^2 r at each
+ * node, so |f'|^2 is a quartic in s whose coefficients (dot products of a, q, r) are
+ * computed once; each step is then a few multiplies and a square root per node.
+ * g' = L' - 1 is near -1 (L moves little with s); a flat g' takes the fixed-point step
+ * instead, and a step to s <= 0 is not taken. Inlined into both callers, so each has its
+ * node count as a constant (the 8-node one as cheap as when it was the arc blends' own). */
+#ifdef __GNUC__
+#define EF_SEG_INLINE static inline __attribute__((always_inline))
+#else
+#define EF_SEG_INLINE static inline
+#endif
+EF_SEG_INLINE float seg_even_newton(const float (*rows)[6], int n, const ef_vec3_t *v, float s0,
+                                    float x20, float x21, int steps)
 {
-    float c[EF_SEG_EVEN_GL][5];
-    for (int i = 0; i < EF_SEG_EVEN_GL; i++) {
-        const float *r = seg_gl8[i];
+    float c[16][5];
+    for (int i = 0; i < n; i++) {
+        const float *r = rows[i];
         ef_vec3_t a = ef_v3_scale(v[0], r[0]);
         a = ef_v3_axpy(a, 0.25f * x20 * r[2], v[1]);
         a = ef_v3_axpy(a, 0.25f * x21 * r[4], v[3]);
@@ -425,19 +472,25 @@ float ef_seg_even_speed(const ef_vec3_t *v, float s0, float x20, float x21, int 
     float s = s0;
     for (int it = 0; it < steps; it++) {
         float l = 0.0f, dl = 0.0f;
-        for (int i = 0; i < EF_SEG_EVEN_GL; i++) {
+        for (int i = 0; i < n; i++) {
             const float *k = c[i];
             float s2 = k[0] + s * (k[1] + s * (k[2] + s * (k[3] + s * k[4])));
             float ds2 = k[1] + s * (2.0f * k[2] + s * (3.0f * k[3] + s * 4.0f * k[4]));
             float sp = ef_sqrtf(ef_maxf(s2, 0.0f));
-            l += seg_gl8[i][5] * sp;
-            dl += seg_gl8[i][5] * (0.5f * ds2 / ef_maxf(sp, 1e-30f));
+            l += rows[i][5] * sp;
+            dl += rows[i][5] * (0.5f * ds2 / ef_maxf(sp, 1e-30f));
         }
         float g = l - s, dg = dl - 1.0f;
         float sn = s - g / ef_selectf(dg < -0.1f, dg, -1.0f);
         s = ef_selectf(sn > 0.0f, sn, s);
     }
     return s;
+}
+
+/* The 8-node rule (contract in ef_seg.h). */
+float ef_seg_even_speed(const ef_vec3_t *v, float s0, float x20, float x21, int steps)
+{
+    return seg_even_newton(seg_gl8, EF_SEG_EVEN_GL, v, s0, x20, x21, steps);
 }
 
 /* End speeds against the 8-node length (contract in ef_seg.h): the degree-4 Bernstein
@@ -464,8 +517,8 @@ float ef_seg_end_err(const ef_vec3_t *b)
     return ef_maxf(e0, ef_fabsf(ef_v3_norm(h[4]) * inv - 1.0f));
 }
 
-/* A quintic with end speeds x1 = its own length (ef_seg_even_speed(), EF_SEG_EVEN_NEWTON
- * steps from len, the length of a neighbouring candidate), tangential DOFs x20, x21, built
+/* A quintic with end speeds x1 = its own length (EF_SEG_EVEN_NEWTON Newton steps on the
+ * 16-node length from len, the length of a neighbouring candidate), tangential DOFs x20, x21, built
  * once. The curve is ef_seg_from_dofs()'s for nm, the normalization of (e0, e1) (which the
  * DOFs do not change: made once by the caller, nm_ok its success), bit for bit. 0 when it
  * cannot be built; else *dev and *dev_ends as ef_seg_speed_stats() gives them. */
@@ -479,7 +532,7 @@ static int seg_even_ends(const ef_endpoint_t *e0, const ef_endpoint_t *e1, const
     v[2] = ef_v3_scale(e0->n, 0.25f * e0->kappa);
     v[3] = nm->t1;
     v[4] = ef_v3_scale(e1->n, 0.25f * e1->kappa);
-    float x = ef_seg_even_speed(v, len, x20, x21, EF_SEG_EVEN_NEWTON);
+    float x = seg_even_newton(seg_gl16, 16, v, len, x20, x21, EF_SEG_EVEN_NEWTON);
     int ok = nm_ok & seg_finite(x20) & seg_finite(x21) & seg_finite(x) & (x > 0.0f);
     if (!ok)
         return 0;

@@ -321,6 +321,8 @@ int ef_blend_prims_valid(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim
  * @retval EF_OK
  * @retval EF_ERR_ARG  NULL pointer, not an arc, s0/s1 out of range or piece too long
  * @retval EF_ERR_KIND not a G2 quintic table
+ * @retval EF_ERR_DOMAIN the table route's piece cannot have end speeds equal to its length
+ *                     (ef_seg_g2_even(): end data with no such quintic)
  * @retval others      as ef_prim_check() and ef_move_measure()
  */
 int ef_blend_arc_piece(const ef_table_t *g2, ef_vec3_t start, const ef_prim_t *pr, float s0,

@@ -109,9 +109,9 @@ int ef_seg_from_dofs(const ef_endpoint_t *e0, const ef_endpoint_t *e1, int degre
 #ifndef EF_SEG_SPEED_SAMPLES
 #define EF_SEG_SPEED_SAMPLES 16
 #endif
-/** Newton steps ef_seg_g2_even() takes per candidate (ef_seg_even_speed()) from the table
- *  curve's length: the error squares with each step; the 16-node length of the result is
- *  then the check (ef_seg_g2_even()). */
+/** Newton steps ef_seg_g2_even() takes per candidate (ef_seg_even_speed()'s, on the 16-node
+ *  rule of ef_seg_length()) from the table curve's length: the error squares with each
+ *  step; the 16-node length of the built result is then the check (ef_seg_g2_even()). */
 #ifndef EF_SEG_EVEN_NEWTON
 #define EF_SEG_EVEN_NEWTON 2
 #endif
@@ -181,6 +181,22 @@ float ef_seg_speed_stats(const ef_vec3_t *b, float *len, float *dev_ends);
 #define EF_SEG_END_SPEED_REL 2e-3f
 #endif
 
+/**
+ * @brief The end speed difference (as ef_seg_g2_even()'s dev_ends) a curve between p0 and p1
+ * may show and still count as evened: ::EF_SEG_END_SPEED_REL plus what float32 rounding of
+ * control points at the coordinates' magnitude does to |f'(0)| = 5 |b1 - b0| (40 ulp of
+ * the largest coordinate per unit chord; a tiny curve far from the origin). Above it a
+ * curve's ends were not evened: no quintic with those end data has end speeds equal to its
+ * length (ef_seg_g2_even()).
+ */
+static inline float ef_seg_end_allow(ef_vec3_t p0, ef_vec3_t p1)
+{
+    float big = ef_maxf(ef_maxf(ef_fabsf(p0.x), ef_fabsf(p0.y)), ef_fabsf(p0.z));
+    big = ef_maxf(big, ef_maxf(ef_maxf(ef_fabsf(p1.x), ef_fabsf(p1.y)), ef_fabsf(p1.z)));
+    float chord = ef_v3_norm(ef_v3_sub(p1, p0));
+    return EF_SEG_END_SPEED_REL + 40.0f * 1.1920929e-7f * big / ef_maxf(chord, 1e-30f);
+}
+
 /** ef_seg_g2_even() results: which DOFs the segment has. */
 enum {
     EF_SEG_EVEN_TABLE = 0, /**< the table's, unchanged */
@@ -207,10 +223,13 @@ enum {
  *   by the fuzzer: a step in the feed at each junction);
  * - where the curvature changes much along the curve (a corner between lines) the table's
  *   optimum is the most even and is kept.
- * x1 = L is a fixed point (L moves with x1): ::EF_SEG_EVEN_NEWTON steps of
- * ef_seg_even_speed() from the table curve's length, then the candidate is built once and
- * measured; one whose end speeds are then not within ::EF_SEG_END_SPEED_REL of its 16-node
- * length is not taken. flags and clamp stay as the lookup set them.
+ * x1 = L is a fixed point (L moves with x1): ::EF_SEG_EVEN_NEWTON Newton steps as
+ * ef_seg_even_speed()'s, on the 16-node rule, from the table curve's length; then the
+ * candidate is built once and measured; one whose end speeds are then not within
+ * ::EF_SEG_END_SPEED_REL of its 16-node length is not taken. Some end data admit no such
+ * curve (a curvature so large against the chord that L(x1) > x1 for every x1): then
+ * neither candidate is taken, and dev_ends says how far the table's ends are from L.
+ * flags and clamp stay as the lookup set them.
  *
  * @param e0,e1    the end data seg was built for
  * @param seg      a valid G2 quintic (degree 5); replaced in place by the winner
