@@ -1404,6 +1404,22 @@ static void test_seg_even(void)
     t1 = t0;
     EF_CHECK_EQ(ef_seg_g2_even(&c0, &c1, &t1, NULL, NULL), EF_SEG_EVEN_TABLE);
     EF_CHECK(memcmp(&t0, &t1, sizeof t0) == 0);
+    /* End data no quintic with end speeds equal to its length joins (the fuzzer's piece: a
+     * curvature of 58 140 /mm on a 1.8e-3 mm chord, so L(x1) > x1 for every x1): neither
+     * candidate is taken, the table's curve stays and dev_ends says how far off its ends
+     * are, beyond ef_seg_end_allow(), which is what the smoother and the arc piece's table
+     * route refuse. */
+    ef_endpoint_t h0 = {ef_v3(-2.66397838e-05f, 1.43781235e-05f, 0),
+                        ef_v3(-0.8359375f, -0.548824668f, 0), ef_v3(0.548824668f, -0.83593744f, 0),
+                        58139.5273f};
+    ef_endpoint_t h1 = {ef_v3(0.00172154454f, 0.000149968284f, 0),
+                        ef_v3(0.0859318525f, -0.996301055f, 0),
+                        ef_v3(0.996300995f, 0.0859318525f, 0), 58139.5273f};
+    ef_seg_t hs;
+    EF_CHECK_EQ(ef_seg_g2_quintic(G2, &h0, &h1, &hs), EF_OK);
+    float hdev = -1, hend = -1;
+    EF_CHECK_EQ(ef_seg_g2_even(&h0, &h1, &hs, &hdev, &hend), EF_SEG_EVEN_TABLE);
+    EF_CHECK(hend > 0.1f && hend > ef_seg_end_allow(h0.p, h1.p));
     /* not a quintic, NULL: nothing changes */
     ef_seg_t cub;
     memset(&cub, 0, sizeof cub);
