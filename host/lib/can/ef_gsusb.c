@@ -26,7 +26,12 @@ static const uint16_t gsu_ids[][2] = {
 #define GSU_CLOSE_WAIT_MS   1000
 #define GSU_IFACE           0
 #define GSU_CTRL_IN_MAX     64 /* bytes asked for by IN requests (the largest reply is 40) */
-#define GSU_IN_ERRORS_MAX   8  /* bulk IN errors in a row that end the transport */
+#define GSU_IN_ERRORS_MAX   8  /* bulk IN errors in a row that end the transport, */
+/* ... when they also span this long: an unplug's first IN transfers fail with a transfer
+ * error before the kernel has removed the device (then every transfer says NO_DEVICE), and
+ * eight immediate resubmissions take well under a millisecond; under load the removal has
+ * been seen to come after them, and the unplug was reported as an adapter fault. */
+#define GSU_IN_ERROR_US 100000u
 
 /* ---- Small helpers ------------------------------------------------------------------ */
 
@@ -585,17 +590,23 @@ static void LIBUSB_CALL gsu_rx_cb(struct libusb_transfer *x)
         gsu_fault(g, &why);
         return;
     }
-    default: /* error, overflow: may be the first sign of an unplug; a run of them is fatal */
+    default: { /* error, overflow: may be the first sign of an unplug; a run is fatal */
         g->stats.xfer_errors++;
-        if (++g->in_errors >= GSU_IN_ERRORS_MAX) {
+        uint32_t now = gsu_now();
+        if (g->in_errors++ == 0)
+            g->in_err_t0 = now;
+        if (g->in_errors >= GSU_IN_ERRORS_MAX &&
+            (uint32_t)(now - g->in_err_t0) >= GSU_IN_ERROR_US) {
             g->rx_active--;
             ef_msg_t why;
-            ef_fail(&why, EF_ERR_IO, "%s: bulk IN: %s, %d times in a row", g->label,
-                    libusb_error_name((int)x->status), GSU_IN_ERRORS_MAX);
+            ef_fail(&why, EF_ERR_IO, "%s: bulk IN: %s, %d times in a row over %u ms", g->label,
+                    libusb_error_name((int)x->status), g->in_errors,
+                    (unsigned)((uint32_t)(now - g->in_err_t0) / 1000u));
             gsu_fault(g, &why);
             return;
         }
         break;
+    }
     }
     if (g->gone || !g->is_open) {
         g->rx_active--;

@@ -190,12 +190,13 @@ typedef struct {
     uint32_t ring_head, ring_count;
     ef_can_frame_t backlog[EF_GSUSB_BACKLOG];
     uint32_t bl_head, bl_count;
-    int wake;      /**< set by completions: the event loop returns */
-    int err_seen;  /**< an error frame arrived during this recv */
-    int io_rc;     /**< an error a completion met, returned by every op from then (sticky) */
-    int in_errors; /**< bulk IN errors in a row */
-    uint32_t seen; /**< EF_CANIF_* conditions */
-    int dev_state; /**< last GET_STATE (EF_GSUSB_STATE_*), -1 unknown */
+    int wake;           /**< set by completions: the event loop returns */
+    int err_seen;       /**< an error frame arrived during this recv */
+    int io_rc;          /**< an error a completion met, returned by every op from then (sticky) */
+    int in_errors;      /**< bulk IN errors in a row */
+    uint32_t in_err_t0; /**< when the first of them came (gsu_now()) */
+    uint32_t seen;      /**< EF_CANIF_* conditions */
+    int dev_state;      /**< last GET_STATE (EF_GSUSB_STATE_*), -1 unknown */
     int16_t tec, rec;
     uint32_t err_frames, tx_full, rx_overrun;
     uint64_t n_tx, n_rx, tx_bits;
