@@ -108,11 +108,14 @@ static ef_move_t *sm_stage_last(ef_smooth_t *s)
     return s->sn ? &s->stage[(s->sh + s->sn - 1) % EF_SMOOTH_STAGE] : (ef_move_t *)0;
 }
 
+static int sm_line_move(ef_move_t *m, ef_vec3_t a, ef_vec3_t b, float feed, uint32_t tag);
+
 /* Append a move to the stage (caller checked room); snap its start onto the previous
  * move's end so the chain is exactly continuous (they agree to rounding already). */
 static void sm_stage(ef_smooth_t *s, const ef_move_t *m)
 {
     ef_move_t *prev = sm_stage_last(s);
+    ef_move_t gap;
     if (m->length < EF_SM_MIN_MOVE) {
         /* A remnant below float32 resolution (e.g. what two blends leave of a line, to
          * rounding): not a move a planner or drive can time. The move before it is
@@ -128,8 +131,19 @@ static void sm_stage(ef_smooth_t *s, const ef_move_t *m)
             prev->flags |= (uint16_t)(m->flags & EF_MOVE_STOP_END);
             (void)ef_move_measure(prev); /* valid before, moved by < EF_MIN_CHORD */
             s->out_end = m->b[m->degree];
+            return;
         }
-        return;
+        /* Remnants in a row at rest add up: two tiny arcs after a stop left the chain
+         * 1.9e-6 short of the program's end (tests/fuzz corpus ok-remnants-at-rest), where
+         * no next move's start covers them. Once the machine would be EF_SM_MIN_MOVE or
+         * more from their end, it is driven there: a line, ending at rest as it began. */
+        ef_vec3_t re = m->b[m->degree];
+        if (!(ef_v3_norm(ef_v3_sub(re, s->out_end)) >= EF_SM_MIN_MOVE) ||
+            sm_line_move(&gap, s->out_end, re, m->feed, m->tag) != EF_OK)
+            return;
+        gap.flags |= EF_MOVE_STOP_END;
+        s->st.stops++;
+        m = &gap;
     }
     ef_move_t *d = &s->stage[(s->sh + s->sn) % EF_SMOOTH_STAGE];
     *d = *m;

@@ -152,7 +152,9 @@ typedef struct {
                                 a line, to rounding), not emitted: joined to the move before,
                                 or, where that one has gone to the planner (it ended at a stop),
                                 covered by the next move's start (the machine is at rest there,
-                                within EF_MIN_CHORD of the remnant's end) */
+                                within EF_MIN_CHORD of the remnant's end); remnants in a row
+                                that leave it EF_MIN_CHORD or more from their end become a line
+                                to it, ending at rest (counted in stops too) */
     float dev_max;         /**< largest deviation of any emitted move from the programmed path */
 } ef_smooth_stats_t;
 
