@@ -44,6 +44,7 @@ static const char usage[] =
     "  --hb-timeout MS   a node whose heartbeat is silent this long is lost (default 200;\n"
     "                    the drives are asked for one every 50 ms)\n"
     "  --sdo-timeout MS  wait for each SDO answer at configuration (default 200; one retry)\n"
+    "  --enable-timeout MS  each power-state step at enable (default 1000)\n"
     "  --bringup-ms MS   from opening the bus to every drive running at most (default\n"
     "                    20000; many drives, or a slow adapter, may need more)\n"
     "  --log FILE        candump log (candump -l format) of the bus traffic\n"
@@ -175,7 +176,8 @@ enum {
     O_MACHINE,
     O_SDO,
     O_CAN_OPTS,
-    O_BRINGUP
+    O_BRINGUP,
+    O_ENABLE_TO
 };
 
 /* Entry point of `evenfeed stream`. */
@@ -199,6 +201,7 @@ int cli_cmd_stream(int argc, char **argv)
                                          {"sdo-timeout", required_argument, NULL, O_SDO},
                                          {"can-opts", required_argument, NULL, O_CAN_OPTS},
                                          {"bringup-ms", required_argument, NULL, O_BRINGUP},
+                                         {"enable-timeout", required_argument, NULL, O_ENABLE_TO},
                                          CLI_PIPE_OPTIONS,
                                          CLI_MACHINE_OPTIONS,
                                          CLI_OPT_HELP,
@@ -256,6 +259,10 @@ int cli_cmd_stream(int argc, char **argv)
         case O_SDO:
             if ((rc = cli_opt_int(&g, 10, 60000, &x)) == EF_OK)
                 cc.sdo_timeout_ms = (uint32_t)x;
+            break;
+        case O_ENABLE_TO:
+            if ((rc = cli_opt_int(&g, 100, 60000, &x)) == EF_OK)
+                cc.enable_timeout_ms = (uint32_t)x;
             break;
         case O_BRINGUP:
             if ((rc = cli_opt_int(&g, 1000, 600000, &x)) == EF_OK)
@@ -319,7 +326,7 @@ int cli_cmd_stream(int argc, char **argv)
         if (rc != EF_OK)
             return rc;
         if (k == O_NODES || k == O_CYCLE || k == O_HB || k == O_LOG || k == O_TRACE || k == O_SDO ||
-            k == O_CAN_OPTS || k == O_BRINGUP)
+            k == O_CAN_OPTS || k == O_BRINGUP || k == O_ENABLE_TO)
             snprintf(can_only, sizeof can_only, "%s", g.opt);
         else if (k == O_SLAVE || k == O_DIRECT_HZ || k == O_TIMEOUT || k == O_RETRIES ||
                  k == O_WATCHDOG)

@@ -2010,10 +2010,11 @@ static void part_io_latency(void)
 /** What the emulated machine needs on a loaded host, where the guest is starved of CPU for
  *  up to seconds (ctest -j2 beside a build: TX to echo up to 2.1 s, an SDO answer 870 ms
  *  after its request; an ASan build -j2 beside hil_gsusb_unplug: echoes 90-180 ms on
- *  average, an SDO unanswered for 1 s twice, bring-up over 20 s): SDO answers waited for
- *  2 s (and once more, ef_sdo_client.h), bring-up for 120 s, and for the adapter bulk OUT
- *  and echo bounds of 10 s and 20 s. The fault part keeps the defaults it checks. */
-#define GS_SDO       "--sdo-timeout 2000 --bringup-ms 120000"
+ *  average, up to 3.2 s; an SDO unanswered for 1 s twice, a power-state step not confirmed
+ *  in 1 s, bring-up over 20 s): SDO answers waited for 2 s (and once more,
+ *  ef_sdo_client.h), each power-state step for 5 s, bring-up for 120 s, and for the adapter
+ *  bulk OUT and echo bounds of 10 s and 20 s. The fault part keeps the defaults it checks. */
+#define GS_SDO       "--sdo-timeout 2000 --enable-timeout 5000 --bringup-ms 120000"
 #define GS_USB_SLOW  "--can-opts timeout=10000"
 #define GS_SEG_VCAN  GS_SEG_CYCLE " " GS_SDO
 #define GS_CSP_VCAN  GS_CSP_CYCLE " " GS_SDO

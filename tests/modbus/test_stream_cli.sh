@@ -27,6 +27,7 @@ expect 1 "is a Modbus option" -- stream --can vcan0 --slave 2 "$prog"
 expect 1 "is a CAN option" -- stream --modbus tcp://127.0.0.1:1 --nodes 1 "$prog"
 expect 1 "--hb-timeout '5'" -- stream --can vcan0 --hb-timeout 5 "$prog"
 expect 1 "--bringup-ms '10'" -- stream --can vcan0 --bringup-ms 10 "$prog"
+expect 1 "--enable-timeout '5'" -- stream --can vcan0 --enable-timeout 5 "$prog"
 expect 1 "--bringup-ms is a CAN option" -- stream --modbus tcp://127.0.0.1:1 --bringup-ms 5000 "$prog"
 expect 1 "needs --iface IFACE and --node N" -- sim-drive can
 expect 1 "--node '200'" -- sim-drive can --iface vcan0 --node 200

@@ -122,6 +122,7 @@ void ef_can_stream_cfg_default(ef_can_stream_cfg_t *c, const ef_table_t *g2, con
     c->boot_timeout_ms = 3000;
     c->hb_timeout_ms = 200;
     c->sdo_timeout_ms = 200;
+    c->enable_timeout_ms = 1000;
     c->stop_timeout_ms = 5000;
     c->bringup_ms = 20000;
     c->stall_ms = 10000;
@@ -913,7 +914,8 @@ static int cs_check_cfg(const ef_can_stream_cfg_t *c, ef_msg_t *m)
     if (c->mode != EF_COM_MODE_CSP && c->mode != EF_COM_MODE_SEGMENT)
         return ef_fail(m, EF_ERR_ARG, "stream: mode must be csp or segment");
     if (c->boot_timeout_ms == 0 || c->hb_timeout_ms == 0 || c->sdo_timeout_ms == 0 ||
-        c->stop_timeout_ms == 0 || c->bringup_ms == 0 || c->bitrate == 0)
+        c->enable_timeout_ms == 0 || c->stop_timeout_ms == 0 || c->bringup_ms == 0 ||
+        c->bitrate == 0)
         return ef_fail(m, EF_ERR_ARG, "stream: a timeout or the bit rate is 0");
     return EF_OK;
 }
@@ -992,6 +994,7 @@ int ef_can_stream(ef_gcode_t *r, const ef_can_stream_cfg_t *c, ef_can_stream_res
     S->mc.boot_timeout_ms = c->boot_timeout_ms;
     S->mc.hb_timeout_ms = (uint16_t)(c->hb_timeout_ms > 65535u ? 65535u : c->hb_timeout_ms);
     S->mc.sdo_timeout_ms = c->sdo_timeout_ms;
+    S->mc.enable_timeout_ms = c->enable_timeout_ms;
     S->mc.stop_timeout_ms = c->stop_timeout_ms;
     if (c->trace) {
         S->trace = fopen(c->trace, "w");

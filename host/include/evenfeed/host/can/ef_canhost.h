@@ -42,26 +42,27 @@ typedef struct {
     uint8_t mode;                           /**< ::ef_com_mode_t (default segment) */
     uint8_t fault_reset;                    /**< reset faulted drives at enable (default 0) */
     uint8_t verbose;                        /**< progress on stderr */
-    uint32_t cycle_us;        /**< SYNC period; 0: the mode's default (CSP 1000, segment 10000) */
-    ef_pipe_cfg_t pipe;       /**< smoothing; in CSP mode its interpolator runs at cycle_us */
-    const char *log;          /**< candump log file of the bus traffic (NULL: none) */
-    const char *trace;        /**< stream trace CSV (NULL: none; format in docs/can.md) */
-    uint32_t boot_timeout_ms; /**< a node that has not booted by then is lost (3000) */
-    uint32_t hb_timeout_ms;   /**< a node silent this long is lost (200) */
-    uint32_t sdo_timeout_ms;  /**< per SDO request (200) */
-    uint32_t stop_timeout_ms; /**< a controlled stop must reach rest (5000) */
-    uint32_t bringup_ms;      /**< from the socket's opening to RUN at most (20000) */
-    uint32_t stall_ms;        /**< a full queue that does not drain for this long plus the
-                                   longest move's duration is an error (10000) */
-    uint32_t bitrate;         /**< for the bus-load figure only (1000000; vcan has none) */
-    const ef_canif_t *canif;  /**< the transport (ef_canif.h), opened on iface and closed by
-                                   the stream; NULL: SocketCAN (ef_sockcan_canif()) */
-    struct ef_mio_s *mio;     /**< machine I/O (ef_mio.h), open and SAFE; NULL: none. Armed
-                                   before the bus is touched (an active e-stop, latch or alarm
-                                   refuses the stream: nothing is sent), read every pump round;
-                                   a trip stops every drive under control (quick stop), waits
-                                   for rest (its stop_ms) and drops enable: ::EF_ERR_ESTOP
-                                   naming the input and the program line. Disarmed at the end */
+    uint32_t cycle_us;          /**< SYNC period; 0: the mode's default (CSP 1000, segment 10000) */
+    ef_pipe_cfg_t pipe;         /**< smoothing; in CSP mode its interpolator runs at cycle_us */
+    const char *log;            /**< candump log file of the bus traffic (NULL: none) */
+    const char *trace;          /**< stream trace CSV (NULL: none; format in docs/can.md) */
+    uint32_t boot_timeout_ms;   /**< a node that has not booted by then is lost (3000) */
+    uint32_t hb_timeout_ms;     /**< a node silent this long is lost (200) */
+    uint32_t sdo_timeout_ms;    /**< per SDO request (200) */
+    uint32_t enable_timeout_ms; /**< per power-state step at enable (1000) */
+    uint32_t stop_timeout_ms;   /**< a controlled stop must reach rest (5000) */
+    uint32_t bringup_ms;        /**< from the socket's opening to RUN at most (20000) */
+    uint32_t stall_ms;          /**< a full queue that does not drain for this long plus the
+                                     longest move's duration is an error (10000) */
+    uint32_t bitrate;           /**< for the bus-load figure only (1000000; vcan has none) */
+    const ef_canif_t *canif;    /**< the transport (ef_canif.h), opened on iface and closed by
+                                     the stream; NULL: SocketCAN (ef_sockcan_canif()) */
+    struct ef_mio_s *mio;       /**< machine I/O (ef_mio.h), open and SAFE; NULL: none. Armed
+                                     before the bus is touched (an active e-stop, latch or alarm
+                                     refuses the stream: nothing is sent), read every pump round;
+                                     a trip stops every drive under control (quick stop), waits
+                                     for rest (its stop_ms) and drops enable: ::EF_ERR_ESTOP
+                                     naming the input and the program line. Disarmed at the end */
 } ef_can_stream_cfg_t;
 
 /** Defaults as documented per field; the pipeline is ef_pipe_cfg_default() with the tables
