@@ -135,12 +135,22 @@ static int lc_run_smoother(void)
     pr[2].end = ef_v3(25.0f, 20.0f, 0.0f);
     pr[3].end = ef_v3(0.0f, 20.0f, 0.0f);
     ef_move_t m;
-    int have = 0;
+    int have = 0, done = 0;
+    uint32_t next = 0;
     for (uint32_t tick = 0; tick < 100000u; tick++) {
-        if (tick < 4u && ef_smooth_push(&lc_smooth, &pr[tick]) != EF_OK)
-            return 1;
-        if (tick == 4u)
-            rc |= ef_smooth_finish(&lc_smooth);
+        /* one work unit a call: a push not taken yet (EF_ERR_FULL) is repeated */
+        if (next < 4u) {
+            int prc = ef_smooth_push(&lc_smooth, &pr[next]);
+            if (prc == EF_OK)
+                next++;
+            else if (prc != EF_ERR_FULL)
+                return 1;
+        } else if (!done) {
+            int frc = ef_smooth_finish(&lc_smooth);
+            done = frc == EF_OK;
+            if (frc != EF_OK && frc != EF_ERR_FULL)
+                rc |= frc;
+        }
         if (!have)
             have = ef_smooth_pull(&lc_smooth, &m) == EF_OK;
         if (have && ef_interp_space(&lc_interp) > 0u) {
@@ -153,7 +163,7 @@ static int lc_run_smoother(void)
         lc_pos[0] = sp.p.x;
         lc_pos[1] = sp.p.y;
         lc_pos[2] = sp.p.z;
-        if (tick > 4u && !have && !sp.moving && ef_interp_space(&lc_interp) == EF_INTERP_QUEUE)
+        if (done && !have && !sp.moving && ef_interp_space(&lc_interp) == EF_INTERP_QUEUE)
             break;
     }
     return rc != EF_OK;

@@ -827,14 +827,18 @@ static int build_smooth(const v2_t *pt, int n, double P, const lim_t *lm, path_t
         pr.tol = (float)P;
         pr.qtol = 0;
         pr.tag = (uint32_t)(i - 1);
-        while ((rc = ef_smooth_push(&sm, &pr)) == EF_ERR_FULL) {
+        for (;;) {
+            uint32_t units = ef_smooth_stats(&sm).units;
+            rc = ef_smooth_push(&sm, &pr);
+            if (rc != EF_ERR_FULL)
+                break;
             int got = 0;
             while (ef_smooth_pull(&sm, &m) == EF_OK) {
                 take_move(pa, st, &m, pt, n);
                 got = 1;
             }
-            if (!got) {
-                fprintf(stderr, "bench_blends: smoother full and nothing to pull\n");
+            if (!got && ef_smooth_stats(&sm).units == units) {
+                fprintf(stderr, "bench_blends: smoother full, no work done, nothing to pull\n");
                 return 1;
             }
         }
@@ -845,9 +849,16 @@ static int build_smooth(const v2_t *pt, int n, double P, const lim_t *lm, path_t
         while (ef_smooth_pull(&sm, &m) == EF_OK)
             take_move(pa, st, &m, pt, n);
     }
-    ef_smooth_finish(&sm);
-    while (ef_smooth_pull(&sm, &m) == EF_OK)
-        take_move(pa, st, &m, pt, n);
+    /* finish: one work unit a call (ef_smooth.h), pulling between */
+    do {
+        rc = ef_smooth_finish(&sm);
+        while (ef_smooth_pull(&sm, &m) == EF_OK)
+            take_move(pa, st, &m, pt, n);
+    } while (rc == EF_ERR_FULL);
+    if (rc != EF_OK) {
+        fprintf(stderr, "bench_blends: ef_smooth_finish: %s\n", ef_err_str(rc));
+        return 1;
+    }
     if (pa->n == 0)
         return 1;
     pa->p[pa->n - 1].stop_after = 1;

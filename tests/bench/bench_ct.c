@@ -23,9 +23,10 @@
  *   bprim_la_v, bprim_aa_v  the same corners through ef_blend_prims_valid (the smoother's
  *             call: the primitives were checked when pushed)
  *   arcpiece  ef_blend_arc_piece                        measure   ef_move_measure (quintics)
- *   smooth    a stream of N CAM-like primitives through ef_smooth_push / ef_smooth_pull; every
- *             push and every pull is one dump, and stdout lists them in order ("call push",
- *             "call pull" for a pulled move, "call pull0" for an empty pull)
+ *   smooth    a stream of N CAM-like primitives through ef_smooth_push / ef_smooth_pull, then
+ *             ef_smooth_finish until done; every push, pull and finish is one dump, and stdout
+ *             lists them in order ("call push", "call pull" for a pulled move, "call pull0"
+ *             for an empty pull, "call finish")
  *   interp    the same stream, its moves through ef_interp (uniform stepping, 1 ms period):
  *             every ef_interp_process call is one dump ("call period"), to the end at rest
  *   interp_c  the same with corrected stepping
@@ -602,6 +603,7 @@ static int run_smooth(const ef_table_t *tbl, long n, int dump, unsigned long lon
         cfg.lim.a_axis[k] = 1000.0f;
     }
     cfg.lim.a_normal_frac = 0.5f;
+    cfg.lim.j_max = 20000.0f; /* the CLI's default: jerk-limited ramps cost most */
     cfg.micro_len = 1.0f;
     cfg.micro_turn = 0.35f;
     cfg.smooth_degree = 5;
@@ -674,9 +676,29 @@ static int run_smooth(const ef_table_t *tbl, long n, int dump, unsigned long lon
         while (smooth_pull(dump, &moves))
             ;
     }
-    ef_smooth_finish(&bench_sm);
-    while (smooth_pull(dump, &moves))
-        ;
+    /* finish: one work unit a call (ef_smooth.h), each call one dump ("call finish") */
+    for (long guard = 0;; guard++) {
+        int dp = dump && bench_interp < 0;
+        if (dp)
+            CALLGRIND_ZERO_STATS;
+        rc = ef_smooth_finish(&bench_sm);
+        if (dp)
+            CALLGRIND_DUMP_STATS;
+        if (bench_interp < 0)
+            printf("call finish\n");
+        while (smooth_pull(dump, &moves))
+            ;
+        if (rc != EF_ERR_FULL)
+            break;
+        if (guard > 10000000L) {
+            fprintf(stderr, "bench_ct: ef_smooth_finish made no end\n");
+            return 1;
+        }
+    }
+    if (rc != EF_OK) {
+        fprintf(stderr, "bench_ct: ef_smooth_finish: %s\n", ef_err_str(rc));
+        return 1;
+    }
     if (bench_interp >= 0) {
         long guard = 0;
         while ((interp_period() || ef_interp_space(&bench_ip) < EF_INTERP_QUEUE) &&

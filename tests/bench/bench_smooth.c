@@ -121,10 +121,23 @@ static int drain(run_t *r, int mode)
     return 0;
 }
 
+/* Finish (one work unit a call, ef_smooth.h) until everything is built, draining between. */
+static int finish_all(run_t *r, int mode)
+{
+    int rc;
+    while ((rc = ef_smooth_finish(&sm)) == EF_ERR_FULL)
+        if (drain(r, mode))
+            return 1;
+    if (rc != EF_OK) {
+        fprintf(stderr, "bench_smooth: ef_smooth_finish: %s\n", ef_err_str(rc));
+        return 1;
+    }
+    return drain(r, mode);
+}
+
 static int finish(run_t *r, int mode)
 {
-    ef_smooth_finish(&sm);
-    if (drain(r, mode))
+    if (finish_all(r, mode))
         return 1;
     return mode == MODE_INTERP ? interp_run(r, 1) : 0;
 }
@@ -178,7 +191,7 @@ static int restart(run_t *r, int mode, const ef_gcode_item_t *it, int err)
         fprintf(stderr, "bench_smooth: %s:%u: primitive refused: %s (chain restarted)\n", text_name,
                 it->line, ef_err_str(err));
     r->restarts++;
-    if (ef_smooth_finish(&sm) == EF_OK && drain(r, mode))
+    if (finish_all(r, mode))
         return 1;
     if (mode == MODE_INTERP && interp_run(r, 2))
         return 1;

@@ -134,13 +134,14 @@ for kind in "$@"; do
     bprim_aa_v) fn=ef_blend_prims_valid; label="blend prims valid arc-arc"; info=1 ;;
     arcpiece) fn=ef_blend_arc_piece; label="arc piece"; info=1 ;;
     measure) fn=ef_move_measure; label="move measure (quintic)"; info=1 ;;
-    smooth) fn=ef_smooth_push,ef_smooth_pull; label="smoother"; info=2 ;;
+    smooth) fn=ef_smooth_push,ef_smooth_pull,ef_smooth_finish; label="smoother"; info=2 ;;
     interp) fn=ef_interp_process; label="interpolator period (uniform)"; info=3 ;;
     interp_c) fn=ef_interp_process; label="interpolator period (corrected)"; info=3 ;;
     *) echo "ct_bench.sh: kind must be g1, g1p, g1_3d, g2, blend, bprim_la, bprim_aa, bprim_la_v, bprim_aa_v, arcpiece, measure, smooth, interp or interp_c, not $kind" >&2; exit 2 ;;
     esac
     if [ "$info" -eq 2 ]; then
-        # The log lists the calls in dump order: "call push", "call pull" (a move), "call pull0".
+        # The log lists the calls in dump order: "call push", "call pull" (a move), "call pull0",
+        # "call finish".
         run_cg dump "$fn" "$kind" "$kind"
         dump_counts "$kind" >"$tmp/$kind.idx"
         grep '^call ' "$tmp/$kind/log" | awk '{ print NR, $2 }' >"$tmp/$kind.calls"
@@ -153,8 +154,9 @@ for kind in "$@"; do
         awk '$2 == "push" { print $3 }' "$tmp/$kind.joined" | stats "smoother push"
         awk '$2 == "pull" { print $3 }' "$tmp/$kind.joined" | stats "smoother pull (one move)"
         awk '$2 == "pull0" { print $3 }' "$tmp/$kind.joined" | stats "smoother pull (empty)"
+        awk '$2 == "finish" { print $3 }' "$tmp/$kind.joined" | stats "smoother finish"
         awk '{ s += $3 } $2 == "pull" { m++ }
-             END { printf "smoother push+pull per move: %d moves from %s primitives, mean %.0f instructions per move\n",
+             END { printf "smoother push+pull+finish per move: %d moves from %s primitives, mean %.0f instructions per move\n",
                    m, "'"$n"'", m ? s / m : 0 }' "$tmp/$kind.joined"
         continue
     fi

@@ -266,6 +266,31 @@ static void ef_fz_drain(ef_fz_state_t *st, int ticks_max)
     }
 }
 
+/* Work units done and moves pulled so far: every EF_ERR_FULL of push and finish must move
+ * one of them (ef_smooth.h, "Work units"), else the smoother is stuck. */
+static uint64_t ef_fz_progress(void)
+{
+    ef_smooth_stats_t t = ef_smooth_stats(&S);
+    return ((uint64_t)t.units << 32) | t.moves;
+}
+
+/* Finish, draining between the calls (one work unit each), until it reports everything
+ * built; a call without progress fails. */
+static void ef_fz_finish(ef_fz_state_t *st, int ticks_max, const char *what)
+{
+    for (;;) {
+        uint64_t before = ef_fz_progress();
+        int rc = ef_smooth_finish(&S);
+        ef_fz_drain(st, ticks_max);
+        if (rc == EF_OK || st->gave_up)
+            return;
+        if (rc != EF_ERR_FULL)
+            ef_fz_fail(what, rc);
+        if (ef_fz_progress() == before)
+            ef_fz_fail(what, 1);
+    }
+}
+
 static void ef_fz_run(const uint8_t *data, size_t size)
 {
     ef_fz_in_t in = {data, size, 0};
@@ -312,8 +337,9 @@ static void ef_fz_run(const uint8_t *data, size_t size)
         p.qtol = (op & 32u) ? 0.005f : 0.0f;
         p.tag = (uint32_t)n;
         if (op & 64u) { /* finish: an event */
-            if (ef_smooth_finish(&S) != EF_OK)
-                ef_fz_fail("finish", 0);
+            ef_fz_finish(&st, 2000, "finish");
+            if (st.gave_up)
+                return;
         }
         if (p.kind == EF_PRIM_LINE) {
             /* one read per statement: the order of a call's arguments is unspecified (gcc
@@ -346,14 +372,16 @@ static void ef_fz_run(const uint8_t *data, size_t size)
                     "-> %d\n",
                     n, p.kind, (unsigned)p.flags, (double)p.feed, (double)p.tol, (double)p.end.x,
                     (double)p.end.y, (double)p.end.z, (double)p.sweep, rc);
-        for (int guard = 0; rc == EF_ERR_FULL && guard < 64 && !st.gave_up; guard++) {
+        while (rc == EF_ERR_FULL && !st.gave_up) {
+            uint64_t before = ef_fz_progress();
             ef_fz_drain(&st, 2000);
-            rc = ef_smooth_push(&S, &p);
+            int again = ef_smooth_push(&S, &p);
+            if (again == EF_ERR_FULL && ef_fz_progress() == before)
+                ef_fz_fail("still full after draining, no work done", 0);
+            rc = again;
         }
         if (st.gave_up)
             return; /* too slow to simulate: what ran so far was checked */
-        if (rc == EF_ERR_FULL)
-            ef_fz_fail("still full after draining", 0);
         if (rc == EF_OK)
             pos = p.end;
         else if (rc > 0 || !strcmp(ef_err_str(rc), "unknown error"))
@@ -362,9 +390,7 @@ static void ef_fz_run(const uint8_t *data, size_t size)
         if (st.gave_up)
             return;
     }
-    if (ef_smooth_finish(&S) != EF_OK)
-        ef_fz_fail("final finish", 0);
-    ef_fz_drain(&st, 2000);
+    ef_fz_finish(&st, 2000, "final finish");
     if (st.gave_up)
         return;
     ef_move_t m;

@@ -647,6 +647,25 @@ static int gd_drain(gd_chain_t *c)
     return 0;
 }
 
+/* Finish (one work unit a call), draining in between, until everything is built; its last
+ * code goes into the digest. A call with no progress (no unit, no move) fails. */
+static int gd_finish(gd_chain_t *c)
+{
+    for (;;) {
+        ef_smooth_stats_t t0 = ef_smooth_stats(&gd_sm);
+        int rc = ef_smooth_finish(&gd_sm);
+        if (gd_drain(c))
+            return 1;
+        if (rc != EF_ERR_FULL) {
+            gd_i(rc);
+            return rc != EF_OK;
+        }
+        ef_smooth_stats_t t1 = ef_smooth_stats(&gd_sm);
+        if (t1.units == t0.units && t1.moves == t0.moves)
+            return 1;
+    }
+}
+
 static void gd_stats(void)
 {
     ef_smooth_stats_t st = ef_smooth_stats(&gd_sm);
@@ -688,8 +707,7 @@ static int gd_chain(const ef_golden_prog_t *pg, uint32_t v, gd_chain_t *c)
     for (uint32_t i = 0; i < pg->n; i++) {
         const ef_golden_rec_t *r = &pg->rec[i];
         if (r->op == EF_GOLDEN_FINISH) {
-            gd_i(ef_smooth_finish(&gd_sm));
-            if (gd_drain(c) || gd_interp_run(c, 1))
+            if (gd_finish(c) || gd_interp_run(c, 1))
                 return 1;
             continue;
         }
@@ -706,7 +724,7 @@ static int gd_chain(const ef_golden_prog_t *pg, uint32_t v, gd_chain_t *c)
             /* refused: bring what was accepted to rest, start again at its end */
             c->refused++;
             gd_keeping = 0;
-            if (ef_smooth_finish(&gd_sm) == EF_OK && gd_drain(c))
+            if (gd_finish(c))
                 return 1;
             if (gd_interp_run(c, 2))
                 return 1;
@@ -719,8 +737,7 @@ static int gd_chain(const ef_golden_prog_t *pg, uint32_t v, gd_chain_t *c)
         if (gd_drain(c))
             return 1;
     }
-    gd_i(ef_smooth_finish(&gd_sm));
-    if (gd_drain(c) || gd_interp_run(c, 1))
+    if (gd_finish(c) || gd_interp_run(c, 1))
         return 1;
     gd_stats();
     return 0;

@@ -55,6 +55,11 @@ extern const ef_table_t ef_tbl_g2_default;
 static int costs_fails;
 static uint32_t costs_v[COSTS_CALLS_MAX];
 static uint32_t costs_v2[COSTS_CALLS_MAX];
+/** Finish calls timed per stream (each does one work unit; ef_smooth.h). */
+#ifndef COSTS_FINISH_MAX
+#define COSTS_FINISH_MAX 20000
+#endif
+static uint32_t costs_v3[COSTS_FINISH_MAX];
 
 /* Pre-generated inputs of one kind (one of these at a time). */
 static union {
@@ -327,6 +332,31 @@ static int costs_pull(uint32_t *np, int keep)
     return 1;
 }
 
+/* Finish, timed per call into costs_v3[*nf], pulling after each call as the loop in
+ * ef_smooth.h does, until everything is built. Returns the last code. */
+static int costs_finish(uint32_t *nf, uint32_t *np, int keep)
+{
+    for (;;) {
+        ef_smooth_stats_t t0s = ef_smooth_stats(&costs_sm);
+        uint32_t t0 = ef_m4_icount_begin();
+        int rc = ef_smooth_finish(&costs_sm);
+        uint32_t n = ef_m4_icount_end(t0);
+        if (*nf < COSTS_FINISH_MAX) {
+            costs_v3[(*nf)++] = n;
+        }
+        uint32_t pulled = 0;
+        while (costs_pull(np, keep)) {
+            pulled++;
+        }
+        if (rc != EF_ERR_FULL) {
+            return rc;
+        }
+        if (!pulled && ef_smooth_stats(&costs_sm).units == t0s.units) {
+            return EF_ERR_STATE; /* no progress */
+        }
+    }
+}
+
 /* Record i of a primitive stream: its op (0 push, 1 finish, as golden.h's) and primitive. */
 typedef uint32_t (*costs_rec_fn)(uint32_t i, const ef_prim_t **pr);
 
@@ -349,6 +379,7 @@ __attribute__((noinline)) static void costs_stream(const char *tag, costs_rec_fn
         cfg.lim.a_axis[k] = 1000.0f;
     }
     cfg.lim.a_normal_frac = 0.5f;
+    cfg.lim.j_max = 20000.0f; /* the CLI's default: jerk-limited ramps cost most */
     cfg.micro_len = 1.0f;
     cfg.micro_turn = 0.35f;
     cfg.smooth_degree = 5;
@@ -357,7 +388,7 @@ __attribute__((noinline)) static void costs_stream(const char *tag, costs_rec_fn
         costs_fail("ef_smooth_init", 0, rc);
         return;
     }
-    uint32_t npush = 0, npull = 0;
+    uint32_t npush = 0, npull = 0, nfin = 0;
     if (keep) {
         costs_nmoves = 0;
     }
@@ -365,8 +396,10 @@ __attribute__((noinline)) static void costs_stream(const char *tag, costs_rec_fn
     for (uint32_t i = 0; i < nrec; i++) {
         const ef_prim_t *pr;
         if (rec(i, &pr) != 0u) {
-            rc = ef_smooth_finish(&costs_sm);
-            while (costs_pull(&npull, keep)) {
+            rc = costs_finish(&nfin, &npull, keep);
+            if (rc != EF_OK) {
+                costs_fail("ef_smooth_finish", (long)i, rc);
+                break;
             }
             continue;
         }
@@ -390,11 +423,9 @@ __attribute__((noinline)) static void costs_stream(const char *tag, costs_rec_fn
         while (costs_pull(&npull, keep)) {
         }
     }
-    rc = ef_smooth_finish(&costs_sm);
+    rc = costs_finish(&nfin, &npull, keep);
     if (rc != EF_OK) {
         costs_fail("ef_smooth_finish", 0, rc);
-    }
-    while (costs_pull(&npull, keep)) {
     }
     /* push, pull and finish share one painted stretch: one line for the three (the check
      * compares it with the largest of their bounds). */
@@ -404,6 +435,8 @@ __attribute__((noinline)) static void costs_stream(const char *tag, costs_rec_fn
     costs_report(name, costs_v, npush);
     costs_cat(costs_cat(name, "ef_smooth_pull/"), tag);
     costs_report(name, costs_v2, npull);
+    costs_cat(costs_cat(name, "ef_smooth_finish/"), tag);
+    costs_report(name, costs_v3, nfin);
     if (keep && costs_nmoves >= COSTS_MOVES_MAX) {
         ef_m4_puts("m4_costs: more moves than COSTS_MOVES_MAX, the interpolator pass is short\n");
     }

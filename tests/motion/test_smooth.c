@@ -136,6 +136,24 @@ static int drain(void)
     return rc;
 }
 
+/* Finish (one work unit a call, ef_smooth.h), draining in between; every EF_ERR_FULL has
+ * made progress: a unit, or a move to pull. */
+static int finish_all(void)
+{
+    int rc = EF_ERR_FULL;
+    for (int guard = 0; rc == EF_ERR_FULL && guard < 1000000; guard++) {
+        uint32_t units = ef_smooth_stats(&S).units;
+        int nm = NM;
+        rc = ef_smooth_finish(&S);
+        EF_CHECK_EQ(drain(), EF_ERR_AGAIN);
+        if (rc == EF_ERR_FULL && ef_smooth_stats(&S).units == units && NM == nm) {
+            EF_CHECK(!"finish: no progress");
+            return EF_ERR_STATE;
+        }
+    }
+    return rc;
+}
+
 /* Push a whole program (FULL handled by draining) and finish. Returns the first refusal. */
 static int run_prims(const ef_smooth_cfg_t *c, ef_vec3_t start, const ef_prim_t *pr, int n)
 {
@@ -148,7 +166,7 @@ static int run_prims(const ef_smooth_cfg_t *c, ef_vec3_t start, const ef_prim_t 
         ef_prim_t q = pr[i];
         q.tag = (uint32_t)NP; /* index among the accepted ones, for dist_prog() */
         int rc = ef_smooth_push(&S, &q);
-        for (int guard = 0; rc == EF_ERR_FULL && guard < 1000; guard++) {
+        for (int guard = 0; rc == EF_ERR_FULL && guard < 100000; guard++) {
             EF_CHECK_EQ(drain(), EF_ERR_AGAIN);
             rc = ef_smooth_push(&S, &q);
         }
@@ -164,7 +182,7 @@ static int run_prims(const ef_smooth_cfg_t *c, ef_vec3_t start, const ef_prim_t 
         a[2] = pr[i].end.z;
         NP++;
     }
-    EF_CHECK_EQ(ef_smooth_finish(&S), EF_OK);
+    EF_CHECK_EQ(finish_all(), EF_OK);
     EF_CHECK_EQ(drain(), EF_ERR_AGAIN);
     return first_err;
 }
@@ -679,8 +697,8 @@ static void test_bad_input(void)
     next.tag = 1;
     EF_CHECK_EQ(ef_smooth_push(&S, &next), EF_OK);
     EF_CHECK_EQ(ef_smooth_stats(&S).prims, 2);
-    EF_CHECK_EQ(ef_smooth_finish(&S), EF_OK);
     NM = 0;
+    EF_CHECK_EQ(finish_all(), EF_OK);
     EF_CHECK_EQ(drain(), EF_ERR_AGAIN);
     EF_CHECK_EQ(NM, 3); /* line, blend, line */
     NP = 2;
@@ -707,30 +725,44 @@ static void test_bad_input(void)
     EF_CHECK_EQ(ef_smooth_init(&S, &c, ef_v3(NAN, 0, 0)), EF_ERR_NONFINITE);
 }
 
-/* A full look-ahead: pushing without pulling ends in EF_ERR_FULL (nothing lost); pulling
- * makes room and the same primitive is then accepted; the path comes out whole. */
+/* A full look-ahead: pushing without pulling ends in EF_ERR_FULL with no more progress
+ * (nothing lost: every EF_ERR_FULL before did a work unit); pulling makes room and the same
+ * primitive is then accepted; the path comes out whole. */
 static void test_full(void)
 {
     ef_smooth_cfg_t c = cfg_default();
     c.micro_len = 0;
     EF_CHECK_EQ(ef_smooth_init(&S, &c, ef_v3(0, 0, 0)), EF_OK);
     static ef_prim_t pr[1000];
-    int pushed = 0, rc = EF_OK;
-    for (int i = 0; i < 1000 && rc == EF_OK; i++) {
+    int pushed = 0, rc = EF_OK, retries = 0;
+    for (int i = 0; i < 1000; i++) {
         pr[i] = line_to((float)(i + 1), (float)(i % 2), 0, 50, 0.01f);
         pr[i].tag = (uint32_t)i;
-        rc = ef_smooth_push(&S, &pr[i]);
-        if (rc == EF_OK)
-            pushed++;
+        uint32_t units;
+        do {
+            units = ef_smooth_stats(&S).units;
+            rc = ef_smooth_push(&S, &pr[i]);
+            retries += rc == EF_ERR_FULL;
+        } while (rc == EF_ERR_FULL && ef_smooth_stats(&S).units != units);
+        if (rc != EF_OK)
+            break;
+        pushed++;
     }
     EF_CHECK_EQ(rc, EF_ERR_FULL);
     EF_CHECK(pushed >= 8 && pushed < 1000);
-    printf("look-ahead: full after %d primitives without pulling\n", pushed);
+    printf("look-ahead: full after %d primitives without pulling (%d pushes repeated while "
+           "work went on)\n",
+           pushed, retries);
     NM = 0;
     EF_CHECK_EQ(drain(), EF_ERR_AGAIN);
     EF_CHECK(NM > 0);
-    EF_CHECK_EQ(ef_smooth_push(&S, &pr[pushed]), EF_OK);
-    EF_CHECK_EQ(ef_smooth_finish(&S), EF_OK);
+    rc = ef_smooth_push(&S, &pr[pushed]);
+    for (int guard = 0; rc == EF_ERR_FULL && guard < 100; guard++) {
+        EF_CHECK_EQ(drain(), EF_ERR_AGAIN);
+        rc = ef_smooth_push(&S, &pr[pushed]);
+    }
+    EF_CHECK_EQ(rc, EF_OK);
+    EF_CHECK_EQ(finish_all(), EF_OK);
     EF_CHECK_EQ(drain(), EF_ERR_AGAIN);
     NP = pushed + 1;
     for (int i = 0; i < NP; i++) {
@@ -771,10 +803,8 @@ static void test_with_interp(void)
             else
                 break;
         }
-        if (next == N && !finished) {
-            ef_smooth_finish(&S);
-            finished = 1;
-        }
+        if (next == N && !finished)
+            finished = ef_smooth_finish(&S) == EF_OK; /* a unit a tick until done */
         for (;;) {
             if (!have_pending) {
                 if (ef_smooth_pull(&S, &pending) != EF_OK)

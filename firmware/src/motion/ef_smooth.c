@@ -21,6 +21,22 @@ enum {
  * EF_SM_MIN_MOVE, so a piece's measured length never falls below it by rounding. */
 #define EF_SM_MIN_PIECE (4.0f * EF_MIN_CHORD)
 
+/* Phases of the decision of the oldest open vertex (ef_smooth_t::job; the transition table
+ * is in ef_smooth.h, "Work units"). */
+enum {
+    EF_J_VERTEX = 0,       /* stop wanted? else the smooth gate */
+    EF_J_SMOOTH_ARC = 1,   /* section curve from the arc frame at a rest start */
+    EF_J_SMOOTH_ARC_M = 2, /* ... measured */
+    EF_J_SMOOTH = 3,       /* section curve to the gate's frame */
+    EF_J_SMOOTH_M = 4,     /* ... measured */
+    EF_J_BLEND = 5,        /* the corner blend */
+    EF_J_PROBE = 6,        /* ... measured */
+    EF_J_CLOSE_ARC = 7,    /* closing section to the arc frame of its smooth start */
+    EF_J_CLOSE_ARC_M = 8,  /* ... measured */
+    EF_J_CLOSE = 9,        /* closing section to its end as decided */
+    EF_J_CLOSE_M = 10,     /* ... measured */
+};
+
 /* Emission phases of the oldest held primitive. */
 enum { EF_E_BODY = 0, EF_E_BLEND = 1, EF_E_DONE = 2 };
 
@@ -92,6 +108,10 @@ int ef_smooth_init(ef_smooth_t *s, const ef_smooth_cfg_t *cfg, ef_vec3_t start)
     s->ph = s->pn = 0;
     s->sh = s->sn = 0;
     s->arc_next = s->arc_n = 0;
+    s->arc_sized = 0;
+    s->arc_k = s->arc_try = 0;
+    s->arc_dev = 0.0f;
+    s->job = EF_J_VERTEX;
     s->next_id = 0;
     s->emitting = EF_E_BODY;
     ef_smooth_stats_t zero = {0};
@@ -121,7 +141,7 @@ static void sm_stage(ef_smooth_t *s, const ef_move_t *m)
          * rounding): not a move a planner or drive can time. The move before it is
          * stretched to its end (by less than EF_MIN_CHORD, while that move is still
          * staged) and takes over its stop, if any. With none staged, the move before has
-         * gone to the planner, which happens only when it ends at a stop (sm_pump()) or
+         * gone to the planner, which happens only when it ends at a stop (sm_feed_plan()) or
          * before the first move: the machine is at rest at out_end, within EF_MIN_CHORD of
          * the remnant's end, so a stop of the remnant is that one, and the next move's start
          * snaps over the gap. Counted either way (stats.remnants). */
@@ -289,13 +309,10 @@ static ef_vec3_t sm_bez_point(const ef_vec3_t *b, int deg, float t)
     return ef_v3_axpy(r, t2 * t, b[3]);
 }
 
-/* A smooth-section move between two frames on held line h; its deviation is measured from
- * the chord (samples plus a bound between them) and, where vertices were merged into the
- * chord and pts holds them, from the input points themselves (sm_poly_dev()); m->dev is the
- * smaller of the two bounds (chord bound + merge_dev, or the polyline measure) plus the
- * between-samples bound. Returns an ef_err code (the caller falls back to a line). */
-static int sm_smooth_move(ef_smooth_t *s, ef_move_t *m, const ef_frame_t *f0, const ef_frame_t *f1,
-                          const ef_smooth_prim_t *h, const ef_vec3_t *pts)
+/* First half of a smooth section between two frames on held line h (a work unit of its
+ * own, ef_smooth_work()): the table's curve, its ends evened; the control points, degree
+ * and clamp flag into *m. Returns an ef_err code (the caller falls back). */
+static int sm_smooth_curve(ef_smooth_t *s, ef_move_t *m, const ef_frame_t *f0, const ef_frame_t *f1)
 {
     ef_endpoint_t e0 = ef_frame_endpoint(f0), e1 = ef_frame_endpoint(f1);
     ef_seg_t seg;
@@ -319,6 +336,16 @@ static int sm_smooth_move(ef_smooth_t *s, ef_move_t *m, const ef_frame_t *f0, co
         m->b[i] = seg.b[i];
     m->degree = seg.degree;
     m->flags = (uint16_t)((seg.flags & EF_SEG_CLAMPED) ? EF_MOVE_CLAMPED : 0u);
+    return EF_OK;
+}
+
+/* Second half: the deviation of the curve in *m from held line h, measured from the chord
+ * (samples plus a bound between them) and, where vertices were merged into the chord and
+ * pts holds them, from the input points themselves (sm_poly_dev()); m->dev is the smaller
+ * of the two bounds (chord bound + merge_dev, or the polyline measure) plus the
+ * between-samples bound. Then the move is measured. Returns an ef_err code. */
+static int sm_smooth_measure(ef_move_t *m, const ef_smooth_prim_t *h, const ef_vec3_t *pts)
+{
     /* Samples: distance from the chord, and position along it / offset from it. */
     enum { NS = EF_BLEND_DEV_SAMPLES };
     float us[NS + 1];
@@ -379,13 +406,13 @@ static ef_frame_t sm_line_frame(ef_vec3_t p, ef_vec3_t dir)
     return f;
 }
 
-/* The smooth-section move of held line h as its vertices stand: its start as decided (a
- * smooth frame, or where the blend before it ended), its end at the smooth frame fe, or on
- * the line trim_end before its end when fe is NULL; measured against the input points pts
- * (NULL: from the chord only). Built once, when h's end vertex is decided: a section that
- * fits is kept in h (sm_section_keep()) and emitted from there. Returns an ef_err code. */
-static int sm_section_build(ef_smooth_t *s, const ef_smooth_prim_t *h, const ef_frame_t *fe,
-                            float trim_end, const ef_vec3_t *pts, ef_move_t *m)
+/* The curve of held line h's smooth section as its vertices stand (the first of two work
+ * units, ef_smooth_work()): its start as decided (a smooth frame, or where the blend before
+ * it ended), its end at the smooth frame fe, or on the line trim_end before its end when fe
+ * is NULL. Built once, when h's end vertex is decided: a section that fits is kept in h
+ * (sm_section_keep()) and emitted from there. Returns an ef_err code. */
+static int sm_section_curve(ef_smooth_t *s, const ef_smooth_prim_t *h, const ef_frame_t *fe,
+                            float trim_end, ef_move_t *m)
 {
     ef_vec3_t dir = sm_dir(h);
     ef_frame_t f0 =
@@ -393,16 +420,14 @@ static int sm_section_build(ef_smooth_t *s, const ef_smooth_prim_t *h, const ef_
     ef_frame_t f1 = fe ? *fe : sm_line_frame(ef_v3_axpy(h->pr.end, -trim_end, dir), dir);
     if (h->trim_start > 0.0f)
         f0.p = h->blend_in_end; /* exactly where the blend ended */
-    int rc = sm_smooth_move(s, m, &f0, &f1, h, pts);
-    return rc == EF_OK && !sm_move_ok(m) ? EF_ERR_NONFINITE : rc;
+    return sm_smooth_curve(s, m, &f0, &f1);
 }
 
-/* sm_section_build() measured against h's input points: 1 when the section was built and is
- * within h's tolerance, else 0. */
-static int sm_body_section(ef_smooth_t *s, const ef_smooth_prim_t *h, const ef_frame_t *fe,
-                           float trim_end, const ef_vec3_t *pts, ef_move_t *m)
+/* The second unit: that curve measured against h's input points pts (NULL: from the chord
+ * only). 1 when the section is a move within h's tolerance, else 0. */
+static int sm_section_fits(const ef_smooth_prim_t *h, const ef_vec3_t *pts, ef_move_t *m)
 {
-    return sm_section_build(s, h, fe, trim_end, pts, m) == EF_OK && m->dev <= h->pr.tol;
+    return sm_smooth_measure(m, h, pts) == EF_OK && sm_move_ok(m) && m->dev <= h->pr.tol;
 }
 
 /* Legendre polynomials P0..P4 and their first two derivatives at x. */
@@ -635,33 +660,6 @@ static void sm_section_emit(const ef_smooth_prim_t *h, ef_move_t *m)
     m->dev = h->sec_dev; /* measured against the input points when it was fitted */
 }
 
-/* Fit held line h's section with the end frame fe of a smooth vertex being decided: built
- * and measured against the input points now (the section is final once the vertex is).
- * Where h starts at rest without a smooth frame, the arc of fe is tried first as its
- * start frame (sm_arc_frame()). 1 when a section fits (h->sec, h->sec_dev set, the free
- * start frame kept), else 0 (h unchanged). */
-static int sm_fit_section(ef_smooth_t *s, ef_smooth_prim_t *h, const ef_frame_t *fe)
-{
-    const ef_vec3_t *pts = sm_run(s, h);
-    ef_move_t trial;
-    if (!h->start_smooth && h->start_stop) {
-        ef_frame_t keep = h->fs;
-        /* (the reflection of the forward tangent at the end is the forward one here) */
-        h->fs = sm_arc_frame(fe->p, fe->t, h->start);
-        h->start_smooth = 1;
-        if (sm_body_section(s, h, fe, 0.0f, pts, &trial)) {
-            sm_section_keep(h, &trial);
-            return 1;
-        }
-        h->start_smooth = 0;
-        h->fs = keep;
-    }
-    if (!sm_body_section(s, h, fe, 0.0f, pts, &trial))
-        return 0;
-    sm_section_keep(h, &trial);
-    return 1;
-}
-
 /* Time a ramp between speed v and v_hi (> v) loses against covering its distance at v_hi:
  * T (v_hi - v) / (2 v_hi), T the S-curve's duration (ef_plan.h, "Speed profile"). */
 static float sm_ramp_loss(float v, float v_hi, float a, float j)
@@ -701,120 +699,203 @@ static int sm_stop_is_faster(const ef_limits_t *lim, ef_move_t *blend, float fee
     return blend->length * (1.0f / v_b - 1.0f / vh) > extra;
 }
 
-/* Decide the vertex between held primitives a (ends there) and b (starts there). */
-static void sm_decide_vertex(ef_smooth_t *s, ef_smooth_prim_t *a, ef_smooth_prim_t *b)
+/* Held primitive a's end vertex is decided (a->end_kind set): the next one, b (NULL when a
+ * is the newest), starts at rest after a stop. Then a's smooth section, if it has smooth
+ * frames and none yet, is built (the CLOSE phases: a section from a smooth vertex to an
+ * exact stop ends on the arc of its smooth start, sm_arc_frame(), when that fits, else on
+ * the chord's direction); otherwise a is closed. */
+static void sm_job_decided(ef_smooth_t *s, ef_smooth_prim_t *a, ef_smooth_prim_t *b)
+{
+    if (a->end_kind == EF_V_STOP && b)
+        b->start_stop = 1;
+    if (a->pr.kind != EF_PRIM_LINE || a->sec != 0 || !(a->start_smooth || a->end_smooth)) {
+        a->closed = 1;
+        s->job = EF_J_VERTEX;
+        return;
+    }
+    s->job =
+        a->end_kind == EF_V_STOP && a->start_smooth && !a->end_smooth ? EF_J_CLOSE_ARC : EF_J_CLOSE;
+}
+
+/* a's end vertex is a smooth vertex with the gate's frame s->jf; its section (s->jtrial)
+ * fits. */
+static void sm_job_smooth(ef_smooth_t *s, ef_smooth_prim_t *a, ef_smooth_prim_t *b)
+{
+    sm_section_keep(a, &s->jtrial);
+    a->end_kind = EF_V_SMOOTH;
+    a->end_smooth = 1;
+    a->fe = s->jf;
+    b->start_smooth = 1;
+    b->fs = s->jf;
+    s->st.smooth++;
+    sm_job_decided(s, a, b);
+}
+
+/* a's end vertex is an exact stop (counted). */
+static void sm_job_stop(ef_smooth_t *s, ef_smooth_prim_t *a, ef_smooth_prim_t *b)
 {
     a->end_kind = EF_V_STOP;
-    if ((b->pr.flags & EF_PRIM_STOP_BEFORE) || !(b->pr.tol > 0.0f)) {
-        s->st.stops++;
-        return;
-    }
-    /* What the decimation used of the tolerance is not available to a blend here; smooth
-     * sections are measured against the input points themselves. */
-    float tol = b->pr.tol - ef_maxf(a->merge_dev, b->merge_dev);
-    if (a->pr.kind == EF_PRIM_LINE && b->pr.kind == EF_PRIM_LINE) {
-        ef_frame_t f;
+    s->st.stops++;
+    sm_job_decided(s, a, b);
+}
+
+/* The arc frame tried at a's free start (a starts at rest, sm_arc_frame()) is taken back. */
+static void sm_job_unarc(ef_smooth_t *s, ef_smooth_prim_t *a)
+{
+    a->start_smooth = 0;
+    a->fs = s->jkeep;
+}
+
+/* One step of the oldest open vertex's decision (ef_smooth_work(), the phases in
+ * ef_smooth.h): held primitive a ends there, b (NULL only when a ends at a finish) starts
+ * there. Each phase is one bounded work unit. */
+static void sm_job_step(ef_smooth_t *s, ef_smooth_prim_t *a, ef_smooth_prim_t *b)
+{
+    const ef_vec3_t *pts = sm_run(s, a);
+    switch (s->job) {
+    case EF_J_VERTEX:
+        if (a->fin_stop || !b || (b->pr.flags & EF_PRIM_STOP_BEFORE) || !(b->pr.tol > 0.0f)) {
+            sm_job_stop(s, a, b);
+            return;
+        }
         /* The section ending here is final once this vertex is: built and measured now, so
          * a section that does not fit makes this vertex a corner, not an exact stop. */
-        if (sm_smooth_gate(s, a, b, b->pr.tol, &f) && sm_fit_section(s, a, &f)) {
-            a->end_kind = EF_V_SMOOTH;
+        if (a->pr.kind == EF_PRIM_LINE && b->pr.kind == EF_PRIM_LINE &&
+            sm_smooth_gate(s, a, b, b->pr.tol, &s->jf))
+            s->job = !a->start_smooth && a->start_stop ? EF_J_SMOOTH_ARC : EF_J_SMOOTH;
+        else
+            s->job = EF_J_BLEND;
+        return;
+    case EF_J_SMOOTH_ARC:
+        /* a starts at rest without a smooth frame: the arc of the gate's frame is tried
+         * first as its start frame (the reflection of the forward tangent at the end is the
+         * forward one here) */
+        s->jkeep = a->fs;
+        a->fs = sm_arc_frame(s->jf.p, s->jf.t, a->start);
+        a->start_smooth = 1;
+        if (sm_section_curve(s, a, &s->jf, 0.0f, &s->jtrial) == EF_OK) {
+            s->job = EF_J_SMOOTH_ARC_M;
+        } else {
+            sm_job_unarc(s, a);
+            s->job = EF_J_SMOOTH;
+        }
+        return;
+    case EF_J_SMOOTH_ARC_M:
+        if (sm_section_fits(a, pts, &s->jtrial)) {
+            sm_job_smooth(s, a, b);
+            return;
+        }
+        sm_job_unarc(s, a);
+        s->job = EF_J_SMOOTH;
+        return;
+    case EF_J_SMOOTH:
+        s->job =
+            sm_section_curve(s, a, &s->jf, 0.0f, &s->jtrial) == EF_OK ? EF_J_SMOOTH_M : EF_J_BLEND;
+        return;
+    case EF_J_SMOOTH_M:
+        if (sm_section_fits(a, pts, &s->jtrial))
+            sm_job_smooth(s, a, b);
+        else
+            s->job = EF_J_BLEND;
+        return;
+    case EF_J_BLEND: {
+        /* What the decimation used of the tolerance is not available to a blend here;
+         * smooth sections are measured against the input points themselves. Each side
+         * gives at most half its length, so the blends at its two ends cannot overlap
+         * (ef_smooth.h); both primitives were checked when pushed, a->len and b->len are
+         * ef_prim_check()'s. */
+        float tol = b->pr.tol - ef_maxf(a->merge_dev, b->merge_dev);
+        int rc = ef_blend_prims_valid(s->cfg.g2, a->start, &a->pr, a->len, &b->pr, b->len, tol,
+                                      0.5f * a->len, 0.5f * b->len, &a->blend);
+        if (rc == EF_ERR_REVERSAL) {
+            s->st.reversals++;
+            sm_job_stop(s, a, b);
+        } else if (rc != EF_OK || (a->blend.flags & EF_BLEND_STOP)) {
+            /* No blend that float32 can hold (or a lookup failure on validated data): the
+             * safe outcome is the same as for a reversal, an exact stop. */
+            sm_job_stop(s, a, b);
+        } else if (a->blend.flags & EF_BLEND_STRAIGHT) {
+            a->end_kind = EF_V_STRAIGHT;
+            s->st.straight++;
+            sm_job_decided(s, a, b);
+        } else {
+            s->job = EF_J_PROBE;
+        }
+        return;
+    }
+    case EF_J_PROBE: {
+        /* A blend as wide as a huge tolerance allows can reach beyond the coordinate range
+         * (its control points are not bounded by the path's): not a move anything can
+         * hold ... */
+        ef_move_t *probe = &s->jtrial;
+        ef_move_t zero = {0};
+        *probe = zero;
+        for (int i = 0; i < 6; i++)
+            probe->b[i] = a->blend.seg.b[i];
+        probe->degree = 5;
+        /* ... or loop far from the path it replaces (a huge tolerance lets the trial trims
+         * grow into configurations the table clamps): a blend longer than twice the trimmed
+         * path is not a rounded corner, and its speed peaks between the samples the limits
+         * rely on. */
+        if (ef_move_measure(probe) != EF_OK || !sm_move_ok(probe) ||
+            !(probe->length <= 2.0f * (a->blend.trim_in + a->blend.trim_out) + EF_MIN_CHORD)) {
+            sm_job_stop(s, a, b);
+            return;
+        }
+        if (!s->cfg.keep_slow_blends && a->pr.kind == EF_PRIM_LINE && b->pr.kind == EF_PRIM_LINE &&
+            sm_stop_is_faster(&s->cfg.lim, probe, ef_minf(a->pr.feed, b->pr.feed))) {
+            s->st.slow_corners++;
+            sm_job_stop(s, a, b);
+            return;
+        }
+        a->blend_len = probe->length;
+        a->blend_kmax = probe->kappa_max;
+        a->blend_tabs = probe->tabs;
+        a->blend_kabs = probe->kabs;
+        a->blend_kjerk = probe->kjerk;
+        a->end_kind = EF_V_BLEND;
+        a->trim_end = a->blend.trim_in;
+        b->trim_start = a->blend.trim_out;
+        b->blend_in_end = a->blend.seg.b[5]; /* as emitted; a section on b starts there */
+        s->st.blends++;
+        sm_job_decided(s, a, b);
+        return;
+    }
+    case EF_J_CLOSE_ARC:
+        s->jf = sm_arc_frame(a->fs.p, a->fs.t, a->pr.end);
+        s->job = sm_section_curve(s, a, &s->jf, 0.0f, &s->jtrial) == EF_OK ? EF_J_CLOSE_ARC_M
+                                                                           : EF_J_CLOSE;
+        return;
+    case EF_J_CLOSE_ARC_M:
+        if (sm_section_fits(a, pts, &s->jtrial)) {
+            a->fe = s->jf;
             a->end_smooth = 1;
-            a->fe = f;
-            b->start_smooth = 1;
-            b->fs = f;
-            s->st.smooth++;
+            sm_section_keep(a, &s->jtrial);
+            a->closed = 1;
+            s->job = EF_J_VERTEX;
+        } else {
+            s->job = EF_J_CLOSE;
+        }
+        return;
+    case EF_J_CLOSE:
+        if (sm_section_curve(s, a, a->end_smooth ? &a->fe : (const ef_frame_t *)0, a->trim_end,
+                             &s->jtrial) == EF_OK) {
+            s->job = EF_J_CLOSE_M;
             return;
         }
-    }
-    /* Each side gives at most half its length, so the blends at its two ends cannot
-     * overlap (ef_smooth.h). */
-    float max_in = 0.5f * a->len, max_out = 0.5f * b->len;
-    /* both primitives were checked when pushed, a->len and b->len are ef_prim_check()'s */
-    int rc = ef_blend_prims_valid(s->cfg.g2, a->start, &a->pr, a->len, &b->pr, b->len, tol, max_in,
-                                  max_out, &a->blend);
-    if (rc == EF_ERR_REVERSAL) {
-        s->st.stops++;
-        s->st.reversals++;
+        a->sec = 2u; /* driven as its chord between exact stops */
+        a->closed = 1;
+        s->job = EF_J_VERTEX;
+        return;
+    default: /* EF_J_CLOSE_M */
+        if (sm_section_fits(a, pts, &s->jtrial))
+            sm_section_keep(a, &s->jtrial);
+        else
+            a->sec = 2u;
+        a->closed = 1;
+        s->job = EF_J_VERTEX;
         return;
     }
-    if (rc != EF_OK || (a->blend.flags & EF_BLEND_STOP)) {
-        /* No blend that float32 can hold (or a lookup failure on validated data): the safe
-         * outcome is the same as for a reversal, an exact stop. */
-        s->st.stops++;
-        return;
-    }
-    if (a->blend.flags & EF_BLEND_STRAIGHT) {
-        a->end_kind = EF_V_STRAIGHT;
-        s->st.straight++;
-        return;
-    }
-    /* A blend as wide as a huge tolerance allows can reach beyond the coordinate range
-     * (its control points are not bounded by the path's): not a move anything can hold. */
-    ef_move_t probe = {0};
-    for (int i = 0; i < 6; i++)
-        probe.b[i] = a->blend.seg.b[i];
-    probe.degree = 5;
-    /* ... or loop far from the path it replaces (a huge tolerance lets the trial trims grow
-     * into configurations the table clamps): a blend longer than twice the trimmed path is
-     * not a rounded corner, and its speed peaks between the samples the limits rely on. */
-    if (ef_move_measure(&probe) != EF_OK || !sm_move_ok(&probe) ||
-        !(probe.length <= 2.0f * (a->blend.trim_in + a->blend.trim_out) + EF_MIN_CHORD)) {
-        s->st.stops++;
-        return;
-    }
-    if (!s->cfg.keep_slow_blends && a->pr.kind == EF_PRIM_LINE && b->pr.kind == EF_PRIM_LINE &&
-        sm_stop_is_faster(&s->cfg.lim, &probe, ef_minf(a->pr.feed, b->pr.feed))) {
-        s->st.stops++;
-        s->st.slow_corners++;
-        return;
-    }
-    a->blend_len = probe.length;
-    a->blend_kmax = probe.kappa_max;
-    a->blend_tabs = probe.tabs;
-    a->blend_kabs = probe.kabs;
-    a->blend_kjerk = probe.kjerk;
-    a->end_kind = EF_V_BLEND;
-    a->trim_end = a->blend.trim_in;
-    b->trim_start = a->blend.trim_out;
-    b->blend_in_end = a->blend.seg.b[5]; /* as emitted; a section on b starts there */
-    s->st.blends++;
-}
-
-/* Held line h's end vertex is decided: build and measure its smooth section once, while
- * its merged vertices are still in their run slot (emission hands on the move kept then,
- * sm_section_emit()); the slot is free after. A section from a smooth vertex to an
- * exact stop ends on the arc of its smooth start (sm_arc_frame()) when that fits, else on
- * the chord's direction; one that fits neither is driven as its chord between stops. */
-static void sm_close(ef_smooth_t *s, ef_smooth_prim_t *h)
-{
-    if (h->pr.kind != EF_PRIM_LINE || h->sec != 0 || !(h->start_smooth || h->end_smooth))
-        return;
-    ef_move_t trial;
-    const ef_vec3_t *pts = sm_run(s, h);
-    if (h->end_kind == EF_V_STOP && h->start_smooth && !h->end_smooth) {
-        ef_frame_t fe = sm_arc_frame(h->fs.p, h->fs.t, h->pr.end);
-        if (sm_body_section(s, h, &fe, 0.0f, pts, &trial)) {
-            h->fe = fe;
-            h->end_smooth = 1;
-            sm_section_keep(h, &trial);
-            return;
-        }
-    }
-    int ok = sm_body_section(s, h, h->end_smooth ? &h->fe : (const ef_frame_t *)0, h->trim_end, pts,
-                             &trial);
-    if (ok)
-        sm_section_keep(h, &trial);
-    else
-        h->sec = 2u;
-}
-
-/* Decide the vertex between a and b, then close a. */
-static void sm_decide(ef_smooth_t *s, ef_smooth_prim_t *a, ef_smooth_prim_t *b)
-{
-    sm_decide_vertex(s, a, b);
-    if (a->end_kind == EF_V_STOP)
-        b->start_stop = 1;
-    sm_close(s, a);
 }
 
 /* Arc length bounds of piece i (0-based) of n of an arc body; the last piece ends exactly
@@ -867,9 +948,10 @@ static int sm_skip_body(ef_smooth_t *s, ef_smooth_prim_t *h, ef_move_t *m)
     return sm_next_move(s, m);
 }
 
-/* Build the next move of the oldest held primitive (whose two vertices are decided) into
- * *m. Returns 1 when a move was built, 0 when the primitive had nothing more (it is then
- * popped), or a negative ef_err code. */
+/* Build the next move of the oldest held primitive (closed: its two vertices decided, its
+ * section built) into *m. Returns 1 when a move was built, 0 when the primitive had nothing
+ * more (it is then popped), 2 when a work unit went into sizing its arc body (no move yet),
+ * or a negative ef_err code. */
 static int sm_next_move(ef_smooth_t *s, ef_move_t *m)
 {
     ef_smooth_prim_t *h = sm_held(s, 0);
@@ -881,36 +963,42 @@ static int sm_next_move(ef_smooth_t *s, ef_move_t *m)
                 return sm_skip_body(s, h, m);
             }
             int reuse = 0;
-            if (s->arc_next == 0) {
+            if (s->arc_next == 0 && !s->arc_sized) {
                 /* Piece count: by sweep, then doubled until a piece is within the budget
-                 * (all pieces of an arc are congruent, so the first one decides). A
-                 * doubling that does not halve the deviation stops there, one count back:
-                 * what is left is float32 rounding at the coordinates' magnitude, which no
-                 * split reduces (the approximation error falls 64-fold per doubling). Nor
-                 * is a piece made shorter than EF_SM_MIN_PIECE: the stage would drop it as
-                 * a remnant (a fuzzed arc of 1e-6 at z = 1e5 went into 64 pieces of
-                 * 1.6e-8, all dropped, and the chain ended 1.07e-6 short). */
+                 * (all pieces of an arc are congruent, so the first one decides), one trial
+                 * piece per work unit. A doubling that does not halve the deviation stops
+                 * there, one count back: what is left is float32 rounding at the
+                 * coordinates' magnitude, which no split reduces (the approximation error
+                 * falls 64-fold per doubling). Nor is a piece made shorter than
+                 * EF_SM_MIN_PIECE: the stage would drop it as a remnant (a fuzzed arc of
+                 * 1e-6 at z = 1e5 went into 64 pieces of 1.6e-8, all dropped, and the chain
+                 * ended 1.07e-6 short). */
                 float budget = ef_maxf(0.5f * h->pr.tol, EF_SMOOTH_ARC_TOL_MIN);
                 float body = h->len - h->trim_start - h->trim_end;
-                uint32_t n = sm_arc_pieces(h), built = 0;
-                float dev_prev = 3.4e38f;
-                for (int k = 0; k <= EF_SMOOTH_ARC_SPLITS; k++) {
-                    int rc0 = sm_arc_piece(s, h, 0, n, m);
-                    built = rc0 == EF_OK ? n : 0u;
-                    if (rc0 != EF_OK || m->dev <= budget)
-                        break;
-                    if (!(m->dev < 0.5f * dev_prev)) {
-                        n /= 2u;
-                        break;
-                    }
-                    if (k == EF_SMOOTH_ARC_SPLITS || body < 2.0f * (float)n * EF_SM_MIN_PIECE)
-                        break;
-                    dev_prev = m->dev;
-                    n *= 2u;
+                if (s->arc_k == 0) {
+                    s->arc_try = sm_arc_pieces(h);
+                    s->arc_dev = 3.4e38f;
+                }
+                uint32_t n = s->arc_try;
+                int rc0 = sm_arc_piece(s, h, 0, n, m);
+                uint32_t built = rc0 == EF_OK ? n : 0u;
+                if (rc0 != EF_OK || m->dev <= budget) {
+                    /* this count */
+                } else if (!(m->dev < 0.5f * s->arc_dev)) {
+                    n /= 2u;
+                } else if (!(s->arc_k == EF_SMOOTH_ARC_SPLITS ||
+                             body < 2.0f * (float)n * EF_SM_MIN_PIECE)) {
+                    s->arc_dev = m->dev;
+                    s->arc_try = 2u * n;
+                    s->arc_k++;
+                    return 2; /* next unit: the next trial */
                 }
                 s->arc_n = n;
+                s->arc_sized = 1;
                 /* the first piece at the final count is already in *m: not built twice */
                 reuse = built == n;
+                if (!reuse)
+                    return 2; /* next unit: the first piece at the count found */
             }
             uint32_t n = s->arc_n;
             rc = reuse ? EF_OK : sm_arc_piece(s, h, s->arc_next, n, m);
@@ -1006,48 +1094,99 @@ static int sm_next_move(ef_smooth_t *s, ef_move_t *m)
     return 0;
 }
 
-/* The oldest held primitive can be emitted: its end vertex is decided. */
-static int sm_emittable(ef_smooth_t *s)
+/* The oldest staged move into the planner, when it may go and the planner has room: the
+ * newest staged move is held back (unless it ends at a stop) so a fall-back can still mark
+ * it as ending at a stop. A work unit of its own: the planner's backward pass may run over
+ * its whole window (ef_plan.h, "Cost"). 1 when a move went, 0 when none could, or an ef_err
+ * code. */
+static int sm_feed_plan(ef_smooth_t *s)
 {
-    return s->pn > 0 && sm_held(s, 0)->end_kind != EF_V_OPEN;
+    ef_move_t *last = sm_stage_last(s);
+    if (!(s->sn > 1 || (last && (last->flags & EF_MOVE_STOP_END))) || ef_plan_space(&s->plan) == 0)
+        return 0;
+    int rc = ef_plan_push(&s->plan, &s->stage[s->sh]);
+    if (rc != EF_OK)
+        return rc;
+    s->sh = (s->sh + 1) % EF_SMOOTH_STAGE;
+    s->sn--;
+    return 1;
 }
 
-/* Move work along as far as the buffers allow: decided primitives into moves on the
- * stage, staged moves into the planner. The newest staged move is held back (unless it
- * ends at a stop) so a fall-back can still mark it as ending at a stop. Bounded: every
- * iteration stages or hands on one move, and both buffers are finite. */
-static int sm_pump(ef_smooth_t *s)
+/* The oldest held primitive that is not closed and the index of it, or NULL when every held
+ * primitive is. */
+static ef_smooth_prim_t *sm_open(ef_smooth_t *s, uint32_t *at)
 {
-    for (uint32_t guard = 0; guard < 2u * (EF_LOOKAHEAD + EF_SMOOTH_STAGE) + 4u; guard++) {
-        ef_move_t *last = sm_stage_last(s);
-        if (s->sn > 1 || (last && (last->flags & EF_MOVE_STOP_END))) {
-            if (ef_plan_space(&s->plan) > 0) {
-                int rc = ef_plan_push(&s->plan, &s->stage[s->sh]);
-                if (rc != EF_OK)
-                    return rc;
-                s->sh = (s->sh + 1) % EF_SMOOTH_STAGE;
-                s->sn--;
-                continue;
-            }
+    for (uint32_t i = 0; i < s->pn; i++) {
+        ef_smooth_prim_t *h = sm_held(s, i);
+        if (!h->closed) {
+            *at = i;
+            return h;
         }
-        if (s->sn < EF_SMOOTH_STAGE && sm_emittable(s)) {
-            ef_move_t m;
-            int rc = sm_next_move(s, &m);
-            if (rc < 0)
-                return rc;
-            if (rc == 1)
-                sm_stage(s, &m);
-            if (s->emitting == EF_E_DONE || rc == 0) {
-                s->ph = (s->ph + 1) % EF_SMOOTH_PRIMS;
-                s->pn--;
-                s->emitting = EF_E_BODY;
-                s->arc_next = 0;
-            }
-            continue;
-        }
-        break;
     }
+    return (ef_smooth_prim_t *)0;
+}
+
+/* One work unit (ef_smooth_work()), the first of: a staged move into the planner; the
+ * oldest closed primitive's next move onto the stage when it has room; one phase of the
+ * oldest open vertex's decision once that vertex can be decided (the primitive after it can
+ * no longer grow by decimation: one more has come, or a finish). 1 when a unit was done, 0
+ * when nothing can be done now, or a negative ef_err code. */
+static int sm_unit(ef_smooth_t *s)
+{
+    int fed = sm_feed_plan(s);
+    if (fed != 0)
+        return fed;
+    if (s->pn > 0 && s->sn < EF_SMOOTH_STAGE && sm_held(s, 0)->closed) {
+        ef_move_t m;
+        int rc = sm_next_move(s, &m);
+        if (rc < 0)
+            return rc;
+        if (rc == 1)
+            sm_stage(s, &m);
+        if (s->emitting == EF_E_DONE || rc == 0) {
+            s->ph = (s->ph + 1) % EF_SMOOTH_PRIMS;
+            s->pn--;
+            s->emitting = EF_E_BODY;
+            s->arc_next = 0;
+            s->arc_sized = 0;
+            s->arc_k = 0;
+        }
+        return 1;
+    }
+    uint32_t i;
+    ef_smooth_prim_t *a = sm_open(s, &i);
+    if (!a)
+        return 0;
+    ef_smooth_prim_t *b = i + 1 < s->pn ? sm_held(s, i + 1) : (ef_smooth_prim_t *)0;
+    if (s->job == EF_J_VERTEX && !a->fin_stop && !(i + 2 < s->pn) && !(b && b->fin_stop))
+        return 0; /* b may still grow */
+    sm_job_step(s, a, b);
+    return 1;
+}
+
+/* One unit of work (ef_smooth.h, "Work units"). */
+int ef_smooth_work(ef_smooth_t *s)
+{
+    if (!s)
+        return EF_ERR_ARG;
+    int did = sm_unit(s);
+    if (did < 0)
+        return did;
+    if (!did)
+        return EF_ERR_AGAIN;
+    s->st.units++;
     return EF_OK;
+}
+
+/* Room for one more held primitive: a ring slot, and its run slot (the one of the
+ * primitive three before it) no longer needed, i.e. that one closed (ids wrap safely). */
+static int sm_room(ef_smooth_t *s)
+{
+    if (s->pn >= EF_SMOOTH_PRIMS)
+        return 0;
+    uint32_t i;
+    const ef_smooth_prim_t *h = sm_open(s, &i);
+    return !h || s->next_id - h->id <= 2u;
 }
 
 /* Band decimation (ef_smooth.h, rule 2): merge line pr (from s->pos) into the newest held
@@ -1060,8 +1199,8 @@ static int sm_try_merge(ef_smooth_t *s, const ef_prim_t *pr)
         (pr->flags & EF_PRIM_STOP_BEFORE))
         return 0;
     ef_smooth_prim_t *h = sm_held(s, s->pn - 1);
-    if (h->pr.kind != EF_PRIM_LINE || h->end_kind != EF_V_OPEN || h->pr.feed != pr->feed ||
-        h->nmerged >= EF_SMOOTH_MERGE_MAX || !(h->pr.tol > 0.0f))
+    if (h->pr.kind != EF_PRIM_LINE || h->end_kind != EF_V_OPEN || h->fin_stop ||
+        h->pr.feed != pr->feed || h->nmerged >= EF_SMOOTH_MERGE_MAX || !(h->pr.tol > 0.0f))
         return 0;
     ef_vec3_t a = h->start, c = pr->end;
     ef_vec3_t ac = ef_v3_sub(c, a);
@@ -1115,15 +1254,16 @@ int ef_smooth_push(ef_smooth_t *s, const ef_prim_t *pr)
     int rc = ef_prim_check(s->pos, pr, &len);
     if (rc != EF_OK)
         return rc;
-    rc = sm_pump(s);
-    if (rc != EF_OK)
+    /* One unit of the work pending before taking more: a push costs one unit at most. */
+    rc = ef_smooth_work(s);
+    if (rc != EF_OK && rc != EF_ERR_AGAIN)
         return rc;
     if (sm_try_merge(s, pr)) {
         s->pos = pr->end;
         s->st.prims++;
         return EF_OK;
     }
-    if (s->pn >= EF_SMOOTH_PRIMS)
+    if (!sm_room(s))
         return EF_ERR_FULL;
     ef_smooth_prim_t *h = sm_held(s, s->pn);
     h->pr = *pr;
@@ -1131,65 +1271,53 @@ int ef_smooth_push(ef_smooth_t *s, const ef_prim_t *pr)
     h->len = len;
     h->trim_start = h->trim_end = 0.0f;
     h->end_kind = EF_V_OPEN;
+    h->fin_stop = 0;
+    h->closed = 0;
     h->start_smooth = h->end_smooth = 0;
-    /* At rest where it starts: the first primitive, or after ef_smooth_finish() (every
-     * held primitive then ends at a stop); a stop decided later sets it in sm_decide(). */
-    h->start_stop = s->pn == 0 || sm_held(s, s->pn - 1)->end_kind == EF_V_STOP;
+    /* At rest where it starts: the first primitive, or after ef_smooth_finish(); a stop
+     * decided later sets it in sm_job_decided(). */
+    const ef_smooth_prim_t *prev = s->pn ? sm_held(s, s->pn - 1) : (const ef_smooth_prim_t *)0;
+    h->start_stop = !prev || prev->end_kind == EF_V_STOP || prev->fin_stop;
     h->nmerged = 0;
     h->merge_dev = 0.0f;
     h->piece_max = len;
     h->sec = 0;
     h->sec_dev = 0.0f;
-    /* Its run slot is the one of the primitive two before it, whose end vertex is decided
-     * below, before anything is merged into this one. */
+    /* Its run slot is the one of the primitive three before it, closed (sm_room()). */
     h->id = s->next_id++;
     h->blend_in_end = h->start;
     s->pn++;
-    /* The previous primitive is now closed: the vertex before it can be decided. */
-    if (s->pn >= 3) {
-        ef_smooth_prim_t *a = sm_held(s, s->pn - 3), *b = sm_held(s, s->pn - 2);
-        if (a->end_kind == EF_V_OPEN)
-            sm_decide(s, a, b);
-    }
     s->pos = pr->end;
     s->st.prims++;
-    return sm_pump(s);
+    return EF_OK;
 }
 
-/* Decide the last open vertices as a stop at the end, and move everything on. */
+/* Mark the end as an exact stop, then one unit of the work left (ef_smooth.h). */
 int ef_smooth_finish(ef_smooth_t *s)
 {
     if (!s)
         return EF_ERR_ARG;
-    if (s->pn >= 2) {
-        ef_smooth_prim_t *a = sm_held(s, s->pn - 2), *b = sm_held(s, s->pn - 1);
-        if (a->end_kind == EF_V_OPEN)
-            sm_decide(s, a, b);
-    }
     if (s->pn >= 1) {
         ef_smooth_prim_t *b = sm_held(s, s->pn - 1);
-        if (b->end_kind == EF_V_OPEN) {
-            b->end_kind = EF_V_STOP;
-            s->st.stops++;
-            sm_close(s, b);
-        }
+        if (b->end_kind == EF_V_OPEN)
+            b->fin_stop = 1;
     }
-    return sm_pump(s);
+    int rc = ef_smooth_work(s);
+    if (rc != EF_OK && rc != EF_ERR_AGAIN)
+        return rc;
+    /* done when every primitive is built and every move is in the planner (the last one
+     * ends at a stop, so none is held back) */
+    return s->pn == 0 && s->sn == 0 ? EF_OK : EF_ERR_FULL;
 }
 
-/* Hand out the next final move. */
+/* Hand out the next final move: the planner's release only (the work units feed it). */
 int ef_smooth_pull(ef_smooth_t *s, ef_move_t *m)
 {
     if (!s || !m)
         return EF_ERR_ARG;
-    int rc = sm_pump(s);
-    if (rc != EF_OK)
-        return rc;
-    rc = ef_plan_pull(&s->plan, m);
-    if (rc == EF_OK) {
+    int rc = ef_plan_pull(&s->plan, m);
+    if (rc == EF_OK)
         s->st.moves++;
-        sm_pump(s);
-    }
     return rc;
 }
 

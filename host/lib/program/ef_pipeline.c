@@ -283,13 +283,35 @@ static int pipe_pull(ef_pipe_t *P, uint32_t *n, ef_msg_t *m)
     return EF_OK;
 }
 
+/* A call that returned EF_ERR_FULL: a stall when it did no work unit (ef_smooth.h) and
+ * the pulls after it found no move. */
+static int pipe_stalled(ef_pipe_t *P, uint32_t units, uint32_t pulled)
+{
+    return !pulled && ef_smooth_stats(&P->sm).units == units;
+}
+
+/* Finish the smoother (one work unit a call) and pull every move. */
+static int pipe_finish(ef_pipe_t *P, ef_msg_t *m)
+{
+    for (;;) {
+        uint32_t units = ef_smooth_stats(&P->sm).units, n = 0;
+        int rc = ef_smooth_finish(&P->sm);
+        if (rc != EF_OK && rc != EF_ERR_FULL)
+            return ef_fail(m, rc, "smoother finish: %s", ef_err_str(rc));
+        int rc2 = pipe_pull(P, &n, m);
+        if (rc2)
+            return rc2;
+        if (rc == EF_OK)
+            return EF_OK;
+        if (pipe_stalled(P, units, n))
+            return ef_fail(m, EF_ERR_STATE, "smoother finish: no progress");
+    }
+}
+
 /* Exact stop: finish the smoother, emit every move, run the interpolators to rest. */
 static int pipe_drain(ef_pipe_t *P, ef_msg_t *m)
 {
-    int rc = ef_smooth_finish(&P->sm);
-    if (rc)
-        return ef_fail(m, rc, "smoother finish: %s", ef_err_str(rc));
-    rc = pipe_pull(P, NULL, m);
+    int rc = pipe_finish(P, m);
     if (rc)
         return rc;
     for (int k = 0; k < 2; k++) {
@@ -351,15 +373,15 @@ static int pipe_prim(ef_pipe_t *P, const ef_gcode_item_t *it, ef_msg_t *m)
     t->mi.tol = P->tol;
     t->mi.units = it->units;
     t->mi.rapid = rapid;
-    for (int tries = 0;; tries++) {
+    for (;;) {
+        uint32_t units = ef_smooth_stats(&P->sm).units, n = 0;
         rc = ef_smooth_push(&P->sm, &pr);
         if (rc != EF_ERR_FULL)
             break;
-        uint32_t n = 0;
         rc = pipe_pull(P, &n, m);
         if (rc)
             return rc;
-        if (!n && tries > 0)
+        if (pipe_stalled(P, units, n))
             return ef_fail(m, EF_ERR_STATE, "%s:%u: smoother full but nothing to pull", P->r->name,
                            (unsigned)it->line);
     }

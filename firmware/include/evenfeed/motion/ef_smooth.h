@@ -7,13 +7,52 @@
  * blocks, so it can run in a periodic task. Typical loop:
  *
  *     rc = ef_smooth_push(&s, &prim);
- *     while (rc == EF_ERR_FULL) {            // look-ahead full: drain first
+ *     while (rc == EF_ERR_FULL) {            // not taken yet: pull, then push it again
  *         while (ef_smooth_pull(&s, &m) == EF_OK) ef_interp_push(&ip, &m) ...;
  *         rc = ef_smooth_push(&s, &prim);
  *     }
  *     ...
- *     ef_smooth_finish(&s);                  // end of program, or an event that needs rest
+ *     while (ef_smooth_finish(&s) == EF_ERR_FULL)   // end of program, or an event
+ *         while (ef_smooth_pull(&s, &m) == EF_OK) ...;
  *     while (ef_smooth_pull(&s, &m) == EF_OK) ...;
+ *
+ * ## Work units
+ * The geometry is done in units, each of bounded cost (docs: firmware/README.md, "Costs on a
+ * Cortex-M4F"): ef_smooth_push(), ef_smooth_finish() and ef_smooth_work() each do at most
+ * one, ef_smooth_pull() none (it only takes a final move out of the planner). A unit is the
+ * first of these that can be done:
+ * - the oldest staged move into the planner (ef_plan_push(): its backward pass);
+ * - the next move of the oldest decided primitive onto the stage (a line, a kept section,
+ *   a blend, one arc piece, or one trial piece while an arc body's piece count is sized);
+ * - one phase of the decision of the oldest open vertex, in this order:
+ *
+ *   | phase        | does                                    | next                         |
+ *   |--------------|-----------------------------------------|------------------------------|
+ *   | VERTEX       | a stop wanted (finish, STOP_BEFORE,     | stop: CLOSE*; gate passed:   |
+ *   |              | tol 0)? the smooth gate (rule 3)        | SMOOTH_ARC / SMOOTH; BLEND   |
+ *   | SMOOTH_ARC   | section curve from the arc frame at a   | SMOOTH_ARC_M; none: SMOOTH   |
+ *   |              | rest start to the gate's frame          |                              |
+ *   | SMOOTH_ARC_M | that curve measured against the input   | fits: smooth vertex, closed; |
+ *   |              |                                         | else SMOOTH                  |
+ *   | SMOOTH       | section curve to the gate's frame       | SMOOTH_M; none: BLEND        |
+ *   | SMOOTH_M     | measured                                | fits: smooth, closed; BLEND  |
+ *   | BLEND        | ef_blend_prims_valid()                  | reversal, none: stop, CLOSE*;|
+ *   |              |                                         | straight: CLOSE*; else PROBE |
+ *   | PROBE        | the blend measured, range and speed     | stop or blend: CLOSE*        |
+ *   | CLOSE_ARC    | closing section to the arc frame of a   | CLOSE_ARC_M; none: CLOSE     |
+ *   |              | smooth start (end at an exact stop)     |                              |
+ *   | CLOSE_ARC_M  | measured                                | fits: closed; else CLOSE     |
+ *   | CLOSE        | closing section to the end as decided   | CLOSE_M; none: chord, closed |
+ *   | CLOSE_M      | measured                                | fits or chord: closed        |
+ *
+ *   CLOSE* = CLOSE_ARC or CLOSE for a line with a smooth frame at either end and no section
+ *   yet, otherwise closed at once. A vertex is decided once the primitive after it can no
+ *   longer grow by decimation (one more primitive came, or a finish).
+ *
+ * ef_smooth_push() returns ::EF_ERR_FULL while the work behind it must go on first; each
+ * such call has done a unit, or a pull has a move (ef_smooth_stats()::units counts units,
+ * so a caller can tell progress from a stall). A caller waiting for input may call
+ * ef_smooth_work() in its idle time, so the stage and planner fill ahead of the pulls.
  *
  * ## What happens at each vertex (docs/smoothing.md)
  * Vertex = where one primitive ends and the next begins. In this order:
@@ -148,6 +187,7 @@ typedef struct {
     uint32_t merged;       /**< vertices removed by band decimation (collinear collapse) */
     uint32_t smooth;       /**< smooth vertices */
     uint32_t arc_pieces;   /**< arc pieces emitted */
+    uint32_t units;        /**< work units done (ef_smooth_work()) */
     uint32_t remnants;     /**< moves built shorter than EF_MIN_CHORD (what two blends leave of
                                 a line, to rounding), not emitted: joined to the move before,
                                 or, where that one has gone to the planner (it ended at a stop),
@@ -166,6 +206,8 @@ typedef struct {
     float trim_start;                 /**< length taken by the blend at its start */
     float trim_end;                   /**< length taken by the blend at its end */
     uint8_t end_kind;                 /**< how its end vertex was resolved (internal) */
+    uint8_t fin_stop;                 /**< a finish came after it: its end is an exact stop */
+    uint8_t closed;                   /**< end vertex decided and section built: emittable */
     uint8_t start_smooth, end_smooth; /**< smooth frame at start / end (a smooth vertex, or
                                            at an exact stop the arc of the other end's) */
     uint8_t start_stop;               /**< it starts at rest (an exact stop) */
@@ -217,6 +259,14 @@ typedef struct {
     uint32_t sh, sn;   /**< staged moves waiting for planner room */
     uint32_t arc_next; /**< arc emission cursor: next piece of the oldest primitive */
     uint32_t arc_n;    /**< pieces the oldest primitive's arc is split into */
+    uint8_t arc_sized; /**< arc_n is final (the sizing trials are done) */
+    uint32_t arc_k;    /**< sizing: doublings tried so far */
+    uint32_t arc_try;  /**< sizing: the piece count of the next trial */
+    float arc_dev;     /**< sizing: the last trial's deviation */
+    uint8_t job;       /**< phase of the oldest open vertex's decision ("Work units") */
+    ef_frame_t jf;     /**< that decision's frame (the gate's, or an arc frame) */
+    ef_frame_t jkeep;  /**< the start frame an arc frame trial replaced */
+    ef_move_t jtrial;  /**< the curve between its two phases (or the blend probe) */
     int emitting;      /**< the oldest primitive is partly emitted */
     ef_smooth_stats_t st;
 } ef_smooth_t;
@@ -233,24 +283,43 @@ typedef struct {
 int ef_smooth_init(ef_smooth_t *s, const ef_smooth_cfg_t *cfg, ef_vec3_t start);
 
 /**
- * @brief Push the next primitive (it starts at the previous one's end).
- * @retval EF_OK
- * @retval EF_ERR_FULL  no room: pull moves, then push the same primitive again
+ * @brief Push the next primitive (it starts at the previous one's end), after one unit of
+ * the work pending ("Work units").
+ * @retval EF_OK        taken
+ * @retval EF_ERR_FULL  not taken yet (buffers full, or decisions it waits for not done):
+ *                      pull moves, then push the same primitive again
+ * @retval EF_ERR_FEED, EF_ERR_NONFINITE  a staged move the planner refused (not expected:
+ *                      every move is checked when built); nothing taken
  * @retval EF_ERR_ARG, EF_ERR_NONFINITE, EF_ERR_FEED, EF_ERR_DEGENERATE, EF_ERR_ARC
  *                      as ef_prim_check(): the primitive is refused, nothing changed
  */
 int ef_smooth_push(ef_smooth_t *s, const ef_prim_t *pr);
 
 /**
- * @brief Exact stop at the current end: everything pushed becomes pullable and ends at
- * rest. Pushing afterwards continues from rest (use it for events, and at program end).
- * @retval EF_OK
- * @retval EF_ERR_ARG NULL
+ * @brief Exact stop at the current end, then one unit of the work left: call it (pulling
+ * in between) until it returns EF_OK; then everything pushed is pullable and ends at rest.
+ * Pushing afterwards continues from rest (use it for events, and at program end).
+ * @retval EF_OK        every pushed primitive is built into moves, all in the planner
+ * @retval EF_ERR_FULL  work left: pull moves, then call it again
+ * @retval EF_ERR_ARG   NULL
+ * @retval EF_ERR_FEED, EF_ERR_NONFINITE  as ef_smooth_push()
  */
 int ef_smooth_finish(ef_smooth_t *s);
 
 /**
- * @brief Pull the next planned move.
+ * @brief One unit of pending work ("Work units"), for a caller's idle time: builds moves
+ * ahead of the pulls while no input comes. Never needed for correctness (push and finish
+ * do the same).
+ * @retval EF_OK        a unit was done
+ * @retval EF_ERR_AGAIN nothing to do without more input, a finish, or a pull
+ * @retval EF_ERR_ARG   NULL
+ * @retval EF_ERR_FEED, EF_ERR_NONFINITE  as ef_smooth_push()
+ */
+int ef_smooth_work(ef_smooth_t *s);
+
+/**
+ * @brief Pull the next planned move (no work unit: moves reach the planner through push,
+ * finish and ef_smooth_work()).
  * @retval EF_OK        m filled
  * @retval EF_ERR_ARG   NULL pointer
  * @retval EF_ERR_AGAIN nothing final yet: push more, or finish
