@@ -424,6 +424,39 @@ static int same_blend(const ef_blend_t *a, const ef_blend_t *b)
            memcmp(&a->turn, &b->turn, sizeof(float)) == 0 && a->flags == b->flags;
 }
 
+/* ef_prim_check_geo(): the codes of ef_prim_check(), a line's geometry zero as
+ * ef_prim_geo()'s, a refused primitive's zero too, NULL geo refused. */
+static void test_check_geo(void)
+{
+    ef_vec3_t o = ef_v3(0, 0, 0);
+    ef_prim_geo_t g, z;
+    memset(&z, 0, sizeof z);
+    float len = -1;
+    ef_prim_t l = mk_line(ef_v3(3, 4, 0));
+    memset(&g, 0x5a, sizeof g);
+    EF_CHECK_EQ(ef_prim_check_geo(o, &l, &len, &g), EF_OK);
+    EF_CHECK_NEAR(len, 5.0, 1e-6);
+    EF_CHECK(memcmp(&g, &z, sizeof g) == 0);
+    EF_CHECK_EQ(ef_prim_check_geo(o, &l, &len, NULL), EF_ERR_ARG);
+    EF_CHECK_EQ(ef_prim_check_geo(o, NULL, &len, &g), EF_ERR_ARG);
+    EF_CHECK_EQ(ef_prim_check_geo(o, &l, NULL, &g), EF_ERR_ARG);
+    ef_prim_t a = mk_arc_d(d3(2, 0, 0), d3(0, 0, 0), d3(0, 0, 1), M_PI / 2, 0);
+    ef_prim_t bad[4] = {a, a, a, a};
+    bad[0].end.x += 0.5f;   /* end off the circle */
+    bad[1].sweep = NAN;     /* not finite */
+    bad[2].feed = 0.0f;     /* no feed */
+    bad[3].centre.x = 2.0f; /* radius 0 at the start */
+    for (int i = 0; i < 4; i++) {
+        float l1 = -1, l2 = -1;
+        int rc = ef_prim_check(ef_v3(2, 0, 0), &bad[i], &l1);
+        memset(&g, 0x5a, sizeof g);
+        EF_CHECK(rc != EF_OK);
+        EF_CHECK_EQ(ef_prim_check_geo(ef_v3(2, 0, 0), &bad[i], &l2, &g), rc);
+        EF_CHECK(l1 == l2);
+        EF_CHECK(memcmp(&g, &z, sizeof g) == 0);
+    }
+}
+
 static void test_frame(void)
 {
     ef_frame_t f;
@@ -486,6 +519,12 @@ static void test_frame(void)
         ef_prim_geo_t geo;
         ef_prim_geo(sf, &pr, &geo);
         EF_CHECK(ef_prim_end_gap_geo(&pr, &geo) == ef_prim_end_gap(sf, &pr));
+        /* the check that keeps its geometry: the same length, the same geometry's bits */
+        ef_prim_geo_t cg;
+        float clen = -1.0f;
+        EF_CHECK_EQ(ef_prim_check_geo(sf, &pr, &clen, &cg), EF_OK);
+        EF_CHECK(clen == len);
+        EF_CHECK(memcmp(&cg, &geo, sizeof geo) == 0);
         for (int k = 0; k <= 8; k++) {
             double s = k == 8 ? (double)len : m.len * k / 8.0;
             EF_CHECK_EQ(ef_prim_frame(sf, &pr, (float)s, &f), EF_OK);
@@ -1506,6 +1545,7 @@ int main(int argc, char **argv)
 {
     static const ef_test_part_t parts[] = {
         {"check", test_check},
+        {"check_geo", test_check_geo},
         {"frame", test_frame},
         {"measure", test_measure},
         {"arc_piece", test_arc_piece},

@@ -530,6 +530,10 @@ static int ba_range(float tol, float max_in, float max_out, float len_in, float 
  * and later 0.97 tol); the longest feasible trial is kept. Three trials (the previous
  * default) blended 7 more of test_prim's 6000 random corners and left the arc–arc blends'
  * median deviation 3 % nearer tol. */
+static int ba_prims(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in, float len_in,
+                    const ef_prim_t *out, float len_out, float tol, float max_in, float max_out,
+                    ef_ba_corner_t *k, ef_blend_t *res);
+
 int ef_blend_prims(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in, float len_in,
                    const ef_prim_t *out, float len_out, float tol, float max_in, float max_out,
                    ef_blend_t *res)
@@ -540,10 +544,12 @@ int ef_blend_prims(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in
     if (rc != EF_OK)
         return ba_fail_blend(res, rc);
     float cl_in, cl_out;
-    rc = ef_prim_check(start_in, in, &cl_in);
+    ef_ba_corner_t k;
+    /* the check computes each arc's geometry: kept for the frames (ef_prim_check_geo()) */
+    rc = ef_prim_check_geo(start_in, in, &cl_in, &k.gi);
     if (rc != EF_OK)
         return ba_fail_blend(res, rc);
-    rc = ef_prim_check(in->end, out, &cl_out);
+    rc = ef_prim_check_geo(in->end, out, &cl_out, &k.go);
     if (rc != EF_OK)
         return ba_fail_blend(res, rc);
     /* The lengths must be the primitives' (ef_prim_check()'s, up to rounding). */
@@ -552,9 +558,11 @@ int ef_blend_prims(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in
     int lens = lens_in & lens_out;
     if (!(lens & ba_range(tol, max_in, max_out, len_in, len_out)))
         return ba_fail_blend(res, EF_ERR_ARG);
-    /* From here on the lengths as this code computes them, so s = len is exactly the end. */
-    return ef_blend_prims_valid(g2, start_in, in, cl_in, out, cl_out, tol, ef_minf(max_in, cl_in),
-                                ef_minf(max_out, cl_out), res);
+    /* From here on the lengths as this code computes them, so s = len is exactly the end.
+     * ef_blend_prims_valid()'s own argument checks hold for these (finite, 0 < min(max, cl)
+     * <= cl): not made again. */
+    return ba_prims(g2, start_in, in, cl_in, out, cl_out, tol, ef_minf(max_in, cl_in),
+                    ef_minf(max_out, cl_out), &k, res);
 }
 
 /* ef_blend_prims() for primitives the caller has checked (contract in ef_blend.h). */
@@ -569,14 +577,22 @@ int ef_blend_prims_valid(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim
         return ba_fail_blend(res, rc);
     if (!ba_range(tol, max_in, max_out, len_in, len_out))
         return ba_fail_blend(res, EF_ERR_ARG);
-
-    ef_vec3_t v = in->end;
     ef_ba_corner_t k;
     ef_prim_geo(start_in, in, &k.gi);
-    ef_prim_geo(v, out, &k.go);
+    ef_prim_geo(in->end, out, &k.go);
+    return ba_prims(g2, start_in, in, len_in, out, len_out, tol, max_in, max_out, &k, res);
+}
+
+/* The blend for checked arguments, the primitives' geometry in k->gi, k->go. */
+static int ba_prims(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *in, float len_in,
+                    const ef_prim_t *out, float len_out, float tol, float max_in, float max_out,
+                    ef_ba_corner_t *k, ef_blend_t *res)
+{
+    int rc;
+    ef_vec3_t v = in->end;
     ef_frame_t fi, fo;
-    ef_prim_frame_geo(start_in, in, &k.gi, len_in, &fi);
-    ef_prim_frame_geo(v, out, &k.go, 0.0f, &fo);
+    ef_prim_frame_geo(start_in, in, &k->gi, len_in, &fi);
+    ef_prim_frame_geo(v, out, &k->go, 0.0f, &fo);
     if (in->kind == EF_PRIM_LINE && out->kind == EF_PRIM_LINE)
         return ef_blend_corner(g2, v, fi.t, fo.t, tol, max_in, max_out, res);
 
@@ -611,40 +627,40 @@ int ef_blend_prims_valid(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim
     cap_out = ef_minf(cap_out, EF_MAX_COORD);
     float cap = ef_minf(cap_in, cap_out);
 
-    k.start_in = start_in;
-    k.v = v;
-    k.in = in;
-    k.out = out;
-    k.len_in = len_in;
-    k.len_out = len_out;
-    k.cap_in = cap_in;
-    k.cap_out = cap_out;
-    k.two_sin = vx.two_sin;
-    k.x2u = vx.x2c * two_cos;
+    k->start_in = start_in;
+    k->v = v;
+    k->in = in;
+    k->out = out;
+    k->len_in = len_in;
+    k->len_out = len_out;
+    k->cap_in = cap_in;
+    k->cap_out = cap_out;
+    k->two_sin = vx.two_sin;
+    k->x2u = vx.x2c * two_cos;
     /* kappa is constant along each primitive; 1e-5 for its float32 rounding */
-    k.kap = ef_maxf(fi.kappa, fo.kappa) * (1.0f + 1e-5f);
+    k->kap = ef_maxf(fi.kappa, fo.kappa) * (1.0f + 1e-5f);
     /* the frames' tangent angle: EF_BA_ANGLE_ULP ulp of the sweep, plus normalization */
     float sw_in = ef_selectf(in->kind == EF_PRIM_ARC, ef_fabsf(in->sweep), 0.0f);
     float sw_out = ef_selectf(out->kind == EF_PRIM_ARC, ef_fabsf(out->sweep), 0.0f);
-    k.eps_t = (EF_BA_ANGLE_ULP * (sw_in + sw_out) + 4.0f) * 1.1920929e-7f;
-    float r_in = k.gi.r0, r_out = k.go.r0;
-    k.fi = fi;
-    k.fo = fo;
-    k.w_in = sw_in / len_in;
-    k.w_out = sw_out / len_out;
-    k.ang_in = r_in * sw_in * (EF_BA_ANGLE_ULP * 1.1920929e-7f);
-    k.ang_out = r_out * k.w_out * (EF_BA_ANGLE_ULP * 1.1920929e-7f);
+    k->eps_t = (EF_BA_ANGLE_ULP * (sw_in + sw_out) + 4.0f) * 1.1920929e-7f;
+    float r_in = k->gi.r0, r_out = k->go.r0;
+    k->fi = fi;
+    k->fo = fo;
+    k->w_in = sw_in / len_in;
+    k->w_out = sw_out / len_out;
+    k->ang_in = r_in * sw_in * (EF_BA_ANGLE_ULP * 1.1920929e-7f);
+    k->ang_out = r_out * k->w_out * (EF_BA_ANGLE_ULP * 1.1920929e-7f);
     float scale = ba_maxabs(v) + r_in + r_out;
-    k.m0 = EF_BA_ROUND_MARGIN * scale + ef_prim_end_gap_geo(in, &k.gi);
+    k->m0 = EF_BA_ROUND_MARGIN * scale + ef_prim_end_gap_geo(in, &k->gi);
 
     /* First trim: the line–line trim for the table's DOFs (its deviation per unit trim g0),
      * or for a tangent join sqrt(EF_BA_TANGENT_GAIN tol / dk), where a curvature jump's
      * transition deviates by about tol. */
     float xc = vx.x1c; /* x1 per unit chord: the evening's first guess */
     float x = xc * two_cos;
-    float a0 = 0.4f * x + 0.05f * k.x2u;
-    float g0 = ef_fabsf(16.0f - x - 10.0f * a0) * k.two_sin * (1.0f / 32.0f);
-    float room = 0.99f * tol - k.m0;
+    float a0 = 0.4f * x + 0.05f * k->x2u;
+    float g0 = ef_fabsf(16.0f - x - 10.0f * a0) * k->two_sin * (1.0f / 32.0f);
+    float room = 0.99f * tol - k->m0;
     float l_tan = ef_sqrtf(EF_BA_TANGENT_GAIN * ef_maxf(room, 0.0f) / ef_maxf(dk, 1e-30f));
     float l_corner = ef_maxf(room, 0.0f) / ef_maxf(g0, 1e-30f);
     float l = ef_minf(ef_selectf(straight, l_tan, l_corner), cap);
@@ -655,7 +671,7 @@ int ef_blend_prims_valid(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim
     for (int it = 0; it < EF_BLEND_ITER; it++) {
         l = ef_maxf(l, 1e-30f);
         ef_ba_trial_t *t = &trs[it];
-        ba_corner_try(&k, l, xc, it == 0 ? EF_BA_NEWTON0 : EF_BA_NEWTON, t);
+        ba_corner_try(k, l, xc, it == 0 ? EF_BA_NEWTON0 : EF_BA_NEWTON, t);
         int feasible = t->ok & (t->dev <= tol);
         int better = feasible & (t->l > best_l);
         bi = better ? it : bi;
@@ -663,8 +679,8 @@ int ef_blend_prims_valid(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim
         have |= better;
         /* dev ~ m0 + g l + A l^2 through this trial, solved for the next target; a trial that
          * failed shrinks by at least a tenth */
-        float A = ef_maxf(t->dev - k.m0 - t->g * l, 0.0f) / ef_maxf(l * l, 1e-36f);
-        float goal = ef_maxf((it == 0 ? 0.99f : 0.97f) * tol - k.m0, 0.0f);
+        float A = ef_maxf(t->dev - k->m0 - t->g * l, 0.0f) / ef_maxf(l * l, 1e-36f);
+        float goal = ef_maxf((it == 0 ? 0.99f : 0.97f) * tol - k->m0, 0.0f);
         float next = 2.0f * goal / (t->g + ef_sqrtf(t->g * t->g + 4.0f * A * goal) + 1e-30f);
         next = ef_selectf(feasible, next, ef_minf(next, 0.9f * l));
         next = ef_selectf(next >= EF_BA_CAP_SNAP * cap, cap, next);

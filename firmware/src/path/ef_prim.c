@@ -94,8 +94,8 @@ static inline ef_vec3_t prim_arc_point(const ef_prim_geo_t *g, float sn, float c
     return ef_v3_axpy(ef_v3_axpy(g->base, g->r0, *rad), g->h * frac, g->a);
 }
 
-/* Validate a primitive and give its length (contract in ef_path.h). */
-int ef_prim_check(ef_vec3_t start, const ef_prim_t *pr, float *len)
+/* ef_prim_check() keeping the arc's geometry in *g (prim_arc_geo(), as ef_prim_geo()). */
+static int prim_check(ef_vec3_t start, const ef_prim_t *pr, float *len, ef_prim_geo_t *g)
 {
     if (!len)
         return EF_ERR_ARG;
@@ -131,15 +131,14 @@ int ef_prim_check(ef_vec3_t start, const ef_prim_t *pr, float *len)
     float asw = ef_fabsf(pr->sweep);
     if (!(asw > 0.0f) || !(asw <= EF_ARC_MAX_SWEEP))
         return EF_ERR_ARC;
-    ef_prim_geo_t g;
-    prim_arc_geo(start, pr, &g);
-    if (!(g.r0 >= EF_MIN_CHORD))
+    prim_arc_geo(start, pr, g);
+    if (!(g->r0 >= EF_MIN_CHORD))
         return EF_ERR_DEGENERATE;
-    float rtol = ef_maxf(EF_ARC_ABS_TOL, EF_ARC_REL_TOL * g.r0);
+    float rtol = ef_maxf(EF_ARC_ABS_TOL, EF_ARC_REL_TOL * g->r0);
     ef_vec3_t d1 = ef_v3_sub(pr->end, pr->centre);
-    float x1 = ef_v3_dot(d1, g.eu), y1 = ef_v3_dot(d1, g.ev);
+    float x1 = ef_v3_dot(d1, g->eu), y1 = ef_v3_dot(d1, g->ev);
     float r1 = ef_sqrtf(x1 * x1 + y1 * y1);
-    if (!(ef_fabsf(r1 - g.r0) <= rtol))
+    if (!(ef_fabsf(r1 - g->r0) <= rtol))
         return EF_ERR_ARC;
     /* The end's angle against the sweep, modulo 2 pi. The allowance is the radius tolerance
      * as an arc length, plus float32 rounding of the sweep itself (a few ulp of |sweep| and
@@ -147,20 +146,46 @@ int ef_prim_check(ef_vec3_t start, const ef_prim_t *pr, float *len)
     float ang1 = ef_atan2f(y1, x1);
     float diff = ang1 - pr->sweep;
     diff -= EF_TWO_PI * ef_floorf(diff * (1.0f / EF_TWO_PI) + 0.5f);
-    float allow = rtol / g.r0 + 8.0f * EF_FLT_EPS * (asw + EF_TWO_PI);
+    float allow = rtol / g->r0 + 8.0f * EF_FLT_EPS * (asw + EF_TWO_PI);
     if (!(ef_fabsf(diff) <= allow))
         return EF_ERR_ARC;
-    if (!(g.len >= EF_MIN_CHORD) || !prim_finite(g.len))
+    if (!(g->len >= EF_MIN_CHORD) || !prim_finite(g->len))
         return EF_ERR_DEGENERATE;
     /* Every point of the arc, not only its ends and centre, within EF_MAX_COORD: the
      * circle's reach from the centre (radius plus the helix's rise) bounds it. Without this
      * a large arc near the limit makes pieces and blends no move may hold. */
     float cm =
         ef_maxf(ef_maxf(ef_fabsf(pr->centre.x), ef_fabsf(pr->centre.y)), ef_fabsf(pr->centre.z));
-    if (!(cm + g.r0 + rtol + ef_fabsf(g.h) <= EF_MAX_COORD))
+    if (!(cm + g->r0 + rtol + ef_fabsf(g->h) <= EF_MAX_COORD))
         return EF_ERR_NONFINITE;
-    *len = g.len;
+    *len = g->len;
     return EF_OK;
+}
+
+/* Validate a primitive and give its length (contract in ef_path.h). */
+int ef_prim_check(ef_vec3_t start, const ef_prim_t *pr, float *len)
+{
+    ef_prim_geo_t g;
+    return prim_check(start, pr, len, &g);
+}
+
+/* ef_prim_check() and ef_prim_geo() in one (contract in ef_path.h). */
+int ef_prim_check_geo(ef_vec3_t start, const ef_prim_t *pr, float *len, ef_prim_geo_t *geo)
+{
+    if (!geo)
+        return EF_ERR_ARG;
+    ef_prim_geo_t zero = {{0.0f, 0.0f, 0.0f},
+                          {0.0f, 0.0f, 0.0f},
+                          {0.0f, 0.0f, 0.0f},
+                          {0.0f, 0.0f, 0.0f},
+                          0.0f,
+                          0.0f,
+                          0.0f};
+    *geo = zero;
+    int rc = prim_check(start, pr, len, geo);
+    if (rc != EF_OK)
+        *geo = zero;
+    return rc;
 }
 
 /* An arc's geometry for repeated frames (contract in ef_path.h). */

@@ -188,6 +188,17 @@ typedef struct {
 void ef_prim_geo(ef_vec3_t start, const ef_prim_t *pr, ef_prim_geo_t *g);
 
 /**
+ * @brief ef_prim_check() that also fills the geometry ef_prim_geo(start, pr) gives, the same
+ * bits (the check computes it anyway), for callers that go on to frames: one computation
+ * instead of two (the public ef_blend_prims()).
+ * @retval EF_OK      *len and *geo filled (geo zero for a line)
+ * @retval EF_ERR_ARG geo NULL, or as ef_prim_check()
+ * @retval EF_ERR_NONFINITE, EF_ERR_FEED, EF_ERR_DEGENERATE, EF_ERR_ARC as ef_prim_check()
+ *                    (geo zero)
+ */
+int ef_prim_check_geo(ef_vec3_t start, const ef_prim_t *pr, float *len, ef_prim_geo_t *geo);
+
+/**
  * @brief ef_prim_frame() with the arc's geometry from ef_prim_geo(start, pr): the same
  * operations in the same order, so the same bits (ef_prim_frame() is ef_prim_geo() then
  * this).
