@@ -27,7 +27,7 @@ for f in ef_seg_g1_cubic_xy ef_seg_g1_cubic/3d ef_seg_g2_quintic ef_blend_corner
     ef_blend_prims/line-arc ef_blend_prims/arc-line ef_blend_prims/arc-arc \
     ef_blend_prims/helix-helix ef_blend_prims_valid/line-arc ef_blend_prims_valid/arc-line \
     ef_blend_prims_valid/arc-arc ef_blend_prims_valid/helix-helix ef_blend_arc_piece ef_move_measure ef_smooth_push/cam \
-    ef_smooth_pull/cam ef_interp_process/uniform ef_interp_process/corrected \
+    ef_smooth_pull/cam ef_smooth_finish/cam ef_interp_process/uniform ef_interp_process/corrected \
     ef_interp_process/corrected-late; do
     if ! grep -q "^cost $f n=[1-9][0-9]* min=[0-9]* median=[0-9]* max=[0-9]* ratio=" "$out"; then
         echo "costs_check: no cost line for $f" >&2

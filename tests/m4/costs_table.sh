@@ -2,7 +2,7 @@
 # SPDX-License-Identifier: Apache-2.0
 # x86 (callgrind, tests/bench/ct_bench.sh) and Cortex-M4F (QEMU icount, tests/m4/m4_costs.c)
 # instructions per call side by side, worst case against the issue-17 targets: every blend
-# kind <= 10 000 M4 instructions, smoother push <= 30 000, pull <= 5 000, interpolator
+# kind <= 10 000 M4 instructions, smoother push (and finish) <= 30 000, pull <= 5 000, interpolator
 # period <= 1 000 (M4), G1 planar path <= 400 (x86), each function's max/min <= 1.02 or its
 # bound stated. Figures only: the exit status is 0 whatever they are.
 # Usage: costs_table.sh X86_LOG M4_O2_OUT [M4_OS_OUT]   (missing files print as '-')
@@ -28,6 +28,7 @@ awk '
         else if (lab == "move measure (quintic)") m = "ef_move_measure"
         else if (lab == "smoother push") m = "ef_smooth_push/cam"
         else if (lab == "smoother pull (one move)") m = "ef_smooth_pull/cam"
+        else if (lab == "smoother finish") m = "ef_smooth_finish/cam"
         else if (lab == "interpolator period (uniform)") m = "ef_interp_process/uniform"
         else if (lab == "interpolator period (corrected)") m = "ef_interp_process/corrected"
         if (m == "") next
@@ -44,7 +45,7 @@ awk '
     }
     function target(f) {
         if (f ~ /^ef_blend_(corner|prims)/) return "M4 <= 10000"
-        if (f ~ /^ef_smooth_push/) return "M4 <= 30000"
+        if (f ~ /^ef_smooth_(push|finish)/) return "M4 <= 30000"
         if (f ~ /^ef_smooth_pull/) return "M4 <= 5000"
         if (f ~ /-late$/) return "-" # a missed deadline, not a servo period: a bound only
         if (f ~ /^ef_interp_process/) return "M4 <= 1000"

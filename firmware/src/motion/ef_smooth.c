@@ -1250,21 +1250,24 @@ int ef_smooth_push(ef_smooth_t *s, const ef_prim_t *pr)
 {
     if (!s || !pr)
         return EF_ERR_ARG;
-    float len;
-    int rc = ef_prim_check(s->pos, pr, &len);
-    if (rc != EF_OK)
-        return rc;
     /* One unit of the work pending before taking more: a push costs one unit at most. */
-    rc = ef_smooth_work(s);
+    int rc = ef_smooth_work(s);
     if (rc != EF_OK && rc != EF_ERR_AGAIN)
+        return rc;
+    /* Taken (merged or held) only with a slot free: a primitive pushed again after
+     * EF_ERR_FULL is checked and its decimation tested once, not at every call. Deferring
+     * a merge changes nothing: the newest held line is not touched by the work units. */
+    if (!sm_room(s))
+        return EF_ERR_FULL;
+    float len;
+    rc = ef_prim_check(s->pos, pr, &len);
+    if (rc != EF_OK)
         return rc;
     if (sm_try_merge(s, pr)) {
         s->pos = pr->end;
         s->st.prims++;
         return EF_OK;
     }
-    if (!sm_room(s))
-        return EF_ERR_FULL;
     ef_smooth_prim_t *h = sm_held(s, s->pn);
     h->pr = *pr;
     h->start = s->pos;

@@ -96,8 +96,9 @@
  * have the same normalized configuration, so checking the first checks them all.
  *
  * ## Errors
- * A primitive that fails validation is refused with its error (nothing is queued, the state
- * is unchanged); the caller reports it and normally calls ef_smooth_finish(), which brings
+ * A primitive that fails validation is refused with its error (nothing of it is queued; the
+ * path so far is unchanged); the caller reports it and normally calls ef_smooth_finish()
+ * until EF_OK, which brings
  * everything accepted so far to an exact stop at the last accepted end. Nothing invalid is
  * ever emitted.
  */
@@ -291,7 +292,9 @@ int ef_smooth_init(ef_smooth_t *s, const ef_smooth_cfg_t *cfg, ef_vec3_t start);
  * @retval EF_ERR_FEED, EF_ERR_NONFINITE  a staged move the planner refused (not expected:
  *                      every move is checked when built); nothing taken
  * @retval EF_ERR_ARG, EF_ERR_NONFINITE, EF_ERR_FEED, EF_ERR_DEGENERATE, EF_ERR_ARC
- *                      as ef_prim_check(): the primitive is refused, nothing changed
+ *                      as ef_prim_check(): the primitive is refused, nothing of it taken
+ *                      (checked once there is room for it: a refusal may come after
+ *                      EF_ERR_FULL; the unit done before it is the smoother's own work)
  */
 int ef_smooth_push(ef_smooth_t *s, const ef_prim_t *pr);
 
