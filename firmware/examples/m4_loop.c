@@ -211,15 +211,18 @@ static void ex_wait(void)
     }
 }
 
-static int ex_push(const ef_prim_t *pr)
+/* Push pr, or finish when pr is NULL: one work unit a call (ef_smooth.h, "Work units"),
+ * moving what is final into the ring between the calls while it returns EF_ERR_FULL; the
+ * worst call's cost into *worst. */
+static int ex_smooth(const ef_prim_t *pr, uint32_t *worst)
 {
     for (;;) {
         uint32_t isr0 = atomic_load_explicit(&ex_isr_total, memory_order_relaxed);
         uint32_t t0 = ef_m4_icount_begin();
-        int rc = ef_smooth_push(&ex_sm, pr);
+        int rc = pr ? ef_smooth_push(&ex_sm, pr) : ef_smooth_finish(&ex_sm);
         uint32_t n = ex_cost(t0, isr0);
-        if (n > ex_push_prog) {
-            ex_push_prog = n;
+        if (n > *worst) {
+            *worst = n;
         }
         if (rc != EF_ERR_FULL) {
             return rc;
@@ -234,29 +237,15 @@ static int ex_push(const ef_prim_t *pr)
     }
 }
 
-/* Finish: one work unit a call (ef_smooth.h, "Work units"), moving what is final into the
- * ring between the calls, until every pushed primitive is built into moves. */
+static int ex_push(const ef_prim_t *pr)
+{
+    return ex_smooth(pr, &ex_push_prog);
+}
+
+/* Finish until every pushed primitive is built into moves. */
 static int ex_finish(void)
 {
-    for (;;) {
-        uint32_t isr0 = atomic_load_explicit(&ex_isr_total, memory_order_relaxed);
-        uint32_t t0 = ef_m4_icount_begin();
-        int rc = ef_smooth_finish(&ex_sm);
-        uint32_t n = ex_cost(t0, isr0);
-        if (n > ex_fin_prog) {
-            ex_fin_prog = n;
-        }
-        if (rc != EF_ERR_FULL) {
-            return rc;
-        }
-        int p = ex_pump();
-        if (p < 0) {
-            return p;
-        }
-        if (p > 0) {
-            ex_wait();
-        }
-    }
+    return ex_smooth((const ef_prim_t *)0, &ex_fin_prog);
 }
 
 /* Move everything the smoother has final into the ring, waiting for room. */

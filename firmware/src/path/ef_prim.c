@@ -94,6 +94,19 @@ static inline ef_vec3_t prim_arc_point(const ef_prim_geo_t *g, float sn, float c
     return ef_v3_axpy(ef_v3_axpy(g->base, g->r0, *rad), g->h * frac, g->a);
 }
 
+/* A line's geometry, and what a refused primitive leaves: all zero. */
+static void prim_geo_zero(ef_prim_geo_t *g)
+{
+    ef_prim_geo_t zero = {{0.0f, 0.0f, 0.0f},
+                          {0.0f, 0.0f, 0.0f},
+                          {0.0f, 0.0f, 0.0f},
+                          {0.0f, 0.0f, 0.0f},
+                          0.0f,
+                          0.0f,
+                          0.0f};
+    *g = zero;
+}
+
 /* ef_prim_check() keeping the arc's geometry in *g (prim_arc_geo(), as ef_prim_geo()). */
 static int prim_check(ef_vec3_t start, const ef_prim_t *pr, float *len, ef_prim_geo_t *g)
 {
@@ -174,17 +187,10 @@ int ef_prim_check_geo(ef_vec3_t start, const ef_prim_t *pr, float *len, ef_prim_
 {
     if (!geo)
         return EF_ERR_ARG;
-    ef_prim_geo_t zero = {{0.0f, 0.0f, 0.0f},
-                          {0.0f, 0.0f, 0.0f},
-                          {0.0f, 0.0f, 0.0f},
-                          {0.0f, 0.0f, 0.0f},
-                          0.0f,
-                          0.0f,
-                          0.0f};
-    *geo = zero;
+    prim_geo_zero(geo);
     int rc = prim_check(start, pr, len, geo);
     if (rc != EF_OK)
-        *geo = zero;
+        prim_geo_zero(geo);
     return rc;
 }
 
@@ -193,14 +199,7 @@ void ef_prim_geo(ef_vec3_t start, const ef_prim_t *pr, ef_prim_geo_t *g)
 {
     if (!g)
         return;
-    ef_prim_geo_t zero = {{0.0f, 0.0f, 0.0f},
-                          {0.0f, 0.0f, 0.0f},
-                          {0.0f, 0.0f, 0.0f},
-                          {0.0f, 0.0f, 0.0f},
-                          0.0f,
-                          0.0f,
-                          0.0f};
-    *g = zero;
+    prim_geo_zero(g);
     if (pr && pr->kind == EF_PRIM_ARC)
         prim_arc_geo(start, pr, g);
 }
