@@ -596,6 +596,91 @@ static void test_arcs(void)
            ri.kinds[EF_MOVE_ARC], st.blends, st.stops, ri.dev_over);
 }
 
+/* The same move, field by field (the planned law included). */
+static int same_move(const ef_move_t *a, const ef_move_t *b)
+{
+    return memcmp(a->b, b->b, sizeof a->b) == 0 && a->degree == b->degree && a->kind == b->kind &&
+           a->flags == b->flags && a->seq == b->seq && a->tag == b->tag && a->length == b->length &&
+           a->dev == b->dev && a->v_max == b->v_max && a->v_entry == b->v_entry &&
+           a->v_exit == b->v_exit && a->duration == b->duration &&
+           memcmp(&a->law, &b->law, sizeof a->law) == 0;
+}
+
+/* ef_smooth_work() in the caller's idle time: after every push, units until it has none
+ * (EF_ERR_AGAIN), and at the end units while a finish waits, the pulls in between. Every
+ * unit counted, the moves the same bits as without it (the decisions do not depend on when
+ * they are made), and nothing left once the finish returns EF_OK. */
+static void test_work(void)
+{
+    enum { N = 240, KEEP = 4096 };
+    static ef_prim_t pr[N];
+    static ef_move_t ref[KEEP];
+    ef_vec3_t p = ef_v3(0, 0, 0);
+    for (int i = 0; i < N; i++) { /* micro-segments on a circle, corners, arcs */
+        if (i % 60 == 59) {
+            pr[i] = arc_to(p, p.x, p.y + 4.0f, 2.0f, 40, 0.02f);
+        } else if (i % 60 >= 40) {
+            pr[i] =
+                line_to(p.x + ((i % 2) ? 3.0f : 0.0f), p.y + ((i % 2) ? 0.0f : 3.0f), 0, 40, 0.02f);
+        } else {
+            double a = 0.05 * (i % 60);
+            pr[i] = line_to(p.x + (float)(0.5 * cos(a)), p.y + (float)(0.5 * sin(a)), 0, 40, 0.02f);
+        }
+        pr[i].tag = (uint32_t)i;
+        p = pr[i].end;
+    }
+    ef_smooth_cfg_t c = cfg_default();
+    EF_CHECK_EQ(run_prims(&c, ef_v3(0, 0, 0), pr, N), 0);
+    int nref = NM < KEEP ? NM : KEEP;
+    EF_CHECK(NM > 0 && NM < KEEP);
+    memcpy(ref, M, (size_t)nref * sizeof ref[0]);
+
+    EF_CHECK_EQ(ef_smooth_work(NULL), EF_ERR_ARG);
+    EF_CHECK_EQ(ef_smooth_init(&S, &c, ef_v3(0, 0, 0)), EF_OK);
+    EF_CHECK_EQ(ef_smooth_work(&S), EF_ERR_AGAIN); /* nothing pushed: nothing to do */
+    NM = 0;
+    uint32_t idle_units = 0;
+    for (int i = 0; i < N; i++) {
+        int rc = ef_smooth_push(&S, &pr[i]);
+        for (int guard = 0; rc == EF_ERR_FULL && guard < 100000; guard++) {
+            EF_CHECK_EQ(drain(), EF_ERR_AGAIN);
+            rc = ef_smooth_push(&S, &pr[i]);
+        }
+        EF_CHECK_EQ(rc, EF_OK);
+        for (int guard = 0; guard < 100000; guard++) {
+            uint32_t u = ef_smooth_stats(&S).units;
+            rc = ef_smooth_work(&S);
+            if (rc == EF_ERR_AGAIN) {
+                EF_CHECK_EQ(ef_smooth_stats(&S).units, u); /* no unit: not counted */
+                break;
+            }
+            EF_CHECK_EQ(rc, EF_OK);
+            EF_CHECK_EQ(ef_smooth_stats(&S).units, u + 1u);
+            idle_units++;
+            EF_CHECK_EQ(drain(), EF_ERR_AGAIN);
+        }
+    }
+    /* finish flags the stop; the rest is done by idle units */
+    int rc = ef_smooth_finish(&S);
+    for (int guard = 0; rc == EF_ERR_FULL && guard < 100000; guard++) {
+        while (ef_smooth_work(&S) == EF_OK)
+            EF_CHECK_EQ(drain(), EF_ERR_AGAIN);
+        EF_CHECK_EQ(drain(), EF_ERR_AGAIN);
+        rc = ef_smooth_finish(&S);
+    }
+    EF_CHECK_EQ(rc, EF_OK);
+    EF_CHECK_EQ(drain(), EF_ERR_AGAIN);
+    EF_CHECK_EQ(ef_smooth_work(&S), EF_ERR_AGAIN);
+    EF_CHECK_EQ(NM, nref);
+    int same = 0;
+    for (int k = 0; k < nref && k < NM; k++)
+        same += same_move(&M[k], &ref[k]);
+    EF_CHECK_EQ(same, nref);
+    EF_CHECK(idle_units > 0);
+    printf("work: %d moves the same bits with %u units done in idle calls (%u in all)\n", NM,
+           idle_units, ef_smooth_stats(&S).units);
+}
+
 static uint64_t rng = 88172645463325252ull;
 static double urand(void)
 {
@@ -853,12 +938,19 @@ static void test_random_runs(void)
 int main(int argc, char **argv)
 {
     static const ef_test_part_t parts[] = {
-        {"square", test_square},         {"reversal", test_reversal},
-        {"collinear", test_collinear},   {"circle", test_micro_circle_5},
-        {"circle", test_micro_circle_3}, {"arcs", test_arcs},
-        {"bad", test_bad_input},         {"full", test_full},
-        {"interp", test_with_interp},    {"band", test_band},
-        {"zigzag", test_zigzag},         {"random [RUNS]", test_random_runs},
+        {"square", test_square},
+        {"reversal", test_reversal},
+        {"collinear", test_collinear},
+        {"circle", test_micro_circle_5},
+        {"circle", test_micro_circle_3},
+        {"arcs", test_arcs},
+        {"bad", test_bad_input},
+        {"full", test_full},
+        {"interp", test_with_interp},
+        {"band", test_band},
+        {"zigzag", test_zigzag},
+        {"work", test_work},
+        {"random [RUNS]", test_random_runs},
     };
     setvbuf(stdout, NULL, _IOLBF, 0);
     M = calloc(MAXM, sizeof *M);
