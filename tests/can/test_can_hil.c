@@ -1920,7 +1920,7 @@ static void part_io_latency(void)
     EF_CHECK_EQ(tm_spawn(cd, 0, &dump), 0);
     double *bus = calloc((size_t)n, sizeof *bus), *cmdl = calloc((size_t)n, sizeof *cmdl),
            *rest = calloc((size_t)n, sizeof *rest), *press = calloc((size_t)n, sizeof *press);
-    int nb = 0, nc = 0, nr = 0, stopped = 0;
+    int nb = 0, nc = 0, nr = 0, stopped = 0, made = 0;
     char extra[700];
     snprintf(extra, sizeof extra, "--machine %s", mach);
     for (int i = 0; i < n && bus && cmdl && rest && press; i++) {
@@ -1941,6 +1941,7 @@ static void part_io_latency(void)
         struct timespec rt;
         clock_gettime(CLOCK_REALTIME, &rt);
         press[i] = (double)rt.tv_sec + rt.tv_nsec * 1e-9;
+        made = i + 1;
         io_pull(IO_ESTOP, 0);
         int wst = 0, rc = -1;
         for (int k = 0; k < 3000 && rc < 0; k++) {
@@ -1973,14 +1974,16 @@ static void part_io_latency(void)
     }
     usleep(200000); /* candump's last frames */
     tm_stop(&dump, SIGTERM);
-    for (int i = 0; i < n && press && bus; i++) {
+    /* Only the presses made: a run cut short (a stream that ended before it moved) leaves
+     * the rest unset, and a frame matched against an unset time was a latency of 56 years. */
+    for (int i = 0; i < made && press && bus; i++) {
         double t = io_first_stop(candump, press[i]);
-        if (t >= 0 && (i + 1 >= n || t < press[i + 1]))
+        if (t >= 0 && (i + 1 >= made || t < press[i + 1]))
             bus[nb++] = (t - press[i]) * 1e3;
     }
     printf("e-stop latency under User-Mode Linux (not a real-time kernel; SYNC every %s us):\n",
            IO_CSP_CYCLE);
-    printf("  %d presses, %d streams stopped by e-stop\n", n, stopped);
+    printf("  %d presses of %d made, %d streams stopped by e-stop\n", made, n, stopped);
     io_report("press -> first quick-stop frame (candump)", bus, nb);
     io_report("kernel edge -> stop command (streamer)", cmdl, nc);
     io_report("kernel edge -> all drives at rest", rest, nr);
