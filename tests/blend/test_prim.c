@@ -386,6 +386,27 @@ static void test_check(void)
     EF_CHECK_NEAR(len, 2 * (1.5 * M_PI), 1e-5);
     b.sweep = (float)(-M_PI / 2); /* clockwise would end at (0,-2) */
     EF_CHECK_EQ(ef_prim_check(s2, &b, &len), EF_ERR_ARC);
+    /* The angle's allowance, max(0.002, 0.001 r) / r + 8 eps (|sweep| + 2 pi): the end turned
+     * about the centre by 0.97 of it is taken, by 1.03 of it refused, either way round, also
+     * after many turns (the end's distance from where the sweep reaches, as an angle). */
+    for (int turns = 0; turns <= 400; turns += 200) {
+        for (int side = -1; side <= 1; side += 2) {
+            double sw = M_PI / 2 + 2 * M_PI * turns;
+            double allow = 0.002 / 2.0 + 8.0 * 1.1920929e-7 * ((float)sw + 2 * M_PI);
+            for (int k = 0; k < 2; k++) {
+                double ang = M_PI / 2 + side * (k ? 1.03 : 0.97) * allow;
+                b = a;
+                b.sweep = (float)sw;
+                b.end = ef_v3((float)(2 * cos(ang)), (float)(2 * sin(ang)), 0.0f);
+                EF_CHECK_EQ(ef_prim_check(s2, &b, &len), k ? EF_ERR_ARC : EF_OK);
+            }
+        }
+    }
+    /* A radius below EF_ARC_ABS_TOL / 2: the whole circle is within the tolerance of its
+     * model, so any end angle on it is taken (allowance above 2 rad). */
+    b = mk_arc_d(d3(4e-4, 0, 0), d3(0, 0, 0), d3(0, 0, 1), M_PI / 2, 0);
+    b.end = ef_v3(-4e-4f, 0.0f, 0.0f);
+    EF_CHECK_EQ(ef_prim_check(ef_v3(4e-4f, 0, 0), &b, &len), EF_OK);
     /* zero radius (start on the axis) */
     b = a;
     b.centre = s2;
@@ -395,6 +416,15 @@ static void test_check(void)
     ef_prim_t full = mk_arc_d(d3(1, 0, 0), d3(0, 0, 0), d3(0, 0, 1), 999 * 2 * M_PI, 0);
     EF_CHECK_EQ(ef_prim_check(ef_v3(1, 0, 0), &full, &len), EF_OK);
     EF_CHECK_NEAR(len, 999 * 2 * M_PI, 2e-3);
+    {
+        /* its end frame through the kept sine and cosine of 999 turns: ef_prim_frame()'s */
+        ef_prim_geo_t fg;
+        ef_frame_t f0, f1;
+        ef_prim_geo(ef_v3(1, 0, 0), &full, &fg);
+        EF_CHECK_EQ(ef_prim_frame_end_geo(ef_v3(1, 0, 0), &full, &fg, 1, &f0), EF_OK);
+        EF_CHECK_EQ(ef_prim_frame(ef_v3(1, 0, 0), &full, len, &f1), EF_OK);
+        EF_CHECK(memcmp(&f0, &f1, sizeof f0) == 0);
+    }
     /* arcs at large radius with small tolerance mismatch */
     ef_prim_t big = mk_arc_d(d3(1000, 0, 0), d3(0, 0, 0), d3(0, 0, -1), 0.3, 0);
     EF_CHECK_EQ(ef_prim_check(ef_v3(1000, 0, 0), &big, &len), EF_OK);
@@ -487,6 +517,14 @@ static void test_frame(void)
     EF_CHECK_EQ(ef_prim_frame(st, &l, 6.5f, &f), EF_OK);
     EF_CHECK(memcmp(&fl, &f, sizeof f) == 0);
     EF_CHECK_EQ(ef_prim_frame_geo(st, &l, NULL, 0.0f, &fl), EF_ERR_ARG);
+    for (int e = 0; e < 2; e++) { /* a line's end frames: ef_prim_frame()'s at 0 and len */
+        EF_CHECK_EQ(ef_prim_frame_end_geo(st, &l, &lg, e, &fl), EF_OK);
+        EF_CHECK_EQ(ef_prim_frame(st, &l, e ? 1e9f : 0.0f, &f), EF_OK);
+        EF_CHECK(memcmp(&fl, &f, sizeof f) == 0);
+    }
+    EF_CHECK_EQ(ef_prim_frame_end_geo(st, &l, NULL, 1, &fl), EF_ERR_ARG);
+    EF_CHECK_EQ(ef_prim_frame_end_geo(st, NULL, &lg, 1, &fl), EF_ERR_ARG);
+    EF_CHECK_EQ(ef_prim_frame_end_geo(st, &l, &lg, 1, NULL), EF_ERR_ARG);
     EF_CHECK(ef_prim_end_gap_geo(&l, &lg) == 0.0f);
     ef_prim_geo(st, &l, NULL); /* nothing to fill: no crash */
     ef_prim_t bad = l;
@@ -525,6 +563,13 @@ static void test_frame(void)
         EF_CHECK_EQ(ef_prim_check_geo(sf, &pr, &clen, &cg), EF_OK);
         EF_CHECK(clen == len);
         EF_CHECK(memcmp(&cg, &geo, sizeof geo) == 0);
+        /* the frames at the ends without a sine and cosine: the same bits */
+        ef_frame_t fe, fr;
+        for (int e = 0; e < 2; e++) {
+            EF_CHECK_EQ(ef_prim_frame_end_geo(sf, &pr, &geo, e, &fe), EF_OK);
+            EF_CHECK_EQ(ef_prim_frame_geo(sf, &pr, &geo, e ? len : 0.0f, &fr), EF_OK);
+            EF_CHECK(memcmp(&fe, &fr, sizeof fe) == 0);
+        }
         for (int k = 0; k <= 8; k++) {
             double s = k == 8 ? (double)len : m.len * k / 8.0;
             EF_CHECK_EQ(ef_prim_frame(sf, &pr, (float)s, &f), EF_OK);

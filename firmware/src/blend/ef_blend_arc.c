@@ -283,7 +283,8 @@ int ef_blend_arc_piece(const ef_table_t *g2, ef_vec3_t start, const ef_prim_t *p
     if (g2->kind != EF_TABLE_G2_QUINTIC)
         return EF_ERR_KIND;
     float len;
-    int rc = ef_prim_check(start, pr, &len);
+    ef_prim_geo_t geo;
+    int rc = ef_prim_check_geo(start, pr, &len, &geo);
     if (rc != EF_OK)
         return rc;
     if (!(s0 >= 0.0f) || !(s1 > s0) || !(s1 <= len))
@@ -293,8 +294,6 @@ int ef_blend_arc_piece(const ef_table_t *g2, ef_vec3_t start, const ef_prim_t *p
     if (!(piece <= EF_ARC_PIECE_SWEEP * (1.0f + 1e-5f)))
         return EF_ERR_ARG;
 
-    ef_prim_geo_t geo;
-    ef_prim_geo(start, pr, &geo);
     ef_frame_t f0, f1;
     ef_prim_frame_geo(start, pr, &geo, s0, &f0);
     ef_prim_frame_geo(start, pr, &geo, s1, &f1);
@@ -591,8 +590,8 @@ static int ba_prims(const ef_table_t *g2, ef_vec3_t start_in, const ef_prim_t *i
     int rc;
     ef_vec3_t v = in->end;
     ef_frame_t fi, fo;
-    ef_prim_frame_geo(start_in, in, &k->gi, len_in, &fi);
-    ef_prim_frame_geo(v, out, &k->go, 0.0f, &fo);
+    ef_prim_frame_end_geo(start_in, in, &k->gi, 1, &fi);
+    ef_prim_frame_end_geo(v, out, &k->go, 0, &fo);
     if (in->kind == EF_PRIM_LINE && out->kind == EF_PRIM_LINE)
         return ef_blend_corner(g2, v, fi.t, fo.t, tol, max_in, max_out, res);
 

@@ -22,12 +22,37 @@ static inline int prim_finite(float x)
     return (x == x) & (x - x == 0.0f);
 }
 
-/* Every component bounded by EF_MAX_COORD (false for NaN and inf). */
-static inline int prim_v3_ok(ef_vec3_t a)
+/* Bound tests on the bit patterns, one word per value: the magnitude's bits order as the
+ * magnitudes do, and inf and NaN lie above every finite bound, so lim - |bits| has its top bit
+ * set exactly when |x| > the bound whose bits are lim, NaN and inf included. Or-ing the words
+ * tests many values at once, with no float compare (on a Cortex-M4 each costs a compare, a
+ * flags transfer and a conditional: the check tests up to 21 values). */
+static inline uint32_t prim_abits(float x)
 {
-    int ox = ef_fabsf(a.x) <= EF_MAX_COORD, oy = ef_fabsf(a.y) <= EF_MAX_COORD;
-    int oz = ef_fabsf(a.z) <= EF_MAX_COORD;
-    return ox & oy & oz;
+    union {
+        float f;
+        uint32_t u;
+    } v = {x};
+    return v.u & 0x7fffffffu;
+}
+
+/* Top bit set when |x| > the float whose bits are lim, or x is NaN. */
+static inline uint32_t prim_over(float x, uint32_t lim)
+{
+    return lim - prim_abits(x);
+}
+
+/* The same for every component of a. */
+static inline uint32_t prim_over3(ef_vec3_t a, uint32_t lim)
+{
+    return prim_over(a.x, lim) | prim_over(a.y, lim) | prim_over(a.z, lim);
+}
+
+/* The bits of the largest finite float (finite: |x| <= it) and of EF_MAX_COORD. */
+#define EF_PRIM_FINITE_BITS 0x7f7fffffu
+static inline uint32_t prim_coord_bits(void)
+{
+    return prim_abits(EF_MAX_COORD);
 }
 
 /* All three components finite (no range bound), to reject NaN/inf control points. */
@@ -82,6 +107,11 @@ static void prim_arc_geo(ef_vec3_t start, const ef_prim_t *pr, ef_prim_geo_t *g)
     g->r0 = r0;
     g->h = h;
     g->len = ef_sqrtf(ang * ang + h * h);
+    /* The end's angle, for the check, the end gap and the end frame: one evaluation instead
+     * of one each. The clamp is an identity on a checked sweep; on any other (ef_prim_geo()
+     * does not validate) it keeps the reduction's integer conversion defined. */
+    prim_sincosf(ef_minf(ef_maxf(pr->sweep, -EF_ARC_MAX_SWEEP), EF_ARC_MAX_SWEEP), &g->sn1,
+                 &g->cs1);
 }
 
 /* An arc's model point at the angle with sine sn and cosine cs and axial fraction frac of the
@@ -103,6 +133,8 @@ static void prim_geo_zero(ef_prim_geo_t *g)
                           {0.0f, 0.0f, 0.0f},
                           0.0f,
                           0.0f,
+                          0.0f,
+                          0.0f,
                           0.0f};
     *g = zero;
 }
@@ -118,11 +150,13 @@ static int prim_check(ef_vec3_t start, const ef_prim_t *pr, float *len, ef_prim_
     int line = pr->kind == EF_PRIM_LINE, arc = pr->kind == EF_PRIM_ARC;
     if (!(line | arc) || (pr->flags & ~(uint32_t)EF_PRIM_STOP_BEFORE) != 0u)
         return EF_ERR_ARG;
-    int finite = prim_v3_ok(start) & prim_v3_ok(pr->end) & prim_finite(pr->feed) &
-                 prim_finite(pr->tol) & prim_finite(pr->qtol);
+    /* start, end (and centre) within EF_MAX_COORD; feed, tol, qtol (and axis, sweep) finite */
+    const uint32_t lc = prim_coord_bits(), lf = EF_PRIM_FINITE_BITS;
+    uint32_t over = prim_over3(start, lc) | prim_over3(pr->end, lc) | prim_over(pr->feed, lf) |
+                    prim_over(pr->tol, lf) | prim_over(pr->qtol, lf);
     if (arc)
-        finite &= prim_v3_ok(pr->centre) & prim_v3_finite(pr->axis) & prim_finite(pr->sweep);
-    if (!finite)
+        over |= prim_over3(pr->centre, lc) | prim_over3(pr->axis, lf) | prim_over(pr->sweep, lf);
+    if (over >> 31)
         return EF_ERR_NONFINITE;
     if (!(pr->tol >= 0.0f) || !(pr->qtol >= 0.0f))
         return EF_ERR_ARG;
@@ -153,14 +187,15 @@ static int prim_check(ef_vec3_t start, const ef_prim_t *pr, float *len, ef_prim_
     float r1 = ef_sqrtf(x1 * x1 + y1 * y1);
     if (!(ef_fabsf(r1 - g->r0) <= rtol))
         return EF_ERR_ARC;
-    /* The end's angle against the sweep, modulo 2 pi. The allowance is the radius tolerance
-     * as an arc length, plus float32 rounding of the sweep itself (a few ulp of |sweep| and
-     * of the angle evaluation), so a many-turn arc is not refused for its representation. */
-    float ang1 = ef_atan2f(y1, x1);
-    float diff = ang1 - pr->sweep;
-    diff -= EF_TWO_PI * ef_floorf(diff * (1.0f / EF_TWO_PI) + 0.5f);
+    /* The end against the point the sweep reaches on its circle (of the end's radius): their
+     * distance in the arc's plane, r1 2 sin(|d angle| / 2), at most r1 allow, where allow is
+     * the radius tolerance as an angle plus the float32 rounding of the sweep itself (a few
+     * ulp of |sweep| and of the sine and cosine), so a many-turn arc is not refused for its
+     * representation. The distance form needs no arc tangent (the sweep's sine and cosine
+     * are the geometry's, kept for the frames) and no reduction modulo 2 pi. */
     float allow = rtol / g->r0 + 8.0f * EF_FLT_EPS * (asw + EF_TWO_PI);
-    if (!(ef_fabsf(diff) <= allow))
+    float ex = x1 - r1 * g->cs1, ey = y1 - r1 * g->sn1, ar = allow * r1;
+    if (!(ex * ex + ey * ey <= ar * ar))
         return EF_ERR_ARC;
     if (!(g->len >= EF_MIN_CHORD) || !prim_finite(g->len))
         return EF_ERR_DEGENERATE;
@@ -187,9 +222,10 @@ int ef_prim_check_geo(ef_vec3_t start, const ef_prim_t *pr, float *len, ef_prim_
 {
     if (!geo)
         return EF_ERR_ARG;
-    prim_geo_zero(geo);
+    /* An arc the check passes has had every field filled (prim_arc_geo()); anything else is
+     * zeroed here, once. */
     int rc = prim_check(start, pr, len, geo);
-    if (rc != EF_OK)
+    if (rc != EF_OK || pr->kind != EF_PRIM_ARC)
         prim_geo_zero(geo);
     return rc;
 }
@@ -199,9 +235,10 @@ void ef_prim_geo(ef_vec3_t start, const ef_prim_t *pr, ef_prim_geo_t *g)
 {
     if (!g)
         return;
-    prim_geo_zero(g);
     if (pr && pr->kind == EF_PRIM_ARC)
-        prim_arc_geo(start, pr, g);
+        prim_arc_geo(start, pr, g); /* every field */
+    else
+        prim_geo_zero(g);
 }
 
 /* Exact position, tangent, normal, curvature at arc length s (contract in ef_path.h). */
@@ -210,6 +247,48 @@ int ef_prim_frame(ef_vec3_t start, const ef_prim_t *pr, float s, ef_frame_t *out
     ef_prim_geo_t g;
     ef_prim_geo(start, pr, &g);
     return ef_prim_frame_geo(start, pr, &g, s, out);
+}
+
+/* A line's frame at s (clamped to [0, len]; NaN counts as 0). */
+static void prim_line_frame(ef_vec3_t start, const ef_prim_t *pr, float s, ef_frame_t *out)
+{
+    ef_vec3_t d = ef_v3_sub(pr->end, start);
+    float len = ef_v3_norm(d);
+    float inv = 1.0f / ef_maxf(len, 1e-30f);
+    float sc = ef_minf(ef_maxf(s, 0.0f), len); /* NaN s clamps to 0 */
+    int at_end = sc >= len;
+    ef_vec3_t u = ef_v3_scale(d, inv);
+    ef_vec3_t p = ef_v3_axpy(start, sc, u);
+    out->p.x = ef_selectf(at_end, pr->end.x, p.x);
+    out->p.y = ef_selectf(at_end, pr->end.y, p.y);
+    out->p.z = ef_selectf(at_end, pr->end.z, p.z);
+    out->t = u;
+}
+
+/* An arc's frame at the clamped arc length sc, fraction frac = sc / len of it, the angle's
+ * sine sn and cosine cs: shared by ef_prim_frame_geo() and ef_prim_frame_end_geo(), which
+ * differ only in where the sine and cosine come from. */
+static inline __attribute__((always_inline)) void
+prim_arc_frame(ef_vec3_t start, const ef_prim_t *pr, const ef_prim_geo_t *g, float sc, float frac,
+               float sn, float cs, ef_frame_t *out)
+{
+    float len = g->len;
+    ef_vec3_t rad;
+    ef_vec3_t p = prim_arc_point(g, sn, cs, frac, &rad);
+    /* dp/ds: (r0 sweep / len) (-sin e_u + cos e_v) + (h / len) a, unit by construction. */
+    float il = 1.0f / ef_maxf(len, 1e-30f);
+    ef_vec3_t tan = ef_v3_add(ef_v3_scale(g->eu, -sn), ef_v3_scale(g->ev, cs));
+    ef_vec3_t t = ef_v3_axpy(ef_v3_scale(tan, g->r0 * pr->sweep * il), g->h * il, g->a);
+    t = ef_v3_scale(t, 1.0f / ef_maxf(ef_v3_norm(t), 1e-30f));
+    int at_end = sc >= len, at_start = sc <= 0.0f;
+    out->p.x = ef_selectf(at_end, pr->end.x, ef_selectf(at_start, start.x, p.x));
+    out->p.y = ef_selectf(at_end, pr->end.y, ef_selectf(at_start, start.y, p.y));
+    out->p.z = ef_selectf(at_end, pr->end.z, ef_selectf(at_start, start.z, p.z));
+    out->t = t;
+    out->n = ef_v3_scale(rad, -1.0f); /* towards the axis */
+    /* r / (r^2 + c^2), c = h / sweep, written as r sweep^2 / len^2 (len^2 = r^2 sw^2 + h^2). */
+    float q = pr->sweep * il;
+    out->kappa = g->r0 * q * q;
 }
 
 /* The same with the arc's geometry from ef_prim_geo() (contract in ef_path.h). */
@@ -223,42 +302,40 @@ int ef_prim_frame_geo(ef_vec3_t start, const ef_prim_t *pr, const ef_prim_geo_t 
     if (!pr || (pr->kind != EF_PRIM_LINE && pr->kind != EF_PRIM_ARC) || !geo)
         return EF_ERR_ARG;
     if (pr->kind == EF_PRIM_LINE) {
-        ef_vec3_t d = ef_v3_sub(pr->end, start);
-        float len = ef_v3_norm(d);
-        float inv = 1.0f / ef_maxf(len, 1e-30f);
-        float sc = ef_minf(ef_maxf(s, 0.0f), len); /* NaN s clamps to 0 */
-        int at_end = sc >= len;
-        ef_vec3_t u = ef_v3_scale(d, inv);
-        ef_vec3_t p = ef_v3_axpy(start, sc, u);
-        out->p.x = ef_selectf(at_end, pr->end.x, p.x);
-        out->p.y = ef_selectf(at_end, pr->end.y, p.y);
-        out->p.z = ef_selectf(at_end, pr->end.z, p.z);
-        out->t = u;
+        prim_line_frame(start, pr, s, out);
         return EF_OK;
     }
-    const ef_prim_geo_t g = *geo;
-    float len = g.len;
+    float len = geo->len;
     float sc = ef_minf(ef_maxf(s, 0.0f), len);
     float frac = sc / ef_maxf(len, 1e-30f);
-    float th = pr->sweep * frac;
     float sn, cs;
-    prim_sincosf(th, &sn, &cs);
-    ef_vec3_t rad;
-    ef_vec3_t p = prim_arc_point(&g, sn, cs, frac, &rad);
-    /* dp/ds: (r0 sweep / len) (-sin e_u + cos e_v) + (h / len) a, unit by construction. */
-    float il = 1.0f / ef_maxf(len, 1e-30f);
-    ef_vec3_t tan = ef_v3_add(ef_v3_scale(g.eu, -sn), ef_v3_scale(g.ev, cs));
-    ef_vec3_t t = ef_v3_axpy(ef_v3_scale(tan, g.r0 * pr->sweep * il), g.h * il, g.a);
-    t = ef_v3_scale(t, 1.0f / ef_maxf(ef_v3_norm(t), 1e-30f));
-    int at_end = sc >= len, at_start = sc <= 0.0f;
-    out->p.x = ef_selectf(at_end, pr->end.x, ef_selectf(at_start, start.x, p.x));
-    out->p.y = ef_selectf(at_end, pr->end.y, ef_selectf(at_start, start.y, p.y));
-    out->p.z = ef_selectf(at_end, pr->end.z, ef_selectf(at_start, start.z, p.z));
-    out->t = t;
-    out->n = ef_v3_scale(rad, -1.0f); /* towards the axis */
-    /* r / (r^2 + c^2), c = h / sweep, written as r sweep^2 / len^2 (len^2 = r^2 sw^2 + h^2). */
-    float q = pr->sweep * il;
-    out->kappa = g.r0 * q * q;
+    prim_sincosf(pr->sweep * frac, &sn, &cs);
+    prim_arc_frame(start, pr, geo, sc, frac, sn, cs, out);
+    return EF_OK;
+}
+
+/* The frame at either end, the angle's sine and cosine known (contract in ef_path.h). At
+ * s = 0 the angle is sweep * 0, a zero of either sign, whose sine prim_sincosf() gives as +0
+ * and cosine as 1; at s = len the fraction is len / len = 1, the angle the sweep itself,
+ * whose sine and cosine the geometry holds. */
+int ef_prim_frame_end_geo(ef_vec3_t start, const ef_prim_t *pr, const ef_prim_geo_t *geo,
+                          int at_end, ef_frame_t *out)
+{
+    if (!out)
+        return EF_ERR_ARG;
+    ef_frame_t zero = {{0.0f, 0.0f, 0.0f}, {0.0f, 0.0f, 0.0f}, {0.0f, 0.0f, 0.0f}, 0.0f};
+    *out = zero;
+    if (!pr || (pr->kind != EF_PRIM_LINE && pr->kind != EF_PRIM_ARC) || !geo)
+        return EF_ERR_ARG;
+    if (pr->kind == EF_PRIM_LINE) {
+        prim_line_frame(start, pr, at_end ? 3.4e38f : 0.0f, out);
+        return EF_OK;
+    }
+    float len = geo->len;
+    float sc = at_end ? len : 0.0f;
+    float frac = sc / ef_maxf(len, 1e-30f);
+    float sn = at_end ? geo->sn1 : 0.0f, cs = at_end ? geo->cs1 : 1.0f;
+    prim_arc_frame(start, pr, geo, sc, frac, sn, cs, out);
     return EF_OK;
 }
 
@@ -276,10 +353,8 @@ float ef_prim_end_gap_geo(const ef_prim_t *pr, const ef_prim_geo_t *geo)
     if (!pr || pr->kind != EF_PRIM_ARC || !geo)
         return 0.0f;
     const ef_prim_geo_t g = *geo;
-    float sn, cs;
-    prim_sincosf(pr->sweep, &sn, &cs);
     ef_vec3_t rad;
-    ef_vec3_t p = prim_arc_point(&g, sn, cs, 1.0f, &rad);
+    ef_vec3_t p = prim_arc_point(&g, g.sn1, g.cs1, 1.0f, &rad);
     return ef_v3_norm(ef_v3_sub(pr->end, p));
 }
 

@@ -137,10 +137,15 @@ static inline ef_endpoint_t ef_frame_endpoint(const ef_frame_t *f)
  * | |axis|^2 - 1 | > 2 EF_UNIT_TOL; sweep), DEGENERATE (radius), ARC (radius, angle),
  * DEGENERATE (length), NONFINITE (the arc's reach beyond EF_MAX_COORD).
  * A line's arc fields are not looked at. Only the centre's position perpendicular to the
- * axis matters (the axis line through it). The angle test allows the radius tolerance as an
- * arc length, r |d angle| <= max(EF_ARC_ABS_TOL, EF_ARC_REL_TOL r), plus the float32
- * rounding of the sweep itself, 8 eps (|sweep| + 2 pi) rad (eps = 2^-23), so many-turn arcs
- * are not refused for their representation.
+ * axis matters (the axis line through it). The angle test measures, in the arc's plane, the
+ * distance of the end from the point the sweep reaches on the end's circle (radius r1),
+ * r1 2 sin(|d angle| / 2), and allows the radius tolerance as an angle,
+ * max(EF_ARC_ABS_TOL, EF_ARC_REL_TOL r) / r, plus the float32 rounding of the sweep itself,
+ * 8 eps (|sweep| + 2 pi) rad (eps = 2^-23), so many-turn arcs are not refused for their
+ * representation: the distance at most r1 times that allowance. For the small allowances of
+ * any arc above a few EF_ARC_ABS_TOL in radius this is |d angle| within the allowance; an
+ * arc whose allowance exceeds 2 rad (a radius below EF_ARC_ABS_TOL / 2) takes any end angle,
+ * its whole circle being within the tolerance of its model.
  */
 int ef_prim_check(ef_vec3_t start, const ef_prim_t *pr, float *len);
 
@@ -178,6 +183,8 @@ float ef_prim_end_gap(ef_vec3_t start, const ef_prim_t *pr);
 typedef struct {
     ef_vec3_t a, base, eu, ev;
     float r0, h, len;
+    float sn1, cs1; /**< sine and cosine of the sweep (the end's angle), as the frames
+                         compute them */
 } ef_prim_geo_t;
 
 /**
@@ -207,6 +214,17 @@ int ef_prim_check_geo(ef_vec3_t start, const ef_prim_t *pr, float *len, ef_prim_
  */
 int ef_prim_frame_geo(ef_vec3_t start, const ef_prim_t *pr, const ef_prim_geo_t *geo, float s,
                       ef_frame_t *out);
+
+/**
+ * @brief ef_prim_frame_geo() at s = 0 (at_end 0) or at s = len (at_end 1: the geometry's
+ * len for an arc, |end - start| for a line): the same bits, without evaluating a sine and
+ * cosine (the start's angle is 0, the end's sine and cosine are in the geometry). Blends
+ * take the frames where two primitives meet through this.
+ * @retval EF_OK
+ * @retval EF_ERR_ARG NULL pointer or unknown kind (out zero)
+ */
+int ef_prim_frame_end_geo(ef_vec3_t start, const ef_prim_t *pr, const ef_prim_geo_t *geo,
+                          int at_end, ef_frame_t *out);
 
 /**
  * @brief ef_prim_end_gap() with the arc's geometry from ef_prim_geo(); 0 for a line or NULL.
