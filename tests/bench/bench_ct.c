@@ -52,6 +52,7 @@
 #define CALLGRIND_ZERO_STATS ((void)0)
 #define CALLGRIND_DUMP_STATS ((void)0)
 #endif
+#include "ct_cases.h"
 #include "ef_test.h"
 #include "evenfeed/blend/ef_blend.h"
 #include "evenfeed/core/ef_err.h"
@@ -809,6 +810,7 @@ int main(int argc, char **argv)
     for (long i = 0; i < n; i++) {
         ef_endpoint_t e0, e1;
         ef_seg_t seg;
+        ef_seg_xy_t xy;
         int kind = (int)(i % BC_COUNT);
         bench_xy = g1_path == 1;
         if (g1_path == 1) /* the six coplanar kinds */
@@ -825,7 +827,7 @@ int main(int argc, char **argv)
         if (g2)
             rc = ef_seg_g2_quintic(tbl, &e0, &e1, &seg);
         else if (g1_path == 1)
-            rc = ef_seg_g1_cubic_xy(tbl, &e0, &e1, &seg);
+            rc = ef_seg_g1_cubic_xy(tbl, &e0, &e1, &xy);
         else
             rc = ef_seg_g1_cubic(tbl, &e0, &e1, &seg);
         if (dump)
@@ -833,21 +835,17 @@ int main(int argc, char **argv)
         if (g1_path == 1 && rc == EF_OK) {
             ef_seg_t ref;
             int rr = ef_seg_g1_cubic(tbl, &e0, &e1, &ref);
-            /* == on every float: bit for bit, a zero's sign aside (t.z may be -0 here). */
-            const float *fa = &ref.b[0].x, *fb = &seg.b[0].x, *na = &ref.norm.alpha,
-                        *nb = &seg.norm.alpha;
-            int diff = rr != EF_OK || ref.flags != seg.flags || ref.clamp != seg.clamp;
-            for (int q = 0; q < 18; q++)
-                diff |= fa[q] != fb[q];
-            for (int q = 0; q < 4; q++)
-                diff |= ref.dof[q] != seg.dof[q];
-            for (int q = 0; q < (int)(sizeof ref.norm / sizeof(float)); q++)
-                diff |= na[q] != nb[q];
-            if (diff) {
-                fprintf(stderr, "bench_ct: call %ld (kind %d): XY and 3-D segments differ\n", i,
-                        kind);
+            /* the 3-D path's segment up to rounding (ef_seg.h, test_fw seg_xy) */
+            if (rr != EF_OK || !ct_xy_close(tbl, &e0, &e1, &xy, &ref)) {
+                fprintf(stderr,
+                        "bench_ct: call %ld (kind %d): XY and 3-D segments differ (alpha %.9g "
+                        "%.9g, beta %.9g %.9g, dof %.9g %.9g / %.9g %.9g, chord %.9g)\n",
+                        i, kind, (double)xy.alpha, (double)ref.norm.alpha, (double)xy.beta,
+                        (double)ref.norm.beta, (double)xy.dof[0], (double)ref.dof[0],
+                        (double)xy.dof[1], (double)ref.dof[1], (double)ref.norm.chord);
                 return 1;
             }
+            seg.flags = xy.flags;
         }
         if (rc != EF_OK) {
             fprintf(stderr, "bench_ct: call %ld (kind %d) failed: %s\n", i, kind, ef_err_str(rc));

@@ -179,6 +179,59 @@ enum {
 
 /* The configuration kind of call i: g1_path 0 all kinds in turn, 1 the six coplanar ones
  * (bench_ct g1p), 2 the twisted and general ones (g1_3d). */
+/** How far a planar segment (ef_seg_g1_cubic_xy()) is from what it documents, on end data
+ *  e0, e1 in a plane z = e0->p.z, against the 3-D path's segment b on the same data; the
+ *  largest values so far in w[0..2]:
+ *  - w[0]: its angles against b's, rad (-pi and pi count as one);
+ *  - w[1]: its DOFs against the table at its own angles times the chord (ef_table_lookup_g1()),
+ *    per (1 + |table value|) times the chord: the lookup's rounding. The table's slope can
+ *    turn the angles' ulps into far larger DOF changes near a reversal, so the DOFs are held
+ *    to the lookup at the angles they were looked up for, the angles to the 3-D path;
+ *  - w[2]: its control points against p0 + x1_0 t0 / 3 |t0|, p1 - x1_1 t1 / 3 |t1| (exact
+ *    in double), per eps (|coordinates| + |handles|).
+ *  Returns whether flags, clamp bits and plane agree with b's (they must). */
+static inline int ct_xy_diff(const ef_table_t *tbl, const ef_endpoint_t *e0,
+                             const ef_endpoint_t *e1, const ef_seg_xy_t *a, const ef_seg_t *b,
+                             double w[3])
+{
+    double da = fmax(fabs((double)a->alpha - (double)b->norm.alpha),
+                     fabs((double)a->beta - (double)b->norm.beta));
+    da = fmin(da, fabs(fabs((double)a->alpha) - fabs((double)b->norm.alpha)) +
+                      fabs(fabs((double)a->beta) - fabs((double)b->norm.beta)));
+    w[0] = fmax(w[0], da);
+    float d[2];
+    uint32_t fl = 0;
+    double c = (double)b->norm.chord;
+    if (ef_table_lookup_g1(tbl, a->alpha, a->beta, d, &fl) != EF_OK)
+        return 0;
+    for (int k = 0; k < 2; k++)
+        w[1] = fmax(w[1],
+                    fabs((double)a->dof[k] - (double)d[k] * c) / ((1.0 + fabs((double)d[k])) * c));
+    const ef_endpoint_t *e[2] = {e0, e1};
+    for (int k = 0; k < 2; k++) {
+        double tx = (double)e[k]->t.x, ty = (double)e[k]->t.y, tl = hypot(tx, ty);
+        double h = (k ? -1.0 : 1.0) * (double)a->dof[k] / 3.0 / tl;
+        double px = (double)e[k]->p.x, py = (double)e[k]->p.y;
+        double bx = px + h * tx, by = py + h * ty;
+        int j = k ? 2 : 1;
+        double sc = (fmax(fabs(px), fabs(py)) + fabs(h)) * 1.1920929e-7;
+        w[2] = fmax(w[2], hypot((double)a->x[j] - bx, (double)a->y[j] - by) / sc);
+        int q = k ? 3 : 0;
+        w[2] = fmax(w[2], (a->x[q] != e[k]->p.x || a->y[q] != e[k]->p.y) ? 1e30 : 0.0);
+    }
+    return a->flags == b->flags && a->clamp == b->clamp && a->z == e0->p.z;
+}
+
+/** ct_xy_diff() within what ef_seg.h states: angles within 1e-6 rad, DOFs within 1e-6,
+ *  control points within 4 eps. */
+static inline int ct_xy_close(const ef_table_t *tbl, const ef_endpoint_t *e0,
+                              const ef_endpoint_t *e1, const ef_seg_xy_t *a, const ef_seg_t *b)
+{
+    double w[3] = {0, 0, 0};
+    int same = ct_xy_diff(tbl, e0, e1, a, b, w);
+    return same && w[0] <= 1e-6 && w[1] <= 1e-6 && w[2] <= 4.0;
+}
+
 static inline int ct_g1_kind(long i, int g1_path)
 {
     if (g1_path == 1) {

@@ -3,6 +3,7 @@
  * segment construction and bad input. Tables here are synthetic (known functions) so the
  * folding, wrapping and clamping logic is checked independently of the optimizer. */
 #include <string.h>
+#include "bench/ct_cases.h"
 #include "ef_test.h"
 #include "ef_testbez.h"
 #include "evenfeed/geom/ef_bezier.h"
@@ -523,18 +524,20 @@ static void test_lookup(void)
     EF_CHECK_EQ(s.degree, 5);
 }
 
-/* Bit-for-bit equality of everything both entry points write. */
-static int g1_same(const ef_seg_t *a, const ef_seg_t *b)
+/* A refused planar segment is all zero. */
+static int seg_xy_zero(const ef_seg_xy_t *a)
 {
-    return memcmp(a->b, b->b, sizeof a->b) == 0 && memcmp(a->dof, b->dof, sizeof a->dof) == 0 &&
-           memcmp(&a->norm, &b->norm, sizeof a->norm) == 0 && a->degree == b->degree &&
-           a->ndof == b->ndof && a->flags == b->flags && a->clamp == b->clamp;
+    ef_seg_xy_t z;
+    memset(&z, 0, sizeof z);
+    return memcmp(a, &z, sizeof z) == 0;
 }
 
 /* ef_seg_g1_cubic_xy against ef_seg_g1_cubic on data in planes z = const (chords 1e-3..1e3,
  * up to 1e4 from the origin, tangents at random, along and back along the chord, slightly
- * off unit), with a fold table and with a partial one that clamps: the same segment bit
- * for bit; invalid data gets the same error. */
+ * off unit), with a fold table and with a partial one that clamps: the 3-D path's angles to
+ * 1e-6 rad, the DOFs of the table at those angles, the control points those DOFs make, the
+ * same flags (tests/bench/ct_cases.h: ct_xy_diff()); invalid data gets the same error.
+ * ef_seg_xy_expand() gives the general form. */
 static void test_seg_xy(void)
 {
     float flo[2] = {0, 0}, fhi[2] = {(float)(M_PI / 2), (float)M_PI};
@@ -545,6 +548,7 @@ static void test_seg_xy(void)
     ef_table_t part = make_table(EF_TABLE_G1_CUBIC, EF_SYM_NONE, 2, slo, shi, sn, 0, g1_full);
     unsigned long long rs = 4242;
     int same = 0, valid = 0, clamped = 0, n = 8000;
+    double w[3] = {0, 0, 0}, wx = 0;
     for (int i = 0; i < n; i++) {
         const ef_table_t *tb = (i & 1) ? &part : &fold;
         int cls = (i >> 1) % 3; /* 0 random, 1 along/back along the chord, 2 z = 0 */
@@ -566,27 +570,69 @@ static void test_seg_xy(void)
         e1.p = ef_v3((float)(ox + s * cp), (float)(oy + s * sp), z);
         e0.t = ef_v3((float)(len0 * cos(al + ph)), (float)(len0 * sin(al + ph)), 0.0f);
         e1.t = ef_v3((float)(len1 * cos(be + ph)), (float)(len1 * sin(be + ph)), 0.0f);
-        ef_seg_t a, b;
+        ef_seg_xy_t a;
+        ef_seg_t b, ax;
         int ra = ef_seg_g1_cubic_xy(tb, &e0, &e1, &a), rb = ef_seg_g1_cubic(tb, &e0, &e1, &b);
         EF_CHECK_EQ(ra, rb);
         if (ra != EF_OK)
             continue;
         valid++;
         clamped += (a.flags & EF_SEG_CLAMPED) != 0;
-        if (g1_same(&a, &b))
+        if (ct_xy_diff(tb, &e0, &e1, &a, &b, w))
             same++;
         else
-            printf("seg_xy: case %d differs from the 3-D path\n", i);
+            printf("seg_xy: case %d: flags, clamp bits or plane differ from the 3-D path\n", i);
+        /* the general form: the same points, angles and DOFs; the chord as the 3-D path's;
+         * the tangents along the handles, to the precision of the control points */
+        EF_CHECK_EQ(ef_seg_xy_expand(&a, &ax), EF_OK);
+        EF_CHECK(ax.degree == 3 && ax.ndof == 2 && ax.b[2].x == a.x[2] && ax.b[1].z == z &&
+                 ax.norm.alpha == a.alpha && ax.dof[1] == a.dof[1] && ax.flags == a.flags);
+        EF_CHECK(ax.norm.chord == b.norm.chord);
+        double hmin =
+            fmin(ef_v3_norm(ef_v3_sub(ax.b[1], ax.b[0])), ef_v3_norm(ef_v3_sub(ax.b[3], ax.b[2])));
+        double tol_t = 4 * 1.1920929e-7 * (mag + s) / hmin + 1e-6;
+        wx = fmax(wx, fmax(ef_v3_norm(ef_v3_sub(ax.norm.t0, b.norm.t0)),
+                           ef_v3_norm(ef_v3_sub(ax.norm.t1, b.norm.t1))) /
+                          tol_t);
     }
-    printf("seg_xy: %d of %d valid, %d clamped, %d identical to the 3-D path\n", valid, n, clamped,
-           same);
+    printf("seg_xy: %d of %d valid, %d clamped, %d with the 3-D path's flags; largest: angle "
+           "off the 3-D path's %.3g rad, DOF off the table at its angles %.3g, control point "
+           "off its DOFs %.3g eps; expanded tangents %.3g of their bound\n",
+           valid, n, clamped, same, w[0], w[1], w[2], wx);
     EF_CHECK(valid > n - n / 50);
     EF_CHECK(clamped > 0);
     EF_CHECK_EQ(same, valid);
+    EF_CHECK(w[0] <= 1e-6);
+    EF_CHECK(w[1] <= 1e-6);
+    EF_CHECK(w[2] <= 4.0);
+    EF_CHECK(wx <= 1.0);
+
+    /* The angles 0, pi/2 and pi come out exact (the tangent along, across, against the
+     * chord), as the 3-D path's do. */
+    {
+        const float ux[3] = {1, 0, -1}, uy[3] = {0, 1, 0},
+                    want[3] = {0.0f, (float)(M_PI / 2), (float)M_PI};
+        for (int k = 0; k < 3; k++) {
+            ef_endpoint_t p0, p1;
+            memset(&p0, 0, sizeof p0);
+            memset(&p1, 0, sizeof p1);
+            p0.p = ef_v3(1, 2, 3);
+            p1.p = ef_v3(4, 2, 3);
+            p0.t = ef_v3(ux[k], uy[k], 0);
+            p1.t = ef_v3(1, 0, 0);
+            ef_seg_xy_t a;
+            ef_seg_t b;
+            EF_CHECK_EQ(ef_seg_g1_cubic_xy(&fold, &p0, &p1, &a), EF_OK);
+            EF_CHECK_EQ(ef_seg_g1_cubic(&fold, &p0, &p1, &b), EF_OK);
+            EF_CHECK(fabsf(a.alpha) == want[k] && fabsf(b.norm.alpha) == want[k]);
+            EF_CHECK(a.beta == 0.0f);
+        }
+    }
 
     /* Invalid data: the 3-D path's error, whichever check fails; z of e1 and t.z not read. */
     ef_endpoint_t e0 = ep2(0, 0, 0.3f, 0), e1 = ep2(1, 0, -0.2f, 0), x;
-    ef_seg_t sg, ref;
+    ef_seg_xy_t sg;
+    ef_seg_t ref;
     const float bad[] = {NAN, INFINITY, -INFINITY, 2e6f};
     for (int k = 0; k < 4; k++)
         for (int f = 0; f < 8; f++) {
@@ -597,7 +643,7 @@ static void test_seg_xy(void)
             int rc = ef_seg_g1_cubic_xy(&fold, a, b, &sg);
             EF_CHECK_EQ(rc, ef_seg_g1_cubic(&fold, a, b, &ref));
             EF_CHECK(rc == EF_ERR_NONFINITE || rc == EF_ERR_TANGENT);
-            EF_CHECK_EQ(sg.degree, 0);
+            EF_CHECK(seg_xy_zero(&sg));
         }
     for (int k = 0; k < 4; k++) {
         x = e0;
@@ -607,7 +653,7 @@ static void test_seg_xy(void)
         x.p.z = bad[k];
         x.t.z = bad[k];
         EF_CHECK_EQ(ef_seg_g1_cubic_xy(&fold, &e0, &x, &sg), EF_OK);
-        EF_CHECK(sg.b[3].z == 0.0f);
+        EF_CHECK(sg.z == 0.0f);
     }
     x = e0;
     x.t = ef_v3(1.01f, 0, 0);
@@ -620,7 +666,7 @@ static void test_seg_xy(void)
     EF_CHECK_EQ(ef_seg_g1_cubic_xy(&fold, &e0, &x, &sg), EF_ERR_NONFINITE);
     x.t = e1.t;
     EF_CHECK_EQ(ef_seg_g1_cubic_xy(&fold, &e0, &x, &sg), EF_ERR_DEGENERATE);
-    EF_CHECK_EQ(sg.degree, 0);
+    EF_CHECK(seg_xy_zero(&sg));
     x.t = ef_v3(-1, 0, 0); /* reversal: back along the chord is a valid configuration */
     x.p = ef_v3(1, 0, 0);
     EF_CHECK_EQ(ef_seg_g1_cubic_xy(&fold, &e0, &x, &sg), ef_seg_g1_cubic(&fold, &e0, &x, &ref));
@@ -631,6 +677,10 @@ static void test_seg_xy(void)
     ef_table_t kind = fold;
     kind.kind = EF_TABLE_G2_QUINTIC;
     EF_CHECK_EQ(ef_seg_g1_cubic_xy(&kind, &e0, &x, &sg), EF_ERR_KIND);
+    EF_CHECK(seg_xy_zero(&sg));
+    EF_CHECK_EQ(ef_seg_xy_expand(NULL, &ref), EF_ERR_ARG);
+    EF_CHECK_EQ(ref.degree, 0);
+    EF_CHECK_EQ(ef_seg_xy_expand(&sg, NULL), EF_ERR_ARG);
 }
 
 int main(int argc, char **argv)

@@ -94,7 +94,7 @@ enum {
     CS_COUNT
 };
 static const char *const costs_stack_name[CS_COUNT] = {
-    "ef_seg_g1_cubic",
+    "ef_seg_g1_cubic+ef_seg_g1_cubic_xy",
     "ef_seg_g2_quintic",
     "ef_blend_corner",
     "ef_blend_prims",
@@ -198,12 +198,13 @@ __attribute__((noinline)) static void costs_seg(const char *name, int g1_path)
     }
     const ef_table_t *tbl = g2 ? &ef_tbl_g2_default : &ef_tbl_g1_default;
     ef_seg_t seg;
+    ef_seg_xy_t xy;
     ef_m4_stack_paint();
     for (long i = 0; i < COSTS_N; i++) {
         uint32_t t0 = ef_m4_icount_begin();
         int rc = g2 ? ef_seg_g2_quintic(tbl, &costs_in.seg[i].e0, &costs_in.seg[i].e1, &seg)
                  : g1_path == 1
-                     ? ef_seg_g1_cubic_xy(tbl, &costs_in.seg[i].e0, &costs_in.seg[i].e1, &seg)
+                     ? ef_seg_g1_cubic_xy(tbl, &costs_in.seg[i].e0, &costs_in.seg[i].e1, &xy)
                      : ef_seg_g1_cubic(tbl, &costs_in.seg[i].e0, &costs_in.seg[i].e1, &seg);
         costs_v[i] = ef_m4_icount_end(t0);
         if (rc != EF_OK) {

@@ -86,61 +86,69 @@ static inline float seg_ct_floorf(float x)
     return t - (float)seg_ct_hidei(t > x);
 }
 
-/* c ? a : b for c in {0, 1}, the value of ef_selectf() (exact for finite a, b). */
-static inline float seg_sel(float c, float a, float b)
-{
-    return c * a + (1.0f - c) * b;
-}
-
-/* The G1 fold lookup of ef_table_lookup_g1() (EF_SYM_G1_FOLD tables) for angles already in
- * [-pi, pi]: the same operations in the same order, so the same DOFs, without its argument
- * checks, the +-1e6 bound (a no-op on such angles) and the clamp flags (the fold never
- * reports one). */
-static inline void seg_g1_fold_lookup(const ef_table_t *tbl, float alpha, float beta, float d[2])
+/* The fold lookup of ef_table_lookup_g1() for the XY path, angles already in [-pi, pi]: the
+ * same fold and cell, without the argument checks, the +-1e6 bound (a no-op on such angles),
+ * the clamp flags (the fold never reports one) and the clamp of the cell fraction (the
+ * clamped coordinate keeps it in [0, 1]); the bilinear blend as successive lerps on the
+ * DOF pairs (rounded differently from the weighted sum, within an ulp of the DOFs). */
+static inline void seg_g1_fold_lerp(const ef_table_t *tbl, float alpha, float beta, float d[2])
 {
     float uu = 0.5f * (alpha + beta), vv = 0.5f * (alpha - beta);
     float k = seg_ct_floorf(uu * (1.0f / EF_PI_F) + 0.5f);
     uu -= k * EF_PI_F;
     vv -= k * EF_PI_F;
     vv -= (2.0f * EF_PI_F) * seg_ct_floorf(vv * (1.0f / (2.0f * EF_PI_F)) + 0.5f);
-    float swap = (float)seg_ct_hidei((uu < 0.0f) ^ (vv < 0.0f));
+    uint32_t swap = (uint32_t)seg_ct_hidei((uu < 0.0f) ^ (vv < 0.0f));
     float c[2] = {ef_fabsf(uu), ef_fabsf(vv)}, f[2];
     uint32_t i[2];
     for (int a = 0; a < 2; a++) {
         const ef_table_axis_t *ax = &tbl->axis[a];
-        float xc = seg_ct_clampf(c[a], ax->lo, ax->hi);
-        float g = (xc - ax->lo) * ax->inv_step;
+        float g = (seg_ct_clampf(c[a], ax->lo, ax->hi) - ax->lo) * ax->inv_step;
         uint32_t last = ax->nodes - 2u, ii = (uint32_t)g;
         i[a] = ii < last ? ii : last;
-        f[a] = seg_ct_clampf(g - (float)i[a], 0.0f, 1.0f);
+        f[a] = g - (float)i[a];
     }
-    const float *p = tbl->data + 2u * (i[0] * tbl->axis[0].stride + i[1] * tbl->axis[1].stride);
-    const uint32_t s1 = 2u * tbl->axis[1].stride;
-    float w00 = (1.0f - f[0]) * (1.0f - f[1]), w10 = f[0] * (1.0f - f[1]);
-    float w01 = (1.0f - f[0]) * f[1], w11 = f[0] * f[1];
-    float d0 = w00 * p[0] + w10 * p[2] + w01 * p[s1] + w11 * p[s1 + 2];
-    float d1 = w00 * p[1] + w10 * p[3] + w01 * p[s1 + 1] + w11 * p[s1 + 3];
-    d[0] = seg_sel(swap, d1, d0);
-    d[1] = seg_sel(swap, d0, d1);
+    const float *p0 = tbl->data + 2u * (i[0] * tbl->axis[0].stride + i[1] * tbl->axis[1].stride);
+    const float *p1 = p0 + 2u * tbl->axis[1].stride;
+    float r[2];
+    for (int q = 0; q < 2; q++) {
+        float lo = p0[q] + f[0] * (p0[2 + q] - p0[q]);
+        float hi = p1[q] + f[0] * (p1[2 + q] - p1[q]);
+        r[q] = lo + f[1] * (hi - lo);
+    }
+    d[0] = r[swap];
+    d[1] = r[swap ^ 1u];
 }
 
-/* ef_atan2f()'s polynomial (ef_math.c), for the XY path's inline copy below; test_fw
- * seg_xy (XY against 3-D, bit for bit) fails if the two ever differ. */
+/* ef_atan2f()'s polynomial (ef_math.c) for the XY path's arc tangent below, three
+ * coefficients moved by a few ulp (the first to 1, the second by 3, the last by 4) so that
+ * at w = 1 it evaluates, in float32 and this order, to fl(pi/4) exactly: then the angles 0,
+ * pi/2 and pi come out exact, as ef_atan2f()'s do (a tangent along the chord is alpha = 0,
+ * not 1e-7). Largest error over [0, pi]: 4.8e-7 rad (ef_atan2f()'s own: 3.7e-7 in this
+ * form). test_fw seg_xy checks the three angles. */
 static const float seg_atan_c[8] = {
-    9.999999545e-01f, -3.333228719e-01f, 1.997350213e-01f, -1.403925361e-01f,
-    9.965704541e-02f, -6.018953761e-02f, 2.473677233e-02f, -4.825772456e-03f,
+    1.0f,
+    -3.333227932e-01f,
+    1.997350213e-01f,
+    -1.403925361e-01f,
+    9.965704541e-02f,
+    -6.018953761e-02f,
+    2.473677233e-02f,
+    -4.825774115e-03f,
 };
 
-/* ef_atan2f(y, x) for y >= 0 and x^2 + y^2 near 1 (a unit vector's sine and cosine): the
- * same operations, less the selects that are identities there (a zero denominator, y < 0),
- * and the two octant selects as exact sign flips (c in {0, 1}: c k + (1 - 2c) r is k - r or
- * r, rounded as ef_selectf's). Inline: the XY path calls it twice. */
+/* atan2(y, x) in [0, pi] for y >= 0, y + |x| > 0, any scale: with w = (y - |x|) / (y + |x|)
+ * in [-1, 1], atan(y / |x|) = pi/4 + atan(w) (tan(pi/4 + phi) = (1 + tan phi) / (1 - tan phi)),
+ * so ef_atan2f()'s polynomial needs no octant swap, and x < 0 takes pi minus that:
+ * pi/2 + sign(x) (atan(w) - pi/4) either way (x = -0 gives pi/2 as +0 does). Its error is
+ * absolute, an ulp or two of pi/4 (not relative near 0, where pi/4 - pi/4 cancels): the
+ * table's cells are 0.03 rad wide. No selects: the sign is a copysign. Inline: the XY path
+ * calls it twice. */
 static inline float seg_atan2_upper(float y, float x)
 {
     float ax = ef_fabsf(x);
-    float steep = (float)seg_ct_hidei(y > ax), neg = (float)seg_ct_hidei(x < 0.0f);
-    float a = ef_minf(ax, y) / ef_maxf(ax, y);
-    float s = a * a;
+    float w = (y - ax) / (y + ax);
+    float s = w * w;
     float p = seg_atan_c[7];
     p = p * s + seg_atan_c[6];
     p = p * s + seg_atan_c[5];
@@ -149,9 +157,7 @@ static inline float seg_atan2_upper(float y, float x)
     p = p * s + seg_atan_c[2];
     p = p * s + seg_atan_c[1];
     p = p * s + seg_atan_c[0];
-    float r = a * p;
-    r = steep * (0.5f * EF_PI_F) + (1.0f - 2.0f * steep) * r;
-    return neg * EF_PI_F + (1.0f - 2.0f * neg) * r;
+    return 0.5f * EF_PI_F + __builtin_copysignf(1.0f, x) * (w * p - 0.25f * EF_PI_F);
 }
 
 /* Normalize, look up (alpha, beta), scale the per-unit-chord DOFs back by the chord. */
@@ -194,23 +200,30 @@ static int seg_xy_error(const ef_endpoint_t *e0, const ef_endpoint_t *e1)
     return rc != EF_OK ? rc : EF_ERR_DEGENERATE;
 }
 
+/* Zero the planar segment, as seg_fail(). */
+static int seg_xy_fail(ef_seg_xy_t *out, int rc)
+{
+    ef_seg_xy_t zero = {0};
+    *out = zero;
+    return rc;
+}
+
 /*
- * ef_normalize()'s operations on data in the plane z = z0, written out in 2-D: with the z
- * components zero every term they add is an exact zero, so each value here is the general
- * path's bit for bit (|e1 x t| is taken as sqrt(c^2), not |c|, for that reason: the square
- * can underflow). ef_atan2f() and the fold lookup are inline copies with the same operations
- * (cheaper where the data makes their generic parts identities); a table that is not
- * fold-symmetric goes through ef_table_lookup_g1() itself.
+ * ef_normalize()'s tests on data in the plane z = z0, written out in 2-D, then the angles
+ * straight from the chord and the tangents as given: an arc tangent reads only the ratio of
+ * its arguments, so neither needs dividing by its length first (the 3-D path's unit vectors
+ * round differently: the angles agree to a few ulp, not bit for bit). The tangents' lengths
+ * are divided out of the handles only.
  */
 int ef_seg_g1_cubic_xy(const ef_table_t *tbl, const ef_endpoint_t *e0, const ef_endpoint_t *e1,
-                       ef_seg_t *out)
+                       ef_seg_xy_t *out)
 {
     if (!out)
         return EF_ERR_ARG;
     if (!tbl || !e0 || !e1)
-        return seg_fail(out, EF_ERR_ARG);
+        return seg_xy_fail(out, EF_ERR_ARG);
     if (tbl->kind != EF_TABLE_G1_CUBIC)
-        return seg_fail(out, EF_ERR_KIND);
+        return seg_xy_fail(out, EF_ERR_KIND);
     float x0 = e0->p.x, y0 = e0->p.y, z = e0->p.z, x1 = e1->p.x, y1 = e1->p.y;
     float u0 = e0->t.x, v0 = e0->t.y, u1 = e1->t.x, v1 = e1->t.y;
     float dx = x1 - x0, dy = y1 - y0;
@@ -226,49 +239,77 @@ int ef_seg_g1_cubic_xy(const ef_table_t *tbl, const ef_endpoint_t *e0, const ef_
              (int)(ef_fabsf(tt1 - 1.0f) <= 2.0f * EF_UNIT_TOL) & (int)(s >= EF_MIN_CHORD) &
              (int)(s >= EF_MIN_CHORD_REL * scale);
     if (!seg_ct_hidei(ok))
-        return seg_fail(out, seg_xy_error(e0, e1));
-    float inv = 1.0f / s, n0 = 1.0f / ef_sqrtf(tt0), n1 = 1.0f / ef_sqrtf(tt1);
-    float ex = dx * inv, ey = dy * inv;
-    float t0x = u0 * n0, t0y = v0 * n0, t1x = u1 * n1, t1y = v1 * n1;
-    float c0 = ex * t0y - ey * t0x, c1 = ex * t1y - ey * t1x;
-    float a0 = seg_atan2_upper(ef_sqrtf(c0 * c0), t0x * ex + t0y * ey);
-    float a1 = seg_atan2_upper(ef_sqrtf(c1 * c1), t1x * ex + t1y * ey);
-    /* ef_normalize()'s signs: sigma makes the two normals agree, the side is that of their
-     * sum (its x and y are zeros, which never count as negative). */
-    float sigma = 1.0f - 2.0f * (float)seg_ct_hidei(c0 * c1 < 0.0f);
-    float f = 1.0f - 2.0f * (float)seg_ct_hidei(c0 + sigma * c1 < 0.0f);
-    ef_seg_t *o = out;
-    o->norm.alpha = f * a0;
-    o->norm.beta = f * sigma * a1;
-    o->norm.k0 = o->norm.k1 = 0.0f;
-    o->norm.chord = s;
-    o->norm.e1 = ef_v3(ex, ey, 0.0f);
-    o->norm.t0 = ef_v3(t0x, t0y, 0.0f);
-    o->norm.t1 = ef_v3(t1x, t1y, 0.0f);
+        return seg_xy_fail(out, seg_xy_error(e0, e1));
+    /* chord x tangent and chord . tangent, both times |chord| |t| */
+    float c0 = dx * v0 - dy * u0, c1 = dx * v1 - dy * u1;
+    float a0 = seg_atan2_upper(ef_fabsf(c0), dx * u0 + dy * v0);
+    float a1 = seg_atan2_upper(ef_fabsf(c1), dx * u1 + dy * v1);
+    /* ef_normalize()'s signs: sigma = -1 where c0 c1 < 0 makes the two normals agree, the
+     * side f is that of their sum t (its x and y are zeros, which never count as negative):
+     * alpha = f a0 and beta = f sigma a1, every sign taken by copysign. Where the 3-D path's
+     * tests see a zero (a product c0 c1 of -0: one c zero, its angle 0 or pi; a t of -0: both
+     * zero) the sign bit may pick the other sign: -0 and 0, -pi and pi, are the same
+     * configuration, the fold lookup the same cell. */
+    float sigma = __builtin_copysignf(1.0f, c0 * c1);
+    float t = c0 + sigma * c1;
+    float alpha = __builtin_copysignf(a0, t), beta = __builtin_copysignf(a1, sigma * t);
     float d[2];
     uint32_t clamp = 0;
     /* The table's symmetry is fixed per firmware: this does not depend on the data. */
     if (tbl->symmetry == EF_SYM_G1_FOLD && tbl->naxes == 2 && tbl->ndof == 2 && tbl->data) {
-        seg_g1_fold_lookup(tbl, o->norm.alpha, o->norm.beta, d);
+        seg_g1_fold_lerp(tbl, alpha, beta, d);
     } else {
-        int rc = ef_table_lookup_g1(tbl, o->norm.alpha, o->norm.beta, d, &clamp);
+        int rc = ef_table_lookup_g1(tbl, alpha, beta, d, &clamp);
         if (rc != EF_OK)
-            return seg_fail(out, rc);
+            return seg_xy_fail(out, rc);
     }
     float x10 = d[0] * s, x11 = d[1] * s;
-    float k0 = x10 * (1.0f / 3.0f), k1 = -x11 * (1.0f / 3.0f);
+    /* the handles x1 t / 3 along the unit tangents */
+    float k0 = x10 * (1.0f / 3.0f) / ef_sqrtf(tt0), k1 = -x11 * (1.0f / 3.0f) / ef_sqrtf(tt1);
+    ef_seg_xy_t *o = out;
+    o->x[0] = x0;
+    o->y[0] = y0;
+    o->x[1] = x0 + k0 * u0;
+    o->y[1] = y0 + k0 * v0;
+    o->x[2] = x1 + k1 * u1;
+    o->y[2] = y1 + k1 * v1;
+    o->x[3] = x1;
+    o->y[3] = y1;
+    o->z = z;
     o->dof[0] = x10;
     o->dof[1] = x11;
-    o->dof[2] = o->dof[3] = 0.0f;
+    o->alpha = alpha;
+    o->beta = beta;
     o->clamp = clamp;
     o->flags = (uint32_t)(clamp != 0) * EF_SEG_CLAMPED;
-    o->b[0] = ef_v3(x0, y0, z);
-    o->b[1] = ef_v3(x0 + k0 * t0x, y0 + k0 * t0y, z);
-    o->b[2] = ef_v3(x1 + k1 * t1x, y1 + k1 * t1y, z);
-    o->b[3] = ef_v3(x1, y1, z);
-    o->b[4] = o->b[5] = ef_v3(0.0f, 0.0f, 0.0f);
-    o->degree = 3;
-    o->ndof = 2;
+    return EF_OK;
+}
+
+/* The general form of a planar segment (contract in ef_seg.h). */
+int ef_seg_xy_expand(const ef_seg_xy_t *xy, ef_seg_t *out)
+{
+    if (!out)
+        return EF_ERR_ARG;
+    if (!xy)
+        return seg_fail(out, EF_ERR_ARG);
+    ef_seg_t o = {0};
+    for (int i = 0; i < 4; i++)
+        o.b[i] = ef_v3(xy->x[i], xy->y[i], xy->z);
+    o.degree = 3;
+    o.ndof = 2;
+    o.flags = xy->flags;
+    o.clamp = xy->clamp;
+    o.dof[0] = xy->dof[0];
+    o.dof[1] = xy->dof[1];
+    o.norm.alpha = xy->alpha;
+    o.norm.beta = xy->beta;
+    ef_vec3_t c = ef_v3_sub(o.b[3], o.b[0]);
+    ef_vec3_t h0 = ef_v3_sub(o.b[1], o.b[0]), h1 = ef_v3_sub(o.b[3], o.b[2]);
+    o.norm.chord = ef_v3_norm(c);
+    o.norm.e1 = ef_v3_scale(c, 1.0f / ef_maxf(o.norm.chord, 1e-30f));
+    o.norm.t0 = ef_v3_scale(h0, 1.0f / ef_maxf(ef_v3_norm(h0), 1e-30f));
+    o.norm.t1 = ef_v3_scale(h1, 1.0f / ef_maxf(ef_v3_norm(h1), 1e-30f));
+    *out = o;
     return EF_OK;
 }
 

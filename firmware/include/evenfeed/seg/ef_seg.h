@@ -40,8 +40,8 @@ typedef struct {
 
 /**
  * @brief G1 cubic through the table, any end data in 3-D. Constant instruction count for
- * valid input. For data in a plane z = const, ef_seg_g1_cubic_xy() builds the same segment
- * at about a third of the count.
+ * valid input. For data in a plane z = const, ef_seg_g1_cubic_xy() builds it at about
+ * a third of the count.
  * @param tbl   G1 cubic table
  * @param e0,e1 end data (p, t used)
  * @param out   segment
@@ -53,18 +53,31 @@ typedef struct {
 int ef_seg_g1_cubic(const ef_table_t *tbl, const ef_endpoint_t *e0, const ef_endpoint_t *e1,
                     ef_seg_t *out);
 
+/** A planar G1 cubic, the output of ef_seg_g1_cubic_xy(): what a segment in a plane
+ *  z = const needs and no more (ef_seg_xy_expand() gives the general form). */
+typedef struct {
+    float x[4], y[4];  /**< control points b0..b3 */
+    float z;           /**< the plane (e0->p.z) */
+    float dof[2];      /**< x1_0, x1_1, program units */
+    float alpha, beta; /**< the configuration looked up (ef_norm_t's alpha and beta) */
+    uint32_t flags;    /**< EF_SEG_CLAMPED */
+    uint32_t clamp;    /**< EF_LOOKUP_CLAMP_* bits from the lookup */
+} ef_seg_xy_t;
+
 /**
- * @brief G1 cubic for end data in a plane z = const: the XY fast path of ef_seg_g1_cubic().
- * Constant instruction count for valid input.
+ * @brief G1 cubic for end data in a plane z = const: the XY fast path of ef_seg_g1_cubic(),
+ * with a planar output. Constant instruction count for valid input.
  *
  * Reads p.x, p.y, t.x, t.y of both ends and e0->p.z only: e1->p.z is taken as e0->p.z and
- * t.z as 0 (the caller knows its move lies in an XY plane; nothing here tests it). On such
- * data (e1->p.z == e0->p.z, t.z == 0) the segment, its DOFs, flags, clamp bits and norm
- * are ef_seg_g1_cubic()'s bit for bit (a zero's sign aside: every control point's z is
- * e0->p.z), and so is the error code of refused input.
+ * t.z as 0 (the caller knows its move lies in an XY plane; nothing here tests it). It
+ * accepts and refuses exactly what ef_seg_g1_cubic() does on such data, with the same error
+ * codes. Its angles come from the chord and tangents as given, not from unit vectors, so
+ * they differ from ef_seg_g1_cubic()'s by a few ulp (test_fw seg_xy: alpha and beta within
+ * 2e-6 rad, control points within 1e-5 of the chord plus 4 ulp of the coordinates; the same
+ * clamp bits).
  * @param tbl   G1 cubic table
  * @param e0,e1 end data (p.x, p.y, t.x, t.y of both; p.z of e0)
- * @param out   segment, z = e0->p.z throughout
+ * @param out   planar segment, in the plane z = e0->p.z
  * @retval EF_OK             out valid (check out->flags for EF_SEG_CLAMPED)
  * @retval EF_ERR_ARG        NULL pointer, or a table without data
  * @retval EF_ERR_KIND       not a G1 cubic table
@@ -74,7 +87,17 @@ int ef_seg_g1_cubic(const ef_table_t *tbl, const ef_endpoint_t *e0, const ef_end
  * @retval EF_ERR_DEGENERATE chord shorter than ef_normalize() accepts
  */
 int ef_seg_g1_cubic_xy(const ef_table_t *tbl, const ef_endpoint_t *e0, const ef_endpoint_t *e1,
-                       ef_seg_t *out);
+                       ef_seg_xy_t *out);
+
+/**
+ * @brief The general form (ef_seg_t) of a planar segment, for code that takes segments of
+ * any kind: the control points in 3-D, degree 3, the DOFs, flags and clamp bits, and a norm
+ * with alpha and beta as looked up, the chord |b3 - b0| and its direction, and the unit
+ * tangents along the handles (b1 - b0, b3 - b2). Not on the constant-time path.
+ * @retval EF_OK
+ * @retval EF_ERR_ARG NULL pointer (out zero when given)
+ */
+int ef_seg_xy_expand(const ef_seg_xy_t *xy, ef_seg_t *out);
 
 /**
  * @brief G2 quintic through the table. Constant instruction count for valid input.
