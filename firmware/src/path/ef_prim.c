@@ -16,6 +16,9 @@
 #define EF_TWO_PI      6.28318530717958648f
 #define EF_FLT_EPS     1.1920929e-7f
 
+/* Inlined whatever the optimizer weighs: a frame's call layer costs the M4 its arguments. */
+#define EF_PRIM_INLINE static inline __attribute__((always_inline))
+
 /* Finite without libm: NaN fails x == x, inf fails x - x == 0. */
 static inline int prim_finite(float x)
 {
@@ -268,9 +271,8 @@ static void prim_line_frame(ef_vec3_t start, const ef_prim_t *pr, float s, ef_fr
 /* An arc's frame at the clamped arc length sc, fraction frac = sc / len of it, the angle's
  * sine sn and cosine cs: shared by ef_prim_frame_geo() and ef_prim_frame_end_geo(), which
  * differ only in where the sine and cosine come from. */
-static inline __attribute__((always_inline)) void
-prim_arc_frame(ef_vec3_t start, const ef_prim_t *pr, const ef_prim_geo_t *g, float sc, float frac,
-               float sn, float cs, ef_frame_t *out)
+EF_PRIM_INLINE void prim_arc_frame(ef_vec3_t start, const ef_prim_t *pr, const ef_prim_geo_t *g,
+                                   float sc, float frac, float sn, float cs, ef_frame_t *out)
 {
     float len = g->len;
     ef_vec3_t rad;

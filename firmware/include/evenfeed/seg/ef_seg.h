@@ -71,10 +71,14 @@ typedef struct {
  * Reads p.x, p.y, t.x, t.y of both ends and e0->p.z only: e1->p.z is taken as e0->p.z and
  * t.z as 0 (the caller knows its move lies in an XY plane; nothing here tests it). It
  * accepts and refuses exactly what ef_seg_g1_cubic() does on such data, with the same error
- * codes. Its angles come from the chord and tangents as given, not from unit vectors, so
- * they differ from ef_seg_g1_cubic()'s by a few ulp (test_fw seg_xy: alpha and beta within
- * 2e-6 rad, control points within 1e-5 of the chord plus 4 ulp of the coordinates; the same
- * clamp bits).
+ * codes, and the same flags and clamp bits unless an angle lies within its rounding of a
+ * partial table's edge (a fold table never clamps). Its angles come from the chord and tangents as
+ * given, not from unit vectors, by an arc tangent of its own (0, pi/2 and pi exact): within 1e-6
+ * rad of ef_seg_g1_cubic()'s (4.8e-7 measured). The DOFs are the table's at those angles, so they
+ * are not held to the 3-D path's: near a reversal the table's slope turns an ulp of angle into 1e-5
+ * of the chord, and at an exact reversal (both tangents against the chord) the two mirror-image
+ * optima have swapped DOFs and either may be taken. test_fw seg_xy and bench_ct g1p check all of it
+ * (tests/bench/ct_cases.h: ct_xy_diff()).
  * @param tbl   G1 cubic table
  * @param e0,e1 end data (p.x, p.y, t.x, t.y of both; p.z of e0)
  * @param out   planar segment, in the plane z = e0->p.z
