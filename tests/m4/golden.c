@@ -190,6 +190,22 @@ static void gd_seg(int rc, const ef_seg_t *s)
     }
 }
 
+static void gd_seg_xy(int rc, const ef_seg_xy_t *s)
+{
+    gd_i(rc);
+    for (int i = 0; i < 4; i++) {
+        gd_f(s->x[i]);
+        gd_f(s->y[i]);
+    }
+    gd_f(s->z);
+    gd_f(s->dof[0]);
+    gd_f(s->dof[1]);
+    gd_f(s->alpha);
+    gd_f(s->beta);
+    gd_u(s->flags);
+    gd_u(s->clamp);
+}
+
 static void gd_move(const ef_move_t *m)
 {
     for (int i = 0; i < 6; i++)
@@ -377,6 +393,17 @@ static void gd_case_seg(void)
     memset(&s, 0, sizeof s);
     gd_seg(ef_seg_g1_cubic(&ef_tbl_g2_default, &e0, &e1, &s), &s);
     gd_case("seg_g1_cubic", GD_N_SEG + 1u);
+
+    /* the planar path on the same end data (the 3-D ones read as their x, y and e0's z) */
+    static ef_seg_xy_t xy;
+    gd_seed(0x2001u);
+    for (uint32_t i = 0; i < GD_N_SEG; i++) {
+        gd_ends(i, 0, &e0, &e1);
+        memset(&xy, 0, sizeof xy);
+        gd_seg_xy(ef_seg_g1_cubic_xy(&ef_tbl_g1_default, &e0, &e1, &xy), &xy);
+        gd_trace(i);
+    }
+    gd_case("seg_g1_cubic_xy", GD_N_SEG);
 
     gd_seed(0x2002u);
     for (uint32_t i = 0; i < GD_N_SEG; i++) {
