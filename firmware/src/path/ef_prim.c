@@ -293,9 +293,9 @@ EF_PRIM_INLINE void prim_arc_frame(ef_vec3_t start, const ef_prim_t *pr, const e
     out->kappa = g->r0 * q * q;
 }
 
-/* The same with the arc's geometry from ef_prim_geo() (contract in ef_path.h). */
-int ef_prim_frame_geo(ef_vec3_t start, const ef_prim_t *pr, const ef_prim_geo_t *geo, float s,
-                      ef_frame_t *out)
+/* What both frame entry points start with: out zeroed (so a refused call leaves nothing to
+ * drive), the arguments checked. */
+EF_PRIM_INLINE int prim_frame_begin(const ef_prim_t *pr, const ef_prim_geo_t *geo, ef_frame_t *out)
 {
     if (!out)
         return EF_ERR_ARG;
@@ -303,6 +303,16 @@ int ef_prim_frame_geo(ef_vec3_t start, const ef_prim_t *pr, const ef_prim_geo_t 
     *out = zero;
     if (!pr || (pr->kind != EF_PRIM_LINE && pr->kind != EF_PRIM_ARC) || !geo)
         return EF_ERR_ARG;
+    return EF_OK;
+}
+
+/* The same with the arc's geometry from ef_prim_geo() (contract in ef_path.h). */
+int ef_prim_frame_geo(ef_vec3_t start, const ef_prim_t *pr, const ef_prim_geo_t *geo, float s,
+                      ef_frame_t *out)
+{
+    int rc = prim_frame_begin(pr, geo, out);
+    if (rc != EF_OK)
+        return rc;
     if (pr->kind == EF_PRIM_LINE) {
         prim_line_frame(start, pr, s, out);
         return EF_OK;
@@ -323,12 +333,9 @@ int ef_prim_frame_geo(ef_vec3_t start, const ef_prim_t *pr, const ef_prim_geo_t 
 int ef_prim_frame_end_geo(ef_vec3_t start, const ef_prim_t *pr, const ef_prim_geo_t *geo,
                           int at_end, ef_frame_t *out)
 {
-    if (!out)
-        return EF_ERR_ARG;
-    ef_frame_t zero = {{0.0f, 0.0f, 0.0f}, {0.0f, 0.0f, 0.0f}, {0.0f, 0.0f, 0.0f}, 0.0f};
-    *out = zero;
-    if (!pr || (pr->kind != EF_PRIM_LINE && pr->kind != EF_PRIM_ARC) || !geo)
-        return EF_ERR_ARG;
+    int rc = prim_frame_begin(pr, geo, out);
+    if (rc != EF_OK)
+        return rc;
     if (pr->kind == EF_PRIM_LINE) {
         prim_line_frame(start, pr, at_end ? 3.4e38f : 0.0f, out);
         return EF_OK;
