@@ -576,6 +576,49 @@ static void test_groups(void)
 
 /* ------------------------------------------------------------------ (3) window */
 
+/* ef_plan_pull_now(): releases with a short window, interleaved with pushes, as a caller
+ * whose input trickles in; speeds chain, the window's last group ends at rest, and every
+ * released law is within the limits (ef_plan_timelaw()'s own check is the chain below). */
+static void test_pull_now(void)
+{
+    static ef_plan_t p;
+    ef_limits_t lim = mk_limits(1000, 200, 5000, 0.5f);
+    EF_CHECK_EQ(ef_plan_init(&p, &lim), EF_OK);
+    ef_move_t o;
+    EF_CHECK_EQ(ef_plan_pull_now(&p, &o), EF_ERR_AGAIN); /* empty */
+    EF_CHECK_EQ(ef_plan_pull_now(NULL, &o), EF_ERR_ARG);
+    float v_prev = 0.0f;
+    int pulled = 0, rests = 0;
+    uint32_t next_seq = 0;
+    for (int i = 0; i < 200; i++) {
+        ef_move_t m = mk_line(ef_v3((float)i, 0, 0), ef_v3((float)i + 1, 0, 0), 40, 0);
+        EF_CHECK_EQ(ef_plan_push(&p, &m), EF_OK);
+        /* three in the window at most: release the oldest now */
+        while (p.mcount > 3 || (i % 17 == 16 && p.mcount > 0)) {
+            EF_CHECK_EQ(ef_plan_pull_now(&p, &o), EF_OK);
+            EF_CHECK_EQ(o.seq, next_seq);
+            next_seq++;
+            EF_CHECK_NEAR(o.v_entry, v_prev, 1e-4);
+            EF_CHECK(o.v_exit >= 0.0f && o.v_exit <= o.v_max * 1.0001f);
+            EF_CHECK(o.duration > 0.0f);
+            v_prev = o.v_exit;
+            pulled++;
+            if (p.mcount == 0) {
+                EF_CHECK_EQ(o.v_exit, 0.0f); /* the window ran empty: at rest */
+                rests++;
+            }
+        }
+    }
+    while (ef_plan_pull_now(&p, &o) == EF_OK) {
+        EF_CHECK_NEAR(o.v_entry, v_prev, 1e-4);
+        v_prev = o.v_exit;
+        pulled++;
+    }
+    EF_CHECK_EQ(pulled, 200);
+    EF_CHECK_EQ(v_prev, 0.0f);
+    EF_CHECK(rests >= 10);
+}
+
 static void test_window(void)
 {
     static ef_plan_t p;
@@ -1300,6 +1343,7 @@ int main(int argc, char **argv)
         {"plan", chain_case_0},
         {"plan", chain_case_2000},
         {"plan", test_window},
+        {"plan", test_pull_now},
         {"plan", test_axis_limits},
         {"plan", test_curved_share},
         {"plan", test_curvature_jump},

@@ -886,8 +886,9 @@ static int pl_release_start(ef_plan_t *p)
     int rc = pl_timelaw_up(r, r->j_max, up);
     if (rc != EF_OK)
         return rc; /* not reachable for data push accepted; state unchanged */
-    if (g->flags & EF_MOVE_STOP_END)
-        r->v_exit = 0.0f; /* exact: the ramp ends at rest (dropped ramps only for vc ~ 0) */
+    if ((g->flags & EF_MOVE_STOP_END) || p->count == 1u)
+        r->v_exit = 0.0f; /* exact: the ramp ends at rest (dropped ramps only for vc ~ 0);
+                             the window's newest group is planned to (ef_plan_pull_now()) */
     p->rel_n = g->n;
     p->rel_s = 0.0f;
     p->rel_k = 0;
@@ -896,13 +897,14 @@ static int pl_release_start(ef_plan_t *p)
     return EF_OK;
 }
 
-/* Release the oldest move with its final speeds and time law (see ef_plan.h). */
-int ef_plan_pull(ef_plan_t *p, ef_move_t *out)
+/* Release the oldest move with its final speeds and time law (see ef_plan.h); now: whatever
+ * the window holds (ef_plan_pull_now()). */
+static int pl_pull(ef_plan_t *p, ef_move_t *out, int now)
 {
     if (!p || !out)
         return EF_ERR_ARG;
     if (p->rel_n == 0u) {
-        if (p->count == 0 || !(p->mcount >= EF_LOOKAHEAD || p->nstops > 0 || p->finished))
+        if (p->count == 0 || !(now || p->mcount >= EF_LOOKAHEAD || p->nstops > 0 || p->finished))
             return EF_ERR_AGAIN;
         int rc = pl_release_start(p);
         if (rc != EF_OK)
@@ -968,4 +970,14 @@ int ef_plan_pull(ef_plan_t *p, ef_move_t *out)
     }
     *out = m;
     return EF_OK;
+}
+
+int ef_plan_pull(ef_plan_t *p, ef_move_t *out)
+{
+    return pl_pull(p, out, 0);
+}
+
+int ef_plan_pull_now(ef_plan_t *p, ef_move_t *out)
+{
+    return pl_pull(p, out, 1);
 }

@@ -1324,6 +1324,17 @@ int ef_smooth_pull(ef_smooth_t *s, ef_move_t *m)
     return rc;
 }
 
+/* The planner's early release (ef_plan_pull_now()). */
+int ef_smooth_pull_now(ef_smooth_t *s, ef_move_t *m)
+{
+    if (!s || !m)
+        return EF_ERR_ARG;
+    int rc = ef_plan_pull_now(&s->plan, m);
+    if (rc == EF_OK)
+        s->st.moves++;
+    return rc;
+}
+
 /* Copy of the counters. */
 ef_smooth_stats_t ef_smooth_stats(const ef_smooth_t *s)
 {

@@ -249,6 +249,20 @@ int ef_plan_finish(ef_plan_t *p);
  */
 int ef_plan_pull(ef_plan_t *p, ef_move_t *out);
 
+/**
+ * @brief ef_plan_pull() whatever the window holds: for a caller whose moves are about to run
+ * out while input still trickles in (a LinuxCNC task feeding one move per servo period).
+ * Never unsafe: the backward pass plans the newest move to end at rest, so a move released
+ * early exits at a speed from which what is in the window can still stop; releasing the
+ * window's only group releases its last member with v_exit 0. The cost is look-ahead: a
+ * later push cannot raise a released move's speeds, and pushes after the window ran empty
+ * start from rest.
+ * @retval EF_OK        out filled
+ * @retval EF_ERR_ARG   NULL pointer
+ * @retval EF_ERR_AGAIN the window is empty
+ */
+int ef_plan_pull_now(ef_plan_t *p, ef_move_t *out);
+
 /** @brief Free places in the window (0 for NULL). */
 uint32_t ef_plan_space(const ef_plan_t *p);
 

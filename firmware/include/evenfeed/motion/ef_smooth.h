@@ -329,6 +329,16 @@ int ef_smooth_work(ef_smooth_t *s);
  */
 int ef_smooth_pull(ef_smooth_t *s, ef_move_t *m);
 
+/**
+ * @brief ef_smooth_pull() that releases the planner's oldest move even while its window is
+ * not full (ef_plan_pull_now()): for a caller about to run out of moves while its input
+ * still comes in. What is still in the geometry stage is not released (a finish does that).
+ * @retval EF_OK        m filled
+ * @retval EF_ERR_ARG   NULL pointer
+ * @retval EF_ERR_AGAIN the planner holds no move
+ */
+int ef_smooth_pull_now(ef_smooth_t *s, ef_move_t *m);
+
 /** @brief Counters so far (zeroes for NULL). */
 ef_smooth_stats_t ef_smooth_stats(const ef_smooth_t *s);
 
