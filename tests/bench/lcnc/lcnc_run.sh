@@ -12,6 +12,12 @@
 #   EF_LCNC_LOCK     lock file serializing LinuxCNC runs (default /tmp/evenfeed-linuxcnc.lock;
 #                    only one LinuxCNC can run on a machine)
 #   EF_LCNC_KEEP     set to 1 to keep the scratch directory (its path is printed)
+#   EF_LCNC_TPMOD    planner module to load instead of LinuxCNC's ([TRAJ]TPMOD; it must be
+#                    installed in LinuxCNC's module directory: docs/linuxcnc.md)
+#   EF_LCNC_TRACE    with EF_LCNC_TPMOD=evenfeedtp: write the module's record of motmod's
+#                    calls to this file (tests/lcnc/ replays such traces)
+#   EF_LCNC_INI_SET  extra INI settings (keys that occur once in machine.ini), one "SECTION KEY VALUE" per line
+#   EF_LCNC_ACTIONS  what run_lcnc.py does while the program runs (see there)
 # Exit status: 0 done; 77 LinuxCNC (linuxcnc, halsampler, Debian's python3 with the
 # linuxcnc module) is not installed; 1 usage; 2 the run failed; 124 timeout (the LinuxCNC
 # process group this script started was killed).
@@ -107,6 +113,21 @@ trap 'exit 130' INT TERM
 # LinuxCNC writes its tool table, parameter and position files next to the INI file: it
 # runs on copies in the scratch directory, never in the source tree.
 cp "$here/machine.ini" "$here/machine.hal" "$here/machine.tbl" "$here/run_lcnc.py" "$run/"
+# Another planner module ([TRAJ]TPMOD, e.g. evenfeedtp: docs/linuxcnc.md) and other INI
+# settings: "SECTION KEY VALUE" lines in EF_LCNC_INI_SET, each added to its section.
+tpmod=${EF_LCNC_TPMOD:-}
+if [ -n "$tpmod" ] && [ -n "${EF_LCNC_TRACE:-}" ]; then
+    tpmod="$tpmod trace=$run/tp.trace"
+fi
+if [ -n "$tpmod" ]; then
+    sed -i "s|^\[TRAJ\]\$|[TRAJ]\nTPMOD = $tpmod|" "$run/machine.ini"
+fi
+if [ -n "${EF_LCNC_INI_SET:-}" ]; then
+    while read -r sec key val; do
+        [ -n "$sec" ] || continue
+        sed -i "/^$key = /d; s|^\[$sec\]\$|[$sec]\n$key = $val|" "$run/machine.ini"
+    done <<<"$EF_LCNC_INI_SET"
+fi
 chmod +x "$run/run_lcnc.py"
 : >"$run/machine.var"
 
@@ -115,6 +136,7 @@ chmod +x "$run/run_lcnc.py"
 lenv=(EF_LCNC_PROGRAM="$prog" "$marker" EF_LCNC_TIMEOUT=$((limit - 60))
       RTAPI_FIFO_PATH="$run/.rtapi_fifo")
 if [ -n "${EF_LCNC_DEBUG:-}" ]; then lenv+=(EF_LCNC_DEBUG="$EF_LCNC_DEBUG"); fi
+if [ -n "${EF_LCNC_ACTIONS:-}" ]; then lenv+=(EF_LCNC_ACTIONS="$EF_LCNC_ACTIONS"); fi
 if [ "$(id -u)" = 0 ]; then
     # rtapi_app refuses to run as root without a user to fall back to
     uid=${RTAPI_UID:-65534}
@@ -161,4 +183,7 @@ if [ "$rc" -ne 0 ] || [ ! -s "$run/samples.tsv" ]; then
     exit 2
 fi
 mv -f "$run/samples.tsv" "$out"
+if [ -n "${EF_LCNC_TRACE:-}" ] && [ -n "${EF_LCNC_TPMOD:-}" ]; then
+    cp "$run/tp.trace" "$EF_LCNC_TRACE"
+fi
 grep '^run_lcnc: \(ready\|done\)' "$run/linuxcnc.log" >&2 || true

@@ -9,6 +9,12 @@ when it exits, LinuxCNC shuts down. It runs one program and writes the sampled s
   EF_LCNC_OUT       absolute path of the TSV to write (required)
   EF_LCNC_TIMEOUT   seconds the program may run before the script gives up (default 300)
   EF_LCNC_DEBUG     1: log every change of the polled task/interpreter/motion state
+  EF_LCNC_ACTIONS   what to do while the program runs (the planner module's tests,
+                    tests/lcnc/): "TRIGGER ACTION" items separated by ";", in order, each
+                    after the one before. TRIGGER: t=S (S seconds after motion is released)
+                    or line=N (motion has reached source line N); ACTION: feed=X (feed
+                    override), pause, resume or abort. After an abort the run ends once
+                    motion has come to rest with its queue empty.
 
 Sequence: estop reset, machine on, home all joints (homed in place), auto mode, feed and
 rapid override 1, open the program, start halsampler on sampler.0, enable the sampler, run
@@ -152,12 +158,61 @@ def run_program(m, timeout):
                STEP_TIMEOUT_S)
     queued = m.s.queue
     halcmd("setp", "motion.feed-inhibit", "0")
+    if run_actions(m, timeout):
+        m.wait_for("rest after the abort",
+                   lambda s: s.queue == 0 and s.inpos and s.interp_state == L.INTERP_IDLE,
+                   timeout)
+        return queued
     m.wait_for("program end",
                lambda s: (s.echo_serial_number >= serial and s.state == L.RCS_DONE
                           and s.interp_state == L.INTERP_IDLE and s.queue == 0
                           and s.exec_state == L.EXEC_DONE and s.inpos),
                timeout)
     return queued
+
+
+def parse_actions(text):
+    """EF_LCNC_ACTIONS -> [(kind, value, action, arg)]."""
+    out = []
+    for item in filter(None, (x.strip() for x in text.split(";"))):
+        w = item.split()
+        if len(w) != 2 or "=" not in w[0]:
+            raise RunError("bad EF_LCNC_ACTIONS item %r" % item)
+        kind, val = w[0].split("=", 1)
+        act, _, arg = w[1].partition("=")
+        if kind not in ("t", "line") or act not in ("feed", "pause", "resume", "abort"):
+            raise RunError("bad EF_LCNC_ACTIONS item %r" % item)
+        out.append((kind, float(val), act, float(arg) if arg else None))
+    return out
+
+
+def run_actions(m, timeout):
+    """Do EF_LCNC_ACTIONS while the program runs; True when one of them was an abort."""
+    L = linuxcnc
+    t0 = time.monotonic()
+    aborted = False
+    for kind, val, act, arg in parse_actions(os.environ.get("EF_LCNC_ACTIONS", "")):
+        if kind == "t":
+            m.wait_for("t=%g" % val, lambda s: time.monotonic() - t0 >= val, timeout)
+        else:
+            m.wait_for("line %d" % val, lambda s: s.motion_line >= val, timeout)
+        log("action at %s=%g (%.3f s): %s%s" % (kind, val, time.monotonic() - t0, act,
+                                                 "" if arg is None else "=%g" % arg))
+        # (task completes these commands only when the program ends: wait for their
+        # effect in the status instead of wait_complete())
+        if act == "feed":
+            m.c.feedrate(arg)
+            m.wait_for("feed override", lambda s: abs(s.feedrate - arg) < 1e-9, STEP_TIMEOUT_S)
+        elif act == "pause":
+            m.c.auto(L.AUTO_PAUSE)
+            m.wait_for("pause", lambda s: s.paused, STEP_TIMEOUT_S)
+        elif act == "resume":
+            m.c.auto(L.AUTO_RESUME)
+            m.wait_for("resume", lambda s: not s.paused, STEP_TIMEOUT_S)
+        else:
+            m.c.abort()
+            aborted = True
+    return aborted
 
 
 def convert(raw_path, out_path):

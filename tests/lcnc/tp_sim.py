@@ -1,0 +1,186 @@
+#!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
+"""evenfeed's planner module (evenfeedtp.so, [TRAJ]TPMOD) inside LinuxCNC's simulator.
+
+Usage:
+  tp_sim.py --evenfeed PATH --module PATH --work DIR [--record DIR] [CASE...]
+
+Installs the module in LinuxCNC's module directory (rtapi_app loads modules only from
+there; this needs write access, as root in CI), then runs each case on the simulated XYZ
+benchmark machine (tests/bench/lcnc/, 1 ms servo period, 100 mm/s and 1000 mm/s^2 per axis)
+through tests/bench/lcnc/lcnc_run.sh, and samples every servo period's commanded position:
+
+  mix        tp_mix.ngc with LinuxCNC's own planner and with evenfeedtp
+  override   tp_long.ngc with evenfeedtp, feed override 100 % -> 30 % -> 150 % (the INI's
+             MAX_FEED_OVERRIDE 1.5), then a feed hold (pause) and resume
+  abort      tp_long.ngc with evenfeedtp, aborted once motion reaches the blended corner
+             into line 12
+
+Checks on every evenfeedtp run, from the sampled positions: each setpoint within P of the
+programmed path (evenfeed's G-code reader gives the path); per-axis speed, acceleration
+(1 ms second differences) and jerk (4 ms third differences) within the machine's limits
+(the jerk limit is the module's default, 20/s x the acceleration) plus the float32
+setpoints' rounding floor; no step larger than the speed limit allows; the program end
+reached (mix, override), or rest on the path (abort). LinuxCNC's own run (mix) must end at
+the same point. Prints one line per run. Exit 0 when every check holds, 1 when one fails,
+2 when a run is broken, 77 when LinuxCNC is not installed or the module cannot be
+installed. --record DIR keeps the module's call traces (DIR/CASE.trace) for test_tp.
+"""
+
+import argparse
+import filecmp
+import math
+import os
+import shutil
+import subprocess
+import sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+BENCH = os.path.join(HERE, "..", "bench", "lcnc")
+sys.path.insert(0, BENCH)
+import compare as C  # noqa: E402  (the benchmark's path and trajectory tools)
+
+MODDIR = "/usr/lib/linuxcnc/modules"
+JMAX = 20000.0  # the module's default jerk limit on this machine (20/s x 1000 mm/s^2)
+CASES = {
+    "mix": ("tp_mix.ngc", "", ""),
+    "override": ("tp_long.ngc", "t=0.8 feed=0.3; t=2.0 feed=1.5; t=3.0 pause; t=3.6 resume",
+                 "DISPLAY MAX_FEED_OVERRIDE 1.5"),
+    "abort": ("tp_long.ngc", "line=12 abort", ""),
+}
+
+
+class Broken(Exception):
+    pass
+
+
+def install(module):
+    dst = os.path.join(MODDIR, "evenfeedtp.so")
+    if not os.path.isdir(MODDIR):
+        return "LinuxCNC's module directory %s does not exist" % MODDIR
+    if os.path.exists(dst) and filecmp.cmp(module, dst, shallow=False):
+        return None
+    try:
+        shutil.copyfile(module, dst + ".tmp")
+        os.replace(dst + ".tmp", dst)
+    except OSError as ex:
+        return "cannot install %s: %s (run as root, or ./dev linuxcnc)" % (dst, ex)
+    return None
+
+
+def run(prog, out, tpmod, actions, ini_set, trace):
+    env = dict(os.environ)
+    for k in ("EF_LCNC_TPMOD", "EF_LCNC_ACTIONS", "EF_LCNC_INI_SET", "EF_LCNC_TRACE"):
+        env.pop(k, None)
+    if tpmod:
+        env["EF_LCNC_TPMOD"] = tpmod
+    if actions:
+        env["EF_LCNC_ACTIONS"] = actions
+    if ini_set:
+        env["EF_LCNC_INI_SET"] = ini_set
+    if trace:
+        env["EF_LCNC_TRACE"] = trace
+    env.setdefault("EF_LCNC_TIMEOUT", "240")
+    r = subprocess.run(["bash", os.path.join(BENCH, "lcnc_run.sh"), prog, out], env=env,
+                       stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                       universal_newlines=True)
+    if r.returncode == 77:
+        raise C.NotInstalled(r.stdout.strip())
+    if r.returncode != 0:
+        raise Broken("lcnc_run.sh %s (%s): exit %d:\n%s"
+                     % (prog, tpmod or "tpmod", r.returncode, r.stdout.strip()))
+    with open(out) as f:
+        traj = C.load_lcnc(f.read().splitlines())
+    # evenfeed's setpoints are float32: their rounding, not halsampler's 6 decimals, is
+    # the floor of the differences
+    big = max(max(abs(c) for c in p) for p in traj.pos)
+    traj.e = 0.5 * C.ulp32(big) + 0.5e-6
+    return traj
+
+
+class Checker:
+    def __init__(self):
+        self.failed = 0
+
+    def check(self, ok, what):
+        if not ok:
+            self.failed += 1
+            print("  FAIL: %s" % what)
+
+
+def largest_step(traj):
+    return max(math.dist(traj.pos[k], traj.pos[k - 1]) for k in range(1, len(traj.pos)))
+
+
+def check_run(ck, name, program, traj, aborted):
+    st = C.motion_stats(traj)
+    fl = C.sampling_floor(traj.e)
+    dev, dev_rel, over = program.deviation(traj)
+    step = largest_step(traj)
+    end = program.prims[-1].b if hasattr(program.prims[-1], "b") else None
+    print("%-9s evenfeedtp: %.3f s, a %.0f mm/s^2 (limit %.0f + %.1f), jerk over 4 ms %.0f "
+          "mm/s^3 (limit %.0f + %.0f), 1 ms %.0f, largest step %.4f mm, path within %.2f P "
+          "(%d over), end %s"
+          % (name, st["cycle"], st["a"], C.AMAX, fl["a"], st["jb"], JMAX, fl["jb"], st["j"],
+             step, dev_rel, over, tuple(round(c, 4) for c in st["end"])))
+    ck.check(st["a"] <= C.AMAX + fl["a"], "%s: acceleration %.1f above the limit" % (name, st["a"]))
+    ck.check(st["jb"] <= JMAX + fl["jb"], "%s: jerk %.0f above the limit" % (name, st["jb"]))
+    ck.check(step <= C.VMAX * math.sqrt(3) * C.DT * 1.001, "%s: a step of %.4f mm" % (name, step))
+    ck.check(over == 0, "%s: %d setpoints farther than P from the path" % (name, over))
+    if not aborted:
+        ck.check(end is not None and math.dist(st["end"], end) < 1e-3,
+                 "%s: ends at %s, not at the program end %s" % (name, st["end"], end))
+    else:
+        ck.check(traj.pos[-1] == traj.pos[-2], "%s: not at rest after the abort" % name)
+    return st
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("cases", nargs="*", metavar="CASE")
+    ap.add_argument("--evenfeed", required=True, help="the evenfeed binary (G-code reader)")
+    ap.add_argument("--module", required=True, help="evenfeedtp.so as built")
+    ap.add_argument("--work", required=True, help="scratch directory")
+    ap.add_argument("--record", metavar="DIR", help="keep the module's call traces here")
+    args = ap.parse_args()
+    cases = args.cases or list(CASES)
+    unknown = [c for c in cases if c not in CASES]
+    if unknown:
+        print("tp_sim: unknown case %s (known: %s)" % (", ".join(unknown), ", ".join(CASES)))
+        return 2
+    os.makedirs(args.work, exist_ok=True)
+    why = install(args.module)
+    if why:
+        print("tp_sim: %s (skipped)" % why)
+        return 77
+    ck = Checker()
+    try:
+        for name in cases:
+            prog_name, actions, ini_set = CASES[name]
+            prog = os.path.join(HERE, "programs", prog_name)
+            program = C.Program(args.evenfeed, prog)
+            trace = os.path.join(args.record, name + ".trace") if args.record else None
+            out = os.path.join(args.work, name + ".tsv")
+            traj = run(prog, out, "evenfeedtp", actions, ini_set, trace)
+            st = check_run(ck, name, program, traj, name == "abort")
+            if name == "mix":
+                lc = run(prog, out, "", "", "", None)
+                ls = C.motion_stats(lc)
+                print("%-9s LinuxCNC's planner: %.3f s (evenfeedtp / LinuxCNC %.2f), a %.0f, "
+                      "jerk over 4 ms %.0f, end %s"
+                      % (name, ls["cycle"], st["cycle"] / ls["cycle"], ls["a"], ls["jb"],
+                         tuple(round(c, 4) for c in ls["end"])))
+                ck.check(math.dist(ls["end"], st["end"]) < 1e-3,
+                         "mix: the two planners end at different points")
+    except C.NotInstalled as ex:
+        print("tp_sim: LinuxCNC is not installed (skipped): %s" % ex)
+        return 77
+    except (Broken, C.Broken) as ex:
+        print("tp_sim: broken run: %s" % ex)
+        return 2
+    print("tp_sim: %d check(s) failed" % ck.failed if ck.failed else "tp_sim: all checks hold")
+    return 1 if ck.failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
