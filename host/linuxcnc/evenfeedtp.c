@@ -181,7 +181,7 @@ int rtapi_app_main(void)
         if (!tr)
             rtapi_print_msg(RTAPI_MSG_ERR, "evenfeedtp: cannot write trace %s\n", trace);
         else
-            fprintf(tr, "# evenfeed tp trace 1\n");
+            fprintf(tr, "# evenfeed tp trace 2\n");
     }
     hal_ready(comp_id);
     return 0;
@@ -406,21 +406,20 @@ int tpAddLine(TP_STRUCT *const tp, EmcPose end, int canon_motion_type, double ve
               double ini_maxvel, double acc, unsigned char enables, char atspeed, int indexrotary,
               struct state_tag_t tag)
 {
-    (void)acc;
     if (!tp)
         return -1;
     if (tr) {
         tr_flush();
         tr_pose("line", &end);
-        fprintf(tr, " %d %.17g %.17g %d %d %d\n", canon_motion_type, vel, ini_maxvel, (int)enables,
-                (int)atspeed, indexrotary);
+        fprintf(tr, " %d %.17g %.17g %d %d %d %.17g\n", canon_motion_type, vel, ini_maxvel,
+                (int)enables, (int)atspeed, indexrotary, acc);
     }
     if (spindle_sync)
         return refuse_sync();
     double e[EF_TP_AXES];
     pose_to(&end, e);
     int type = indexrotary >= 0 ? EF_TP_MOTION_INDEXROTARY : canon_motion_type;
-    int rc = ef_tp_add_line(&ef, e, type, vel, ini_maxvel, enables, atspeed);
+    int rc = ef_tp_add_line(&ef, e, type, vel, ini_maxvel, acc, enables, atspeed);
     return add_result(tp, rc, tag);
 }
 

@@ -206,8 +206,13 @@ static int replay_file(const char *path, FILE *dump)
             if (rp.spindle_sync) {
                 rc = EF_ERR_ARG;
             } else if (cmd[0] == 'l') {
+                double acc; /* the line's acceleration along it (after indexrotary) */
+                if (sscanf(rest + k, "%lf", &acc) != 1) {
+                    bad = 1;
+                    break;
+                }
                 rc = ef_tp_add_line(&rp.tp, p, ir >= 0 ? EF_TP_MOTION_INDEXROTARY : type, x[0],
-                                    x[1], en, at);
+                                    x[1], acc, en, at);
             } else {
                 double c[3], nn[3];
                 if (sscanf(rest + k, "%lf %lf %lf %lf %lf %lf", &c[0], &c[1], &c[2], &nn[0], &nn[1],
@@ -285,7 +290,7 @@ static void test_replay(void)
         /* the end: everything queued ran to its end (or an abort brought it to rest) */
         EF_CHECK(rp.tp.qn == 0);
         if (!rp.aborted && rp.refused == 0)
-            for (int k = 0; k < 3; k++)
+            for (int k = 0; k < EF_TP_AXES; k++)
                 EF_CHECK_NEAR(rp.last_status_pos[k], rp.tp.goal[k], 1e-4);
     }
 }
@@ -337,7 +342,7 @@ static void s_zigzag(int n, double x0)
         p[1] = (i % 2) ? 0.0 : 1.0 + 0.1 * (i % 3);
         p[2] = 0.1 * (i % 4);
         ef_tp_set_id(&tps, 100 + i);
-        EF_CHECK_EQ(ef_tp_add_line(&tps, p, EF_TP_MOTION_FEED, 50.0, 100.0, 0, 0), EF_OK);
+        EF_CHECK_EQ(ef_tp_add_line(&tps, p, EF_TP_MOTION_FEED, 50.0, 100.0, 1000.0, 0, 0), EF_OK);
     }
 }
 
@@ -417,7 +422,7 @@ static void test_abort(void)
     double at[3] = {st.pos[0], st.pos[1], st.pos[2]};
     ef_tp_abort(&tps);
     EF_CHECK_EQ(
-        ef_tp_add_line(&tps, (double[EF_TP_AXES]){1, 1, 1}, EF_TP_MOTION_FEED, 10, 100, 0, 0),
+        ef_tp_add_line(&tps, (double[EF_TP_AXES]){1, 1, 1}, EF_TP_MOTION_FEED, 10, 100, 1000, 0, 0),
         EF_ERR_ARG); /* refused while aborting */
     long n = s_run(1.0, 5000, &st);
     EF_CHECK(st.done);
@@ -430,7 +435,7 @@ static void test_abort(void)
     chk_limits(&chks, "abort mid-blend");
     /* new moves start where the abort left the machine */
     double p[EF_TP_AXES] = {st.pos[0] + 5.0, st.pos[1], st.pos[2]};
-    EF_CHECK_EQ(ef_tp_add_line(&tps, p, EF_TP_MOTION_FEED, 20, 100, 0, 0), EF_OK);
+    EF_CHECK_EQ(ef_tp_add_line(&tps, p, EF_TP_MOTION_FEED, 20, 100, 1000, 0, 0), EF_OK);
     s_run(1.0, 5000, &st);
     EF_CHECK(st.done);
     EF_CHECK_NEAR(st.pos[0], p[0], 1e-4);
@@ -451,7 +456,8 @@ static void test_stream(void)
             double a = 0.01 * (added + 1), p[EF_TP_AXES] = {0};
             p[0] = 30.0 * sin(a) + 0.2 * (added + 1);
             p[1] = 30.0 * (1.0 - cos(a));
-            EF_CHECK_EQ(ef_tp_add_line(&tps, p, EF_TP_MOTION_FEED, 80.0, 100.0, 0, 0), EF_OK);
+            EF_CHECK_EQ(ef_tp_add_line(&tps, p, EF_TP_MOTION_FEED, 80.0, 100.0, 1000.0, 0, 0),
+                        EF_OK);
             added++;
         }
         s_cycle(1.0, &st);
@@ -476,7 +482,7 @@ static void test_dio(void)
             EF_CHECK_EQ(ef_tp_set_dout(&tps, 5, 1), EF_OK);
             EF_CHECK_EQ(ef_tp_set_dout(&tps, 6, 0), EF_OK);
         }
-        EF_CHECK_EQ(ef_tp_add_line(&tps, p, EF_TP_MOTION_FEED, 50.0, 100.0, 0, 0), EF_OK);
+        EF_CHECK_EQ(ef_tp_add_line(&tps, p, EF_TP_MOTION_FEED, 50.0, 100.0, 1000.0, 0, 0), EF_OK);
     }
     EF_CHECK_EQ(ef_tp_set_dout(&tps, 64, 1), EF_ERR_ARG);
     EF_CHECK_EQ(ef_tp_set_aout(&tps, 3, NAN), EF_ERR_ARG);
@@ -530,26 +536,106 @@ static void test_arc(void)
     }
 }
 
+static void test_aux(void)
+{
+    /* XYZ, then A alone (an indexing turn), then XYZ again: A's move runs between rests
+     * within its own limits; X Y Z with A together is refused */
+    s_init(1.0);
+    chk_t ca;
+    ef_tp_cfg_t ac = tps.cfg; /* A's limits in the checker's X slot: 90 deg/s, 360 deg/s^2 */
+    ac.v_axis[0] = 90.0;
+    ac.a_axis[0] = 360.0;
+    ac.j_max = 20.0 * 360.0;
+    chk_init(&ca, &ac);
+    s_zigzag(4, 0.0);
+    double p[EF_TP_AXES] = {16.0, 0.0, 0.3, 120.0};
+    EF_CHECK_EQ(ef_tp_add_line(&tps, p, EF_TP_MOTION_FEED, 90.0, 90.0, 360.0, 0, 0), EF_OK);
+    double q[EF_TP_AXES] = {20.0, 2.0, 0.3, 120.0};
+    EF_CHECK_EQ(ef_tp_add_line(&tps, q, EF_TP_MOTION_FEED, 50.0, 100.0, 1000.0, 0, 0), EF_OK);
+    double r[EF_TP_AXES] = {25.0, 2.0, 0.3, 150.0};
+    EF_CHECK_EQ(ef_tp_add_line(&tps, r, EF_TP_MOTION_FEED, 50.0, 100.0, 1000.0, 0, 0), EF_ERR_ARG);
+    EF_CHECK(strstr(ef_tp_msg(&tps), "together") != NULL);
+    double c[3] = {20, 0, 0}, n[3] = {0, 0, 1};
+    EF_CHECK_EQ(ef_tp_add_arc(&tps, r, c, n, 0, EF_TP_MOTION_ARC, 50, 100, 0, 0), EF_ERR_ARG);
+    double z[EF_TP_AXES] = {20.0, 2.0, 0.3, 120.0, 0, 0, 0, 0, 1e-300};
+    EF_CHECK_EQ(ef_tp_add_line(&tps, z, EF_TP_MOTION_FEED, 50.0, 100.0, 1000.0, 0, 0),
+                EF_ERR_DEGENERATE); /* W by nothing: zero length */
+    ef_tp_status_t st;
+    int a_moving_xyz_still = 1, a_seen = 0;
+    double last[EF_TP_AXES] = {0};
+    for (long k = 0; k < 20000; k++) {
+        s_cycle(1.0, &st);
+        ef_tp_status_t sa = st;
+        sa.pos[0] = st.pos[3]; /* A through the checker's X */
+        sa.pos[1] = sa.pos[2] = 0.0;
+        chk_push(&ca, &sa);
+        if (k > 0 && st.pos[3] != last[3]) {
+            a_seen = 1;
+            if (st.pos[0] != last[0] || st.pos[1] != last[1] || st.pos[2] != last[2])
+                a_moving_xyz_still = 0;
+            EF_CHECK_EQ(st.exec_seq, 5);
+        }
+        memcpy(last, st.pos, sizeof last);
+        if (st.done)
+            break;
+    }
+    EF_CHECK(st.done);
+    EF_CHECK(a_seen);
+    EF_CHECK(a_moving_xyz_still);
+    EF_CHECK_NEAR(st.pos[3], 120.0, 0.0);
+    EF_CHECK_NEAR(st.pos[0], 20.0, 1e-4);
+    EF_CHECK_NEAR(st.pos[1], 2.0, 1e-4);
+    chk_limits(&chks, "XYZ around an A move");
+    chk_limits(&ca, "the A move (deg)");
+    /* an abort during an A move: A stops on its way, within its limits */
+    s_init(1.0);
+    chk_init(&ca, &ac);
+    double a1[EF_TP_AXES] = {0, 0, 0, 720.0};
+    EF_CHECK_EQ(ef_tp_add_line(&tps, a1, EF_TP_MOTION_FEED, 90.0, 90.0, 360.0, 0, 0), EF_OK);
+    for (long k = 0; k < 20000; k++) {
+        s_cycle(1.0, &st);
+        ef_tp_status_t sa = st;
+        sa.pos[0] = st.pos[3];
+        sa.pos[1] = sa.pos[2] = 0.0;
+        chk_push(&ca, &sa);
+        if (k == 3000)
+            ef_tp_abort(&tps);
+        if (k > 3000 && st.done)
+            break;
+    }
+    EF_CHECK(st.done);
+    EF_CHECK(st.pos[3] > 100.0 && st.pos[3] < 720.0);
+    chk_limits(&ca, "an abort of an A move (deg)");
+    /* and the next move starts from where A stopped */
+    double a2[EF_TP_AXES] = {0, 0, 0, 0};
+    EF_CHECK_EQ(ef_tp_add_line(&tps, a2, EF_TP_MOTION_TRAVERSE, 90.0, 90.0, 360.0, 0, 0), EF_OK);
+    s_run(1.0, 20000, &st);
+    EF_CHECK(st.done);
+    EF_CHECK_NEAR(st.pos[3], 0.0, 0.0);
+}
+
 static void test_bad(void)
 {
     s_init(1.0);
     double ok[EF_TP_AXES] = {5, 0, 0}, p[EF_TP_AXES];
     memcpy(p, ok, sizeof p);
     p[1] = NAN;
-    EF_CHECK_EQ(ef_tp_add_line(&tps, p, EF_TP_MOTION_FEED, 10, 100, 0, 0), EF_ERR_NONFINITE);
+    EF_CHECK_EQ(ef_tp_add_line(&tps, p, EF_TP_MOTION_FEED, 10, 100, 1000, 0, 0), EF_ERR_NONFINITE);
     p[1] = INFINITY;
-    EF_CHECK_EQ(ef_tp_add_line(&tps, p, EF_TP_MOTION_FEED, 10, 100, 0, 0), EF_ERR_NONFINITE);
+    EF_CHECK_EQ(ef_tp_add_line(&tps, p, EF_TP_MOTION_FEED, 10, 100, 1000, 0, 0), EF_ERR_NONFINITE);
     memcpy(p, ok, sizeof p);
     p[3] = 10.0; /* A moves */
-    EF_CHECK_EQ(ef_tp_add_line(&tps, p, EF_TP_MOTION_FEED, 10, 100, 0, 0), EF_ERR_ARG);
+    EF_CHECK_EQ(ef_tp_add_line(&tps, p, EF_TP_MOTION_FEED, 10, 100, 1000, 0, 0), EF_ERR_ARG);
     EF_CHECK(strstr(ef_tp_msg(&tps), "A B C U V W") != NULL);
-    EF_CHECK_EQ(ef_tp_add_line(&tps, ok, 99, 10, 100, 0, 0), EF_ERR_ARG);
-    EF_CHECK_EQ(ef_tp_add_line(&tps, ok, EF_TP_MOTION_INDEXROTARY, 10, 100, 0, 0), EF_ERR_ARG);
-    EF_CHECK_EQ(ef_tp_add_line(&tps, ok, EF_TP_MOTION_FEED, NAN, 100, 0, 0), EF_ERR_NONFINITE);
-    EF_CHECK_EQ(ef_tp_add_line(&tps, ok, EF_TP_MOTION_FEED, 0, 100, 0, 0), EF_ERR_FEED);
-    EF_CHECK_EQ(ef_tp_add_line(&tps, ok, EF_TP_MOTION_FEED, 10, -1, 0, 0), EF_ERR_FEED);
+    EF_CHECK_EQ(ef_tp_add_line(&tps, ok, 99, 10, 100, 1000, 0, 0), EF_ERR_ARG);
+    EF_CHECK_EQ(ef_tp_add_line(&tps, ok, EF_TP_MOTION_INDEXROTARY, 10, 100, 1000, 0, 0),
+                EF_ERR_ARG);
+    EF_CHECK_EQ(ef_tp_add_line(&tps, ok, EF_TP_MOTION_FEED, NAN, 100, 1000, 0, 0),
+                EF_ERR_NONFINITE);
+    EF_CHECK_EQ(ef_tp_add_line(&tps, ok, EF_TP_MOTION_FEED, 0, 100, 1000, 0, 0), EF_ERR_FEED);
+    EF_CHECK_EQ(ef_tp_add_line(&tps, ok, EF_TP_MOTION_FEED, 10, -1, 1000, 0, 0), EF_ERR_FEED);
     double z[EF_TP_AXES] = {0};
-    EF_CHECK_EQ(ef_tp_add_line(&tps, z, EF_TP_MOTION_FEED, 10, 100, 0, 0), EF_ERR_DEGENERATE);
+    EF_CHECK_EQ(ef_tp_add_line(&tps, z, EF_TP_MOTION_FEED, 10, 100, 1000, 0, 0), EF_ERR_DEGENERATE);
     EF_CHECK(strstr(ef_tp_msg(&tps), "zero-length") != NULL);
     double c[3] = {0, 0, 0}, n0[3] = {0, 0, 0}, n[3] = {0, 0, 1}, nn[3] = {0, NAN, 1};
     EF_CHECK_EQ(ef_tp_add_arc(&tps, ok, c, n0, 0, EF_TP_MOTION_ARC, 10, 100, 0, 0), EF_ERR_ARC);
@@ -568,7 +654,7 @@ static void test_bad(void)
         double q[EF_TP_AXES] = {0.5 * (i + 1), 0.3 * (i % 2), 0};
         if (full_at < 0 && ef_tp_full(&tps))
             full_at = i;
-        rc = ef_tp_add_line(&tps, q, EF_TP_MOTION_FEED, 50, 100, 0, 0);
+        rc = ef_tp_add_line(&tps, q, EF_TP_MOTION_FEED, 50, 100, 1000, 0, 0);
         if (rc != EF_OK)
             break;
     }
@@ -617,10 +703,9 @@ int main(int argc, char **argv)
         return replay_file(argv[2], stdout) == 0 ? EXIT_SUCCESS : EXIT_FAILURE;
     }
     static const ef_test_part_t parts[] = {
-        {"override", test_override}, {"pause", test_pause},
-        {"abort", test_abort},       {"stream", test_stream},
-        {"dio", test_dio},           {"arc", test_arc},
-        {"bad", test_bad},           {"replay TRACE...", test_replay},
+        {"override", test_override}, {"pause", test_pause}, {"abort", test_abort},
+        {"stream", test_stream},     {"dio", test_dio},     {"arc", test_arc},
+        {"aux", test_aux},           {"bad", test_bad},     {"replay TRACE...", test_replay},
     };
     return EF_TEST_RUN(argc, argv, 1, parts);
 }

@@ -15,6 +15,11 @@ through tests/bench/lcnc/lcnc_run.sh, and samples every servo period's commanded
              MAX_FEED_OVERRIDE 1.5), then a feed hold (pause) and resume
   abort      tp_long.ngc with evenfeedtp, aborted once motion reaches the blended corner
              into line 12
+  xyza       tp_xyza.ngc on the XYZA machine (tests/lcnc/xyza/): A turns alone between XYZ
+             moves; A within its own speed, acceleration and jerk limits, never moving
+             together with X Y Z, and at its programmed end
+  mixed      tp_xyza_mixed.ngc on the XYZA machine: a move of X and A together must end the
+             run with LinuxCNC's error and evenfeed's reason
 
 Checks on every evenfeedtp run, from the sampled positions: each setpoint within P of the
 programmed path (evenfeed's G-code reader gives the path); per-axis speed, acceleration
@@ -31,6 +36,7 @@ import argparse
 import filecmp
 import math
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -42,11 +48,15 @@ import compare as C  # noqa: E402  (the benchmark's path and trajectory tools)
 
 MODDIR = "/usr/lib/linuxcnc/modules"
 JMAX = 20000.0  # the module's default jerk limit on this machine (20/s x 1000 mm/s^2)
+XYZA = os.path.join(HERE, "xyza")  # the benchmark machine with a rotary A axis
+A_V, A_A = 90.0, 360.0  # its A limits (deg/s, deg/s^2); the module's A jerk 20/s x A_A
 CASES = {
     "mix": ("tp_mix.ngc", "", ""),
     "override": ("tp_long.ngc", "t=0.8 feed=0.3; t=2.0 feed=1.5; t=3.0 pause; t=3.6 resume",
                  "DISPLAY MAX_FEED_OVERRIDE 1.5"),
     "abort": ("tp_long.ngc", "line=12 abort", ""),
+    "xyza": ("tp_xyza.ngc", "", ""),
+    "mixed": ("tp_xyza_mixed.ngc", "", ""),
 }
 
 
@@ -68,10 +78,13 @@ def install(module):
     return None
 
 
-def run(prog, out, tpmod, actions, ini_set, trace):
+def run(prog, out, tpmod, actions, ini_set, trace, machine=None, expect_error=None):
     env = dict(os.environ)
-    for k in ("EF_LCNC_TPMOD", "EF_LCNC_ACTIONS", "EF_LCNC_INI_SET", "EF_LCNC_TRACE"):
+    for k in ("EF_LCNC_TPMOD", "EF_LCNC_ACTIONS", "EF_LCNC_INI_SET", "EF_LCNC_TRACE",
+              "EF_LCNC_MACHINE"):
         env.pop(k, None)
+    if machine:
+        env["EF_LCNC_MACHINE"] = machine
     if tpmod:
         env["EF_LCNC_TPMOD"] = tpmod
     if actions:
@@ -86,11 +99,22 @@ def run(prog, out, tpmod, actions, ini_set, trace):
                        universal_newlines=True)
     if r.returncode == 77:
         raise C.NotInstalled(r.stdout.strip())
+    if expect_error is not None:
+        return r.returncode, r.stdout
     if r.returncode != 0:
         raise Broken("lcnc_run.sh %s (%s): exit %d:\n%s"
                      % (prog, tpmod or "tpmod", r.returncode, r.stdout.strip()))
     with open(out) as f:
-        traj = C.load_lcnc(f.read().splitlines())
+        lines = f.read().splitlines()
+    extra = None
+    if lines and lines[0].split() == ["n", "x", "y", "z", "a", "line"]:
+        # XYZA samples: A apart, the rest as the benchmark's
+        extra = [float(ln.split()[4]) for ln in lines[1:] if ln.split()]
+        extra.insert(0, extra[0])
+        lines = ["n\tx\ty\tz\tline"] + ["\t".join(w[:4] + w[5:]) for w in
+                                           (ln.split() for ln in lines[1:]) if w]
+    traj = C.load_lcnc(lines)
+    traj.a = extra
     # evenfeed's setpoints are float32: their rounding, not halsampler's 6 decimals, is
     # the floor of the differences
     big = max(max(abs(c) for c in p) for p in traj.pos)
@@ -135,6 +159,30 @@ def check_run(ck, name, program, traj, aborted):
     return st
 
 
+def check_a(ck, traj, a_end):
+    """A's own limits (1 ms differences for speed and acceleration, 4 ms for jerk, plus the
+    rounding of the float32 setpoints and of the samples' 6 decimals), A never moving while
+    X Y Z do, A at its end."""
+    a = traj.a
+    e = 0.5 * C.ulp32(max(abs(x) for x in a)) + 0.5e-6  # float32 setpoints, 6 decimals
+    v = max(abs(a[k] - a[k - 1]) for k in range(1, len(a))) / C.DT
+    acc = max(abs(a[k] - 2 * a[k - 1] + a[k - 2]) for k in range(2, len(a))) / C.DT ** 2
+    h = C.JERK_BASE
+    j = max(abs(a[k] - 3 * a[k - h] + 3 * a[k - 2 * h] - a[k - 3 * h])
+            for k in range(3 * h, len(a))) / (h * C.DT) ** 3
+    both = sum(1 for k in range(1, len(a))
+               if a[k] != a[k - 1] and traj.pos[k] != traj.pos[k - 1])
+    print("xyza      A: speed %.2f deg/s (limit %.0f), acceleration %.1f deg/s^2 (limit %.0f), "
+          "jerk over 4 ms %.0f deg/s^3 (limit %.0f), periods with A and X Y Z both moving %d, "
+          "A at the end %.4f" % (v, A_V, acc, A_A, j, 20 * A_A, both, a[-1]))
+    ck.check(v <= A_V + 2 * e / C.DT + 1e-6, "xyza: A speed %.3f above its limit" % v)
+    ck.check(acc <= A_A + 4 * e / C.DT ** 2, "xyza: A acceleration %.1f above its limit" % acc)
+    ck.check(j <= 20 * A_A + 8 * e / (h * C.DT) ** 3, "xyza: A jerk %.0f above its limit" % j)
+    ck.check(both == 0, "xyza: A moved together with X Y Z in %d periods" % both)
+    ck.check(abs(a[-1] - a_end) < 1e-6, "xyza: A ends at %.6f, not %g" % (a[-1], a_end))
+    ck.check(max(a) >= 180.0 - 1e-6, "xyza: A never reached 180")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("cases", nargs="*", metavar="CASE")
@@ -158,11 +206,36 @@ def main():
         for name in cases:
             prog_name, actions, ini_set = CASES[name]
             prog = os.path.join(HERE, "programs", prog_name)
-            program = C.Program(args.evenfeed, prog)
+            if name == "mixed":
+                program = None
+            elif name == "xyza":
+                # evenfeed's reader takes X Y Z only: the path without the A-only lines
+                # (each kept as a comment, so line numbers stay)
+                xyz = os.path.join(args.work, "tp_xyza_path.ngc")
+                with open(prog) as f, open(xyz, "w") as o:
+                    for ln in f:
+                        o.write("(A move)\n" if re.search(r"\bA-?[0-9.]", ln) else ln)
+                program = C.Program(args.evenfeed, xyz)
+            else:
+                program = C.Program(args.evenfeed, prog)
             trace = os.path.join(args.record, name + ".trace") if args.record else None
             out = os.path.join(args.work, name + ".tsv")
-            traj = run(prog, out, "evenfeedtp", actions, ini_set, trace)
+            if name == "mixed":
+                rc, text = run(prog, out, "evenfeedtp", actions, ini_set, trace, XYZA,
+                               expect_error=True)
+                want = ("moving X Y Z together with A B C U V W is not supported",
+                        "can't add linear move at line 7")
+                found = [w for w in want if w in text]
+                print("mixed     evenfeedtp: run ended with status %d; LinuxCNC reported: %s"
+                      % (rc, "; ".join(found) or "(nothing expected)"))
+                ck.check(rc == 2 and len(found) == len(want),
+                         "mixed: expected LinuxCNC's error with evenfeed's reason:\n" + text)
+                continue
+            traj = run(prog, out, "evenfeedtp", actions, ini_set, trace,
+                       XYZA if name == "xyza" else None)
             st = check_run(ck, name, program, traj, name == "abort")
+            if name == "xyza":
+                check_a(ck, traj, 0.0)
             if name == "mix":
                 lc = run(prog, out, "", "", "", None)
                 ls = C.motion_stats(lc)

@@ -141,7 +141,7 @@ int ef_tp_init(ef_tp_t *tp, const ef_tp_cfg_t *cfg, const ef_tp_ops_t *ops)
 static int lt_at_rest(const ef_tp_t *tp)
 {
     return tp->qn == 0 && tp->mn == 0 && ef_interp_space(&tp->ip) == EF_INTERP_QUEUE &&
-           tp->state != EF_TP_STOPPING;
+           tp->state != EF_TP_STOPPING && !tp->aux_on;
 }
 
 int ef_tp_configure(ef_tp_t *tp, const ef_tp_cfg_t *cfg)
@@ -222,10 +222,6 @@ static int lt_add_begin(ef_tp_t *tp, const double end[EF_TP_AXES], int type, dou
     for (int k = 0; k < EF_TP_AXES; k++)
         if (!lt_finite_pos(end[k]))
             return lt_fail(tp, EF_ERR_NONFINITE, "evenfeed: move end not finite");
-    for (int k = 3; k < EF_TP_AXES; k++)
-        if (fabs(end[k] - tp->goal[k]) > TP_AXIS_EPS * (1.0 + fabs(tp->goal[k])))
-            return lt_fail(tp, EF_ERR_ARG,
-                           "evenfeed: axes A B C U V W are not planned by evenfeed (XYZ only)");
     if (!isfinite(vel) || !isfinite(ini_maxvel))
         return lt_fail(tp, EF_ERR_NONFINITE, "evenfeed: speed not finite");
     double feed = fmin(vel * tp->cfg.max_feed_scale, ini_maxvel);
@@ -240,14 +236,43 @@ static int lt_add_begin(ef_tp_t *tp, const double end[EF_TP_AXES], int type, dou
     double tol =
         tp->term >= EF_TP_TERM_BLEND ? (tp->tol > 0.0 ? tp->tol : tp->cfg.tol_default) : 0.0;
     pr->tol = (float)tp->prev_tol;
-    pr->qtol = pr->tol;
+    pr->qtol = pr->tol; /* band decimation as the CLI (LinuxCNC: Q = P without Q) */
     tp->next_tol = tol;
     if (type == EF_TP_MOTION_PROBING || tp->prev_probe)
         pr->flags |= EF_PRIM_STOP_BEFORE;
     return EF_OK;
 }
 
-/* Queue a checked primitive with what the next add gets. */
+/* A queue item at the tail with what the next add gets (outputs, id), the goal moved on. */
+static ef_tp_item_t *lt_enqueue(ef_tp_t *tp, const double end[EF_TP_AXES], int type, int enables,
+                                int atspeed)
+{
+    ef_tp_item_t *it = &tp->q[(tp->qh + tp->qn) % EF_TP_QUEUE];
+    memset(it, 0, sizeof *it);
+    it->seq = tp->next_seq++;
+    it->id = tp->next_id;
+    it->motion_type = (uint8_t)type;
+    it->enables = (uint8_t)enables;
+    it->atspeed = atspeed != 0;
+    it->dio_mask = tp->dio_mask;
+    it->dio_val = tp->dio_val;
+    it->aio_mask = tp->aio_mask;
+    memcpy(it->aio, tp->aio, sizeof it->aio);
+    tp->dio_mask = tp->dio_val = 0;
+    tp->aio_mask = 0;
+    tp->qn++;
+    tp->prev_probe = type == EF_TP_MOTION_PROBING;
+    memcpy(tp->goal, end, sizeof tp->goal);
+    tp->last_enables = enables;
+    tp->quiet_s = 0.0;
+    if (tp->state == EF_TP_IDLE)
+        tp->state = EF_TP_FILLING;
+    tp->st.added++;
+    tp->msg[0] = '\0';
+    return it;
+}
+
+/* Queue a checked primitive. */
 static int lt_add_end(ef_tp_t *tp, ef_prim_t *pr, const double end[EF_TP_AXES], int type,
                       int enables, int atspeed)
 {
@@ -265,46 +290,69 @@ static int lt_add_end(ef_tp_t *tp, ef_prim_t *pr, const double end[EF_TP_AXES], 
         tp->st.refused++;
         return lt_fail(tp, rc, "evenfeed: move refused by the firmware's checks");
     }
-    ef_tp_item_t *it = &tp->q[(tp->qh + tp->qn) % EF_TP_QUEUE];
-    memset(it, 0, sizeof *it);
+    ef_tp_item_t *it = lt_enqueue(tp, end, type, enables, atspeed);
     it->pr = *pr;
-    it->seq = tp->next_seq++;
-    it->id = tp->next_id;
-    it->motion_type = (uint8_t)type;
-    it->enables = (uint8_t)enables;
-    it->atspeed = atspeed != 0;
-    it->dio_mask = tp->dio_mask;
-    it->dio_val = tp->dio_val;
-    it->aio_mask = tp->aio_mask;
-    memcpy(it->aio, tp->aio, sizeof it->aio);
-    tp->dio_mask = tp->dio_val = 0;
-    tp->aio_mask = 0;
-    tp->qn++;
     tp->prev_tol = tp->next_tol;
-    tp->prev_probe = type == EF_TP_MOTION_PROBING;
-    memcpy(tp->goal, end, sizeof tp->goal);
-    tp->last_enables = enables;
-    tp->quiet_s = 0.0;
-    if (tp->state == EF_TP_IDLE)
-        tp->state = EF_TP_FILLING;
-    tp->st.added++;
-    tp->msg[0] = '\0';
     return EF_OK;
 }
 
+/* Queue a move of A B C U V W alone (ef_tp.h, "Axes"): everything before it ends at rest,
+ * and so does it. */
+static int lt_add_aux(ef_tp_t *tp, const double end[EF_TP_AXES], int type, int enables, double v,
+                      double a)
+{
+    ef_tp_item_t *it = lt_enqueue(tp, end, type, enables, 0);
+    it->aux = 1;
+    memcpy(it->aux_to, end + 3, sizeof it->aux_to);
+    it->aux_v = v;
+    it->aux_a = a;
+    it->pr.tag = it->seq;
+    tp->prev_tol = 0.0; /* the next primitive starts at rest */
+    return EF_OK;
+}
+
+/* Whether a move changes A B C U V W; *xyz whether it moves X Y Z (in float32, as the
+ * smoother sees it). */
+static int lt_aux_moves(const ef_tp_t *tp, const double end[EF_TP_AXES], int *xyz)
+{
+    ef_vec3_t a = lt_v3(tp->goal), b = lt_v3(end);
+    *xyz = a.x != b.x || a.y != b.y || a.z != b.z;
+    for (int k = 3; k < EF_TP_AXES; k++)
+        if (fabs(end[k] - tp->goal[k]) > TP_AXIS_EPS * (1.0 + fabs(tp->goal[k])))
+            return 1;
+    return 0;
+}
+
 int ef_tp_add_line(ef_tp_t *tp, const double end[EF_TP_AXES], int motion_type, double vel,
-                   double ini_maxvel, int enables, int atspeed)
+                   double ini_maxvel, double acc, int enables, int atspeed)
 {
     if (!tp || !end)
         return EF_ERR_ARG;
     ef_prim_t pr;
     int rc = lt_add_begin(tp, end, motion_type, vel, ini_maxvel, &pr);
+    int xyz = 0, aux = rc == EF_OK && lt_aux_moves(tp, end, &xyz);
+    if (aux && xyz)
+        rc = lt_fail(tp, EF_ERR_ARG,
+                     "evenfeed: moving X Y Z together with A B C U V W is not supported");
     if (rc != EF_OK) {
         tp->st.refused++;
         return rc;
     }
     pr.kind = EF_PRIM_LINE;
     pr.end = lt_v3(end);
+    if (aux) {
+        /* A B C U V W alone, at LinuxCNC's speed and acceleration along the move */
+        double v = fmin(vel * tp->cfg.max_feed_scale, ini_maxvel), d2 = 0.0; /* (checked) */
+        for (int k = 3; k < EF_TP_AXES; k++)
+            d2 += (end[k] - tp->goal[k]) * (end[k] - tp->goal[k]);
+        if (!(acc > 0.0) || !isfinite(acc)) {
+            tp->st.refused++;
+            return lt_fail(tp, EF_ERR_FEED, "evenfeed: acceleration not > 0");
+        }
+        if (!(d2 > 0.0))
+            return lt_fail(tp, EF_ERR_DEGENERATE, "evenfeed: zero-length move");
+        return lt_add_aux(tp, end, motion_type, enables, v, acc);
+    }
     return lt_add_end(tp, &pr, end, motion_type, enables, atspeed);
 }
 
@@ -316,6 +364,9 @@ int ef_tp_add_arc(ef_tp_t *tp, const double end[EF_TP_AXES], const double centre
         return EF_ERR_ARG;
     ef_prim_t pr;
     int rc = lt_add_begin(tp, end, motion_type, vel, ini_maxvel, &pr);
+    int xyz = 0;
+    if (rc == EF_OK && lt_aux_moves(tp, end, &xyz))
+        rc = lt_fail(tp, EF_ERR_ARG, "evenfeed: arcs that move A B C U V W are not supported");
     if (rc != EF_OK) {
         tp->st.refused++;
         return rc;
@@ -378,6 +429,7 @@ static void lt_drop(ef_tp_t *tp)
     tp->rate = 0.0;
     tp->prev_tol = 0.0;
     tp->prev_probe = 0;
+    tp->aux_on = 0;
     (void)lt_restart(tp);
 }
 
@@ -457,6 +509,64 @@ static int lt_feed(ef_tp_t *tp, int now)
     return EF_OK;
 }
 
+/* Start an A B C U V W move from rest: a degree-1 law along its straight line in those
+ * axes' space (length in their units), at the planner's share of its acceleration and a
+ * jerk of TP_AUX_JERK per second times that. A move below the firmware's resolution is
+ * done at once (it moves less than one float32 step of the law). */
+#define TP_AUX_JERK 20.0
+static void lt_aux_start(ef_tp_t *tp, const ef_tp_item_t *it)
+{
+    double d2 = 0.0;
+    for (int k = 0; k < EF_TP_AXES - 3; k++) {
+        tp->aux_from[k] = tp->pos[3 + k];
+        d2 += (it->aux_to[k] - tp->pos[3 + k]) * (it->aux_to[k] - tp->pos[3 + k]);
+    }
+    ef_move_t *m = &tp->aux_m;
+    memset(m, 0, sizeof *m);
+    m->degree = 1;
+    m->length = (float)sqrt(d2);
+    m->v_max = (float)it->aux_v;
+    m->a_max = (float)(it->aux_a * tp->cfg.plan_share);
+    m->tag = it->seq;
+    tp->aux_t = 0.0;
+    tp->aux_on = ef_plan_timelaw(m, (float)(TP_AUX_JERK * m->a_max)) == EF_OK;
+    if (!tp->aux_on) {
+        memcpy(tp->pos + 3, it->aux_to, sizeof it->aux_to);
+        tp->qp++;
+    }
+}
+
+/* Advance the A B C U V W move by rate x period; done: at its end exactly, taken. */
+static void lt_aux_step(ef_tp_t *tp)
+{
+    const ef_move_t *m = &tp->aux_m;
+    const ef_tp_item_t *it = &tp->q[(tp->qh + tp->qp) % EF_TP_QUEUE];
+    tp->aux_t += tp->rate * tp->cfg.period_s;
+    if (tp->aux_t >= m->duration) {
+        memcpy(tp->pos + 3, it->aux_to, sizeof it->aux_to);
+        tp->aux_on = 0;
+        tp->v_plan = 0.0;
+        tp->qp++;
+        return;
+    }
+    double u = tp->aux_t, tau = 0.0, v = 0.0;
+    for (int k = 0; k < EF_TIMELAW_PHASES; k++) {
+        double d = m->law.dt[k];
+        if (!(d > 0.0))
+            continue;
+        const float *c = m->law.c[k];
+        if (u <= d) {
+            tau = c[0] + u * (c[1] + u * (c[2] + u * c[3]));
+            v = m->length * (c[1] + u * (2.0 * c[2] + u * 3.0 * c[3]));
+            break;
+        }
+        u -= d;
+    }
+    for (int k = 0; k < EF_TP_AXES - 3; k++)
+        tp->pos[3 + k] = tp->aux_from[k] + tau * (it->aux_to[k] - tp->aux_from[k]);
+    tp->v_plan = v;
+}
+
 /* Up to units_per_cycle smoother calls (each at most one work unit). */
 static int lt_work(ef_tp_t *tp)
 {
@@ -465,7 +575,22 @@ static int lt_work(ef_tp_t *tp)
         int rc = lt_feed(tp, 0);
         if (rc != EF_OK)
             return rc;
-        if (tp->qp < tp->qn) {
+        if (tp->qp < tp->qn && tp->q[(tp->qh + tp->qp) % EF_TP_QUEUE].aux) {
+            /* an A B C U V W move: everything before it to rest first */
+            if (tp->aux_on)
+                break;
+            if (tp->sm.pn > 0 || tp->sm.sn > 0) {
+                rc = ef_smooth_finish(&tp->sm);
+                if (rc != EF_OK && rc != EF_ERR_FULL)
+                    return rc;
+                continue;
+            }
+            if (tp->sm.plan.mcount > 0 || tp->sm.plan.rel_n > 0 || tp->mn > 0 ||
+                ef_interp_space(&tp->ip) < EF_INTERP_QUEUE)
+                break; /* its moves are still running */
+            lt_aux_start(tp, &tp->q[(tp->qh + tp->qp) % EF_TP_QUEUE]);
+            break;
+        } else if (tp->qp < tp->qn) {
             const ef_tp_item_t *it = &tp->q[(tp->qh + tp->qp) % EF_TP_QUEUE];
             rc = ef_smooth_push(&tp->sm, &it->pr);
             if (rc == EF_OK)
@@ -539,6 +664,16 @@ static void lt_rate_bounds(const ef_tp_t *tp, double r, double *r1, double *r2)
 {
     const ef_tp_cfg_t *c = &tp->cfg;
     *r1 = *r2 = 1e30;
+    if (tp->aux_on) { /* an A B C U V W move: a line at its own limits */
+        const ef_move_t *m = &tp->aux_m;
+        double s = c->plan_share, a = m->a_max / s, j = TP_AUX_JERK * m->a_max / s;
+        double A = fmax(TP_LIMIT * a - r * r * s * a, TP_HEAD_MIN * a);
+        double J = fmax(TP_LIMIT * j - r * r * r * s * j, TP_HEAD_MIN * j);
+        double tv = fmax(m->v_max, 1e-9);
+        *r1 = fmin(0.5 * A / tv, 0.25 * J / (3.0 * fmax(r, 0.05) * s * a));
+        *r2 = 0.5 * J / tv;
+        return;
+    }
     uint32_t n = EF_INTERP_QUEUE - ef_interp_space(&tp->ip);
     if (n == 0)
         return; /* nothing executing: the rate moves nothing */
@@ -701,7 +836,15 @@ int ef_tp_cycle(ef_tp_t *tp, double scale, ef_tp_status_t *st)
         lt_fire(tp, sp.tag);
         lt_retire(tp, sp.tag, 0);
     }
-    int idle = !sp.moving && ef_interp_space(&tp->ip) == EF_INTERP_QUEUE && tp->mn == 0;
+    uint32_t aux_seq = 0; /* the A B C U V W move this period (0: none) */
+    if (tp->aux_on) {
+        aux_seq = tp->q[(tp->qh + tp->qp) % EF_TP_QUEUE].seq;
+        tp->exec_seq = aux_seq;
+        lt_fire(tp, aux_seq);
+        lt_retire(tp, aux_seq, 0);
+        lt_aux_step(tp);
+    }
+    int idle = !sp.moving && !aux_seq && ef_interp_space(&tp->ip) == EF_INTERP_QUEUE && tp->mn == 0;
     if (idle && tp->qp == tp->qn && tp->sm.plan.mcount == 0 && tp->sm.plan.rel_n == 0 &&
         tp->sm.pn == 0 && tp->sm.sn == 0) {
         lt_fire(tp, UINT32_MAX);
@@ -722,7 +865,7 @@ int ef_tp_cycle(ef_tp_t *tp, double scale, ef_tp_status_t *st)
         memcpy(st->pos, tp->pos, sizeof st->pos);
         st->rate = tp->rate;
         st->v = tp->rate * tp->v_plan;
-        st->moving = sp.moving;
+        st->moving = sp.moving || aux_seq;
         st->done = tp->qn == 0 && idle && tp->state != EF_TP_STOPPING;
         st->underrun = irc == EF_ERR_UNDERRUN;
         st->enables = tp->last_enables;
@@ -734,6 +877,19 @@ int ef_tp_cycle(ef_tp_t *tp, double scale, ef_tp_status_t *st)
             double dx = m->b[m->degree].x - sp.p.x, dy = m->b[m->degree].y - sp.p.y,
                    dz = m->b[m->degree].z - sp.p.z;
             st->dtg = sqrt(dx * dx + dy * dy + dz * dz);
+            if (it) {
+                st->exec_id = it->id;
+                st->motion_type = it->motion_type;
+                st->enables = it->enables;
+            }
+        } else if (aux_seq) {
+            const ef_tp_item_t *it = ef_tp_item(tp, aux_seq);
+            double d2 = 0.0;
+            for (int k = 3; it && k < EF_TP_AXES; k++)
+                d2 += (it->aux_to[k - 3] - tp->pos[k]) * (it->aux_to[k - 3] - tp->pos[k]);
+            st->exec_seq = aux_seq;
+            st->v_req = tp->aux_m.v_max;
+            st->dtg = sqrt(d2);
             if (it) {
                 st->exec_id = it->id;
                 st->motion_type = it->motion_type;

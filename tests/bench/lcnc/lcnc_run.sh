@@ -2,8 +2,9 @@
 # SPDX-License-Identifier: Apache-2.0
 # Runs one part program through LinuxCNC's planner on the simulated benchmark machine
 # (machine.ini, machine.hal, machine.tbl, run_lcnc.py) and writes the setpoints sampled every servo
-# period (1 ms) to OUT.tsv: header "n x y z line", then one row per period (n = sample
-# index from 0, x y z in mm, line = motion.program-line).
+# period (1 ms) to OUT.tsv: header "n x y z line" ("n x y z a line" on the XYZA machine),
+# then one row per period (n = sample index from 0, x y z in mm, a in degrees, line =
+# motion.program-line).
 #
 # Usage: lcnc_run.sh PROGRAM.ngc OUT.tsv
 # Environment:
@@ -18,6 +19,8 @@
 #                    calls to this file (tests/lcnc/ replays such traces)
 #   EF_LCNC_INI_SET  extra INI settings (keys that occur once in machine.ini), one "SECTION KEY VALUE" per line
 #   EF_LCNC_ACTIONS  what run_lcnc.py does while the program runs (see there)
+#   EF_LCNC_MACHINE  directory with another machine.ini and machine.hal (tests/lcnc/xyza:
+#                    a rotary A axis; its samples have a column a after z)
 # Exit status: 0 done; 77 LinuxCNC (linuxcnc, halsampler, Debian's python3 with the
 # linuxcnc module) is not installed; 1 usage; 2 the run failed; 124 timeout (the LinuxCNC
 # process group this script started was killed).
@@ -112,7 +115,8 @@ trap 'exit 130' INT TERM
 
 # LinuxCNC writes its tool table, parameter and position files next to the INI file: it
 # runs on copies in the scratch directory, never in the source tree.
-cp "$here/machine.ini" "$here/machine.hal" "$here/machine.tbl" "$here/run_lcnc.py" "$run/"
+mdir=${EF_LCNC_MACHINE:-$here}
+cp "$mdir/machine.ini" "$mdir/machine.hal" "$here/machine.tbl" "$here/run_lcnc.py" "$run/"
 # Another planner module ([TRAJ]TPMOD, e.g. evenfeedtp: docs/linuxcnc.md) and other INI
 # settings: "SECTION KEY VALUE" lines in EF_LCNC_INI_SET, each added to its section.
 tpmod=${EF_LCNC_TPMOD:-}

@@ -216,17 +216,20 @@ def run_actions(m, timeout):
 
 
 def convert(raw_path, out_path):
-    """halsampler -t rows 'tag x y z line' -> TSV with a header, checking the tags."""
+    """halsampler -t rows 'tag x y z [a] line' -> TSV with a header, checking the tags."""
     rows = 0
     tmp = out_path + ".tmp"
     with open(raw_path) as f, open(tmp, "w") as o:
-        o.write("n\tx\ty\tz\tline\n")
         first = None
+        width = None
         for ln in f:
             w = ln.split()
             if not w:
                 continue
-            if len(w) != 5:
+            if width is None and len(w) in (5, 6):
+                width = len(w)
+                o.write("n\tx\ty\tz\t%sline\n" % ("a\t" if width == 6 else ""))
+            if len(w) != width:
                 raise RunError("malformed halsampler row %d: %r" % (rows + 1, ln))
             tag = int(w[0])
             if first is None:
@@ -234,7 +237,7 @@ def convert(raw_path, out_path):
             if tag != first + rows:
                 raise RunError("sample %d missing (got tag %d): samples were lost"
                                % (first + rows, tag))
-            o.write("%d\t%s\t%s\t%s\t%s\n" % (rows, w[1], w[2], w[3], w[4]))
+            o.write("%d\t%s\n" % (rows, "\t".join(w[1:])))
             rows += 1
     if rows == 0:
         raise RunError("no samples recorded")

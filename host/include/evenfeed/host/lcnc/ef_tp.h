@@ -49,8 +49,13 @@
  * mid-blend, stays within every axis's acceleration and jerk limit.
  *
  * ## Axes
- * X Y Z are planned. A move that changes A B C U V or W is refused (::EF_ERR_ARG, "axes
- * A B C U V W are not planned by evenfeed"): LinuxCNC reports it and stops.
+ * X Y Z are planned through the smoother. A move of A B C U V W alone (X Y Z still: an
+ * indexing turn of a rotary table) is planned on those axes: everything before it comes to
+ * rest, then a jerk-limited profile (ef_plan_timelaw()) along the straight line in their
+ * space at LinuxCNC's speed and acceleration for the move, jerk 20/s x that acceleration,
+ * under the same time rate (override, pause, abort); the next move starts at rest. A move
+ * that changes X Y Z and one of A B C U V W together is refused (::EF_ERR_ARG, "moving X Y
+ * Z together with A B C U V W is not supported"): LinuxCNC reports it and stops.
  */
 #ifndef EF_TP_H
 #define EF_TP_H
@@ -143,14 +148,18 @@ typedef struct {
 
 /** One queued primitive and what LinuxCNC said about it. */
 typedef struct {
-    ef_prim_t pr;        /**< the primitive (pr.tag = seq) */
-    uint32_t seq;        /**< queue sequence number, from 1 */
-    int32_t id;          /**< LinuxCNC's id (tpSetId: the program line) */
-    uint8_t motion_type; /**< ::ef_tp_motion_t */
-    uint8_t enables;     /**< motion's enables at queue time (FS/SS/AF/FH bits) */
-    uint8_t fired;       /**< its outputs were written */
-    uint8_t atspeed;     /**< starts at rest, once the spindle is at speed */
-    uint64_t dio_mask;   /**< synchronized digital outputs to write when it starts */
+    ef_prim_t pr;                  /**< the primitive (pr.tag = seq) */
+    uint32_t seq;                  /**< queue sequence number, from 1 */
+    int32_t id;                    /**< LinuxCNC's id (tpSetId: the program line) */
+    uint8_t motion_type;           /**< ::ef_tp_motion_t */
+    uint8_t enables;               /**< motion's enables at queue time (FS/SS/AF/FH bits) */
+    uint8_t fired;                 /**< its outputs were written */
+    uint8_t atspeed;               /**< starts at rest, once the spindle is at speed */
+    uint8_t aux;                   /**< a move of A B C U V W alone (X Y Z still): not a smoother
+                                        primitive, run on those axes between rests */
+    double aux_to[EF_TP_AXES - 3]; /**< aux: where A B C U V W go */
+    double aux_v, aux_a;           /**< aux: speed and acceleration along the move */
+    uint64_t dio_mask;             /**< synchronized digital outputs to write when it starts */
     uint64_t dio_val;
     uint16_t aio_mask; /**< synchronized analog outputs likewise */
     double aio[EF_TP_AIOS];
@@ -227,7 +236,11 @@ typedef struct {
     uint16_t aio_mask;
     double aio[EF_TP_AIOS];
     int last_enables;
-    int at_speed;      /**< the spindle is at speed (ef_tp_set_at_speed()) */
+    int at_speed;    /**< the spindle is at speed (ef_tp_set_at_speed()) */
+    int aux_on;      /**< an A B C U V W move is executing */
+    ef_move_t aux_m; /**< its time law (degree 1, its length along the aux axes) */
+    double aux_t;    /**< time into it (s, at rate 1) */
+    double aux_from[EF_TP_AXES - 3];
     uint32_t exec_seq; /**< sequence number executing (0: none yet) */
     int error;         /**< the smoother failed: refuses adds until ef_tp_clear() */
     char msg[160];     /**< the last refusal's reason */
@@ -285,20 +298,22 @@ int ef_tp_set_aout(ef_tp_t *tp, int index, double value);
  * @brief Queue a straight move to `end` (tpAddLine).
  * @param vel        requested speed (units/s)
  * @param ini_maxvel the axes' speed limit along the move (units/s): caps vel x max scale
+ * @param acc        the axes' acceleration limit along the move (units/s^2): used for
+ *                   moves of A B C U V W alone (X Y Z moves use the axes' own limits)
  * @param enables    motion's enables (reported back while it executes)
  * @param atspeed    nonzero: the move starts at rest, and only once ef_tp_set_at_speed()
  *                   says the spindle is at speed (M3 with a wait)
  * @retval EF_OK
  * @retval EF_ERR_DEGENERATE a zero-length move (shorter than the firmware resolves): not
  *                           planned, LinuxCNC's "zero length" notice; its outputs move on
- * @retval EF_ERR_ARG        NULL, A B C U V W changed, an unknown motion type, or the
- *                           planner is stopping or failed (tp->msg says which)
+ * @retval EF_ERR_ARG        NULL, X Y Z moved together with A B C U V W, an unknown motion
+ *                           type, or the planner is stopping or failed (tp->msg says which)
  * @retval EF_ERR_NONFINITE  a non-finite end, speed, or a coordinate beyond EF_MAX_COORD
- * @retval EF_ERR_FEED       vel and ini_maxvel not > 0
+ * @retval EF_ERR_FEED       vel and ini_maxvel not > 0 (acc too, for an A B C U V W move)
  * @retval EF_ERR_FULL       the queue is full (ef_tp_full() was ignored)
  */
 int ef_tp_add_line(ef_tp_t *tp, const double end[EF_TP_AXES], int motion_type, double vel,
-                   double ini_maxvel, int enables, int atspeed);
+                   double ini_maxvel, double acc, int enables, int atspeed);
 
 /**
  * @brief Queue a circular arc or helix (tpAddCircle): about `normal` through `centre`,
