@@ -300,8 +300,11 @@ int tpSetVmax(TP_STRUCT *tp, double vmax, double ini_maxvel)
 int tpSetVlimit(TP_STRUCT *tp, double limit)
 {
     (void)tp;
-    (void)limit; /* the axes' own limits bound every move (documented) */
-    return 0;
+    if (tr) {
+        tr_flush();
+        fprintf(tr, "vlimit %.17g\n", limit);
+    }
+    return ef_tp_set_vlimit(&ef, limit) == EF_OK ? 0 : -1;
 }
 
 int tpSetAmax(TP_STRUCT *tp, double amax)

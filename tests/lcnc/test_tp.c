@@ -177,6 +177,9 @@ static int replay_file(const char *path, FILE *dump)
             int c;
             if (sscanf(rest, "%d %lf", &c, &x[0]) == 2)
                 (void)ef_tp_set_term(&rp.tp, c, x[0]);
+        } else if (!strcmp(cmd, "vlimit")) {
+            if (sscanf(rest, "%lf", &x[0]) == 1)
+                (void)ef_tp_set_vlimit(&rp.tp, x[0]);
         } else if (!strcmp(cmd, "id")) {
             int id;
             if (sscanf(rest, "%d", &id) == 1)
@@ -614,6 +617,35 @@ static void test_aux(void)
     EF_CHECK_NEAR(st.pos[3], 0.0, 0.0);
 }
 
+static void test_vlimit(void)
+{
+    /* [TRAJ]MAX_LINEAR_VELOCITY caps the path speed of X Y Z moves, not of an A move */
+    s_init(1.0);
+    EF_CHECK_EQ(ef_tp_set_vlimit(&tps, 20.0), EF_OK);
+    EF_CHECK_EQ(ef_tp_set_vlimit(&tps, NAN), EF_ERR_ARG);
+    double p[EF_TP_AXES] = {30.0, 10.0, 0.0};
+    EF_CHECK_EQ(ef_tp_add_line(&tps, p, EF_TP_MOTION_TRAVERSE, 100.0, 100.0, 1000.0, 0, 0), EF_OK);
+    double q[EF_TP_AXES] = {30.0, 10.0, 0.0, 90.0};
+    EF_CHECK_EQ(ef_tp_add_line(&tps, q, EF_TP_MOTION_TRAVERSE, 90.0, 90.0, 360.0, 0, 0), EF_OK);
+    ef_tp_status_t st;
+    double vmax_xyz = 0.0, vmax_a = 0.0, last[EF_TP_AXES] = {0};
+    for (long k = 0; k < 20000; k++) {
+        s_cycle(1.0, &st);
+        double d = sqrt((st.pos[0] - last[0]) * (st.pos[0] - last[0]) +
+                        (st.pos[1] - last[1]) * (st.pos[1] - last[1]));
+        vmax_xyz = fmax(vmax_xyz, d / 1e-3);
+        vmax_a = fmax(vmax_a, fabs(st.pos[3] - last[3]) / 1e-3);
+        memcpy(last, st.pos, sizeof last);
+        if (st.done)
+            break;
+    }
+    EF_CHECK(st.done);
+    printf("vlimit 20: path speed at most %.3f; A at most %.2f deg/s\n", vmax_xyz, vmax_a);
+    EF_CHECK(vmax_xyz <= 20.0 * 1.001 && vmax_xyz > 19.0);
+    EF_CHECK(vmax_a > 80.0);
+    chk_limits(&chks, "vlimit");
+}
+
 static void test_bad(void)
 {
     s_init(1.0);
@@ -703,9 +735,11 @@ int main(int argc, char **argv)
         return replay_file(argv[2], stdout) == 0 ? EXIT_SUCCESS : EXIT_FAILURE;
     }
     static const ef_test_part_t parts[] = {
-        {"override", test_override}, {"pause", test_pause}, {"abort", test_abort},
-        {"stream", test_stream},     {"dio", test_dio},     {"arc", test_arc},
-        {"aux", test_aux},           {"bad", test_bad},     {"replay TRACE...", test_replay},
+        {"override", test_override}, {"pause", test_pause},
+        {"abort", test_abort},       {"stream", test_stream},
+        {"dio", test_dio},           {"arc", test_arc},
+        {"aux", test_aux},           {"vlimit", test_vlimit},
+        {"bad", test_bad},           {"replay TRACE...", test_replay},
     };
     return EF_TEST_RUN(argc, argv, 1, parts);
 }

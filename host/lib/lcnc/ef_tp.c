@@ -182,6 +182,14 @@ int ef_tp_set_term(ef_tp_t *tp, int cond, double tol)
     return EF_OK;
 }
 
+int ef_tp_set_vlimit(ef_tp_t *tp, double vlimit)
+{
+    if (!tp || !isfinite(vlimit))
+        return EF_ERR_ARG;
+    tp->vlimit = vlimit > 0.0 ? vlimit : 0.0;
+    return EF_OK;
+}
+
 void ef_tp_set_id(ef_tp_t *tp, int32_t id)
 {
     if (tp)
@@ -230,7 +238,7 @@ static int lt_add_begin(ef_tp_t *tp, const double end[EF_TP_AXES], int type, dou
     if (tp->qn >= EF_TP_QUEUE)
         return lt_fail(tp, EF_ERR_FULL, "evenfeed: planner queue overflow");
     memset(pr, 0, sizeof *pr);
-    pr->feed = (float)feed;
+    pr->feed = (float)(tp->vlimit > 0.0 ? fmin(feed, tp->vlimit) : feed);
     /* LinuxCNC's term condition says how a move ends; evenfeed's tolerance belongs to the
      * vertex where a primitive starts: the previous move's end. */
     double tol =

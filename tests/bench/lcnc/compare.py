@@ -423,13 +423,21 @@ def machine_hash():
     return h.hexdigest()[:16]
 
 
-def run_lcnc(prog, sha, cache_dir, scratch, use_cache):
+def run_lcnc(prog, sha, cache_dir, scratch, use_cache, tpmod=None):
+    """LinuxCNC's samples of prog, with its own planner or (tpmod) another planner module
+    (never cached: it is the code under test)."""
     cached = os.path.join(cache_dir, sha + ".tsv.gz")
+    if tpmod:
+        use_cache = False
     if use_cache and os.path.exists(cached):
         with gzip.open(cached, "rt") as f:
             return f.read().splitlines(), True
     out = os.path.join(scratch, "lcnc.tsv")
-    r = subprocess.run(["bash", os.path.join(HERE, "lcnc_run.sh"), prog, out],
+    env = dict(os.environ)
+    env.pop("EF_LCNC_TPMOD", None)
+    if tpmod:
+        env["EF_LCNC_TPMOD"] = tpmod
+    r = subprocess.run(["bash", os.path.join(HERE, "lcnc_run.sh"), prog, out], env=env,
                        stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                        universal_newlines=True)
     if r.returncode == 77:
@@ -455,10 +463,18 @@ def compare(args, prog, cache_dir):
     os.makedirs(scratch, exist_ok=True)
     program = Program(args.evenfeed, prog)
 
-    csv_path = os.path.join(scratch, name + ".csv")
-    ef = run_evenfeed(args.evenfeed, prog, csv_path, args.evenfeed_arg)
-    ef_traj = load_evenfeed(csv_path, program.start, ef["inch"])
-    os.unlink(csv_path)
+    if args.tpmod:
+        # evenfeed as LinuxCNC's planner module: both sides are LinuxCNC runs
+        tp_lines, _ = run_lcnc(prog, sha, cache_dir, scratch, False, args.tpmod)
+        ef_traj = load_lcnc(tp_lines)
+        big = max(max(abs(c) for c in p) for p in ef_traj.pos)
+        ef_traj.e = 0.5 * ulp32(big) + 0.5e-6  # float32 setpoints
+        ef = {"inch": False}
+    else:
+        csv_path = os.path.join(scratch, name + ".csv")
+        ef = run_evenfeed(args.evenfeed, prog, csv_path, args.evenfeed_arg)
+        ef_traj = load_evenfeed(csv_path, program.start, ef["inch"])
+        os.unlink(csv_path)
     lc_lines, cached = run_lcnc(prog, sha, cache_dir, scratch, not args.no_cache)
     lc_traj = load_lcnc(lc_lines)
 
@@ -470,8 +486,15 @@ def compare(args, prog, cache_dir):
         dev, dev_rel, over = program.deviation(traj)
         row[key] = dict(st, geo_dev=dev, geo_dev_rel=dev_rel, geo_over=over,
                         floor=sampling_floor(traj.e))
-    row["ef"].update({"dev": ef["dev"], "dev_tol": ef["dev_tol"], "dev_line": ef["dev_line"],
-                      "dev_over": ef["dev_over"], "cycle_reported": ef["cycle_reported"]})
+    if args.tpmod:
+        # no summary of its own: the setpoints' distance from the path stands in for it
+        e = row["ef"]
+        row["ef"].update({"dev": e["geo_dev"], "dev_tol": e["geo_dev"] / e["geo_dev_rel"]
+                          if e["geo_dev_rel"] > 0 else 0.0, "dev_line": 0,
+                          "dev_over": e["geo_over"], "cycle_reported": e["cycle"]})
+    else:
+        row["ef"].update({"dev": ef["dev"], "dev_tol": ef["dev_tol"], "dev_line": ef["dev_line"],
+                          "dev_over": ef["dev_over"], "cycle_reported": ef["cycle_reported"]})
     row["ratio"] = row["ef"]["cycle"] / row["lc"]["cycle"]
     row["ef"]["eff"] = row["bound"] / row["ef"]["cycle"]
     row["lc"]["eff"] = row["bound"] / row["lc"]["cycle"]
@@ -606,6 +629,10 @@ def main():
     ap.add_argument("--smoke", action="store_true", help="check the runs instead of a table")
     ap.add_argument("--evenfeed-arg", action="append", default=[], metavar="ARG",
                     help="extra argument for evenfeed smooth (repeatable), e.g. --jerk=0")
+    ap.add_argument("--tpmod", metavar="MODULE",
+                    help="evenfeed's side is LinuxCNC with this planner module ([TRAJ]TPMOD, "
+                         "e.g. evenfeedtp, installed in LinuxCNC's module directory) instead "
+                         "of evenfeed smooth; the module's default jerk limit is J")
     args = ap.parse_args()
     args.evenfeed = os.path.abspath(args.evenfeed)
     args.work = os.path.abspath(args.work)
@@ -617,11 +644,18 @@ def main():
 
     rows, failed = [], []
     if not args.smoke:
-        print("evenfeed %s vs LinuxCNC %s (tests/bench/lcnc/machine.ini): per axis %.0f mm/s, "
-              "%.0f mm/s^2, servo period %.0f ms; evenfeed smooth%s"
-              % (args.evenfeed, lcnc_version() or "(cached)", VMAX, AMAX, DT * 1e3,
-                 (" " + " ".join(args.evenfeed_arg)) if args.evenfeed_arg else
-                 " defaults (J %.0f mm/s^3)" % JMAX))
+        if args.tpmod:
+            print("evenfeed as LinuxCNC's planner ([TRAJ]TPMOD = %s) vs LinuxCNC %s's own, "
+                  "side by side on the same machine (tests/bench/lcnc/machine.ini): per axis "
+                  "%.0f mm/s, %.0f mm/s^2, servo period %.0f ms; the module's defaults (J %.0f "
+                  "mm/s^3, planning to 0.9 of a and J)"
+                  % (args.tpmod, lcnc_version(), VMAX, AMAX, DT * 1e3, JMAX))
+        else:
+            print("evenfeed %s vs LinuxCNC %s (tests/bench/lcnc/machine.ini): per axis %.0f "
+                  "mm/s, %.0f mm/s^2, servo period %.0f ms; evenfeed smooth%s"
+                  % (args.evenfeed, lcnc_version() or "(cached)", VMAX, AMAX, DT * 1e3,
+                     (" " + " ".join(args.evenfeed_arg)) if args.evenfeed_arg else
+                     " defaults (J %.0f mm/s^3)" % JMAX))
         print("cycle: first to last period of motion; bound: feed-limited (every move at "
               "min(F, axis limits), infinite acceleration); eff = bound / cycle;")
         print("a, j: peak per-axis |2nd|, |3rd| differences of the 1 ms setpoints (mm/s^2; "

@@ -228,6 +228,7 @@ typedef struct {
     /* what the next add gets */
     int term;
     double tol;
+    double vlimit;   /**< path speed cap of X Y Z moves (0: none) */
     double next_tol; /**< tolerance at the end of the move being added */
     double prev_tol; /**< at the end of the last queued move: the next one's start */
     int prev_probe;  /**< the last queued move was a probe: the next starts at rest */
@@ -282,6 +283,14 @@ int ef_tp_set_pos(ef_tp_t *tp, const double pos[EF_TP_AXES]);
  * @retval EF_ERR_ARG unknown condition, or a negative / non-finite tolerance
  */
 int ef_tp_set_term(ef_tp_t *tp, int cond, double tol);
+
+/**
+ * @brief Path speed cap of X Y Z moves added next (tpSetVlimit: [TRAJ]MAX_LINEAR_VELOCITY),
+ * units/s; 0 or less: none. Moves of A B C U V W alone are not capped (as LinuxCNC).
+ * @retval EF_OK
+ * @retval EF_ERR_ARG NULL, or not finite
+ */
+int ef_tp_set_vlimit(ef_tp_t *tp, double vlimit);
 
 /** @brief Id of the moves added next (tpSetId; LinuxCNC's line number). */
 void ef_tp_set_id(ef_tp_t *tp, int32_t id);
