@@ -111,6 +111,12 @@ echo "   (docs/benchmarks-linuxcnc.md); evenfeed at J 20000 mm/s^3, LinuxCNC wit
 bash tests/bench/lcnc/run.sh "$b"
 
 echo
+echo "== LinuxCNC planner module (evenfeedtp): one servo period's call, ef_tp_cycle(), on the"
+echo "   recorded motion traces of tests/lcnc/traces/ (wall time on this machine: the maximum"
+echo "   depends on its load; the work per period is bounded by 32 smoother units, docs/linuxcnc.md)"
+"$b/tests/test_tp" replay tests/lcnc/traces/*.trace | grep -v '^[0-9]* passed' || true
+
+echo
 echo "== CAN bus load: CSP at 1 kHz against segment mode, 3 drives, the sample profile, real"
 echo "   master and drive code on a simulated 1 Mbit/s bus (docs/benchmarks-can.md)"
 "$b/tests/bench_canbus" samples/profile.ngc

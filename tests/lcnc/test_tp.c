@@ -14,6 +14,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "ef_test.h"
 #include "evenfeed/core/ef_err.h"
@@ -115,6 +116,7 @@ typedef struct {
     chk_t chk;
     int spindle_sync, created, aborted;
     long adds, refused, zero;
+    double us_sum, us_max; /* wall time of ef_tp_cycle() (a figure, not a check) */
     double last_status_pos[EF_TP_AXES];
 } replay_t;
 
@@ -240,7 +242,13 @@ static int replay_file(const char *path, FILE *dump)
             ef_tp_set_at_speed(&rp.tp, at);
             for (long i = 0; i < cnt; i++) {
                 ef_tp_status_t st;
+                struct timespec t0, t1;
+                clock_gettime(CLOCK_MONOTONIC, &t0);
                 (void)ef_tp_cycle(&rp.tp, x[0], &st);
+                clock_gettime(CLOCK_MONOTONIC, &t1);
+                double us = (t1.tv_sec - t0.tv_sec) * 1e6 + (t1.tv_nsec - t0.tv_nsec) * 1e-3;
+                rp.us_sum += us;
+                rp.us_max = us > rp.us_max ? us : rp.us_max;
                 chk_push(&rp.chk, &st);
                 memcpy(rp.last_status_pos, st.pos, sizeof st.pos);
             }
@@ -281,6 +289,9 @@ static void test_replay(void)
             continue;
         const char *base = strrchr(path, '/') ? strrchr(path, '/') + 1 : path;
         chk_limits(&rp.chk, base);
+        printf("  servo-period call (ef_tp_cycle, this machine, its load): mean %.2f us, "
+               "max %.1f us\n",
+               rp.us_sum / (double)rp.chk.cycles, rp.us_max);
         const ef_tp_stats_t *ts = &rp.tp.st;
         printf("  %ld adds, %ld zero-length, %ld refused; planner: %u finishes, %u early "
                "releases, %u moves, most units in a cycle %u, stalls %u; vertices: %u "
