@@ -1313,26 +1313,26 @@ int ef_smooth_finish(ef_smooth_t *s)
     return s->pn == 0 && s->sn == 0 ? EF_OK : EF_ERR_FULL;
 }
 
-/* Hand out the next final move: the planner's release only (the work units feed it). */
-int ef_smooth_pull(ef_smooth_t *s, ef_move_t *m)
+/* Hand out the next final move: the planner's release only (the work units feed it);
+ * now: whatever the planner's window holds (ef_smooth_pull_now()). */
+static int sm_pull(ef_smooth_t *s, ef_move_t *m, int now)
 {
     if (!s || !m)
         return EF_ERR_ARG;
-    int rc = ef_plan_pull(&s->plan, m);
+    int rc = now ? ef_plan_pull_now(&s->plan, m) : ef_plan_pull(&s->plan, m);
     if (rc == EF_OK)
         s->st.moves++;
     return rc;
 }
 
-/* The planner's early release (ef_plan_pull_now()). */
+int ef_smooth_pull(ef_smooth_t *s, ef_move_t *m)
+{
+    return sm_pull(s, m, 0);
+}
+
 int ef_smooth_pull_now(ef_smooth_t *s, ef_move_t *m)
 {
-    if (!s || !m)
-        return EF_ERR_ARG;
-    int rc = ef_plan_pull_now(&s->plan, m);
-    if (rc == EF_OK)
-        s->st.moves++;
-    return rc;
+    return sm_pull(s, m, 1);
 }
 
 /* Copy of the counters. */

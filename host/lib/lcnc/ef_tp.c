@@ -108,7 +108,6 @@ static int lt_restart(ef_tp_t *tp)
     tp->period_us = (uint32_t)lround(c->period_s * 1e6);
     if (tp->period_us == 0u)
         tp->period_us = 1u;
-    tp->period_f = (float)c->period_s;
     rc = ef_interp_init(&tp->ip, p, tp->period_us, EF_STEP_CORRECTED);
     if (rc != EF_OK)
         return lt_fail(tp, rc, "evenfeed: interpolator settings refused");

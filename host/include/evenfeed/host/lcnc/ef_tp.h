@@ -223,7 +223,6 @@ typedef struct {
     double pos[EF_TP_AXES];  /**< commanded pose */
     double rate, rate_d;     /**< time rate and its derivative (1/s) */
     double v_plan, a_plan;   /**< planned path speed now (rate 1) */
-    float period_f;
     uint32_t period_us;
     /* what the next add gets */
     int term;
