@@ -27,3 +27,13 @@ if(TARGET ef_tables_default)
     target_link_libraries(fuzz_smooth PRIVATE ef_fw_fuzz m)
   endif()
 endif()
+
+# Auxiliary axes (A B C U V W) through smoother, planner and interpolator
+# (tests/motion/test_axes.c).
+if(TARGET ef_tables_default)
+  add_executable(test_axes ${CMAKE_CURRENT_SOURCE_DIR}/motion/test_axes.c)
+  target_include_directories(test_axes PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
+  target_link_libraries(test_axes PRIVATE ef_fw ef_tables_default m)
+  add_test(NAME fw_axes COMMAND test_axes)
+  set_tests_properties(fw_axes PROPERTIES TIMEOUT 300)
+endif()

@@ -351,7 +351,7 @@ static void test_random_streams(void)
     unsigned long long rng = 777;
     for (int pass = 0; pass < 2; pass++) {
         float j = pass ? 3000.0f : 0.0f;
-        ef_limits_t lim = {{300, 200, 100}, {2000, 1500, 800}, j, 0.4f};
+        ef_limits_t lim = {{300, 200, 100}, {2000, 1500, 800}, j, 0.4f, {0}};
         ef_vec3_t p = ef_v3(0, 0, 0);
         for (int i = 0; i < N; i++) {
             double len = pow(10, ef_t_uniform(&rng, -4, 1.3));
@@ -463,7 +463,7 @@ static void test_incremental_bounds(void)
     unsigned long long rng = 4242;
     for (int pass = 0; pass < 2; pass++) {
         float j = pass ? 3000.0f : 0.0f;
-        ef_limits_t lim = {{300, 200, 100}, {2000, 1500, 800}, j, 0.4f};
+        ef_limits_t lim = {{300, 200, 100}, {2000, 1500, 800}, j, 0.4f, {0}};
         EF_CHECK_EQ(ef_plan_init(&p, &lim), EF_OK);
         ef_vec3_t a = ef_v3(0, 0, 0);
         double worst = 0, worst_exit = 0;
@@ -723,7 +723,7 @@ static void test_window(void)
 static void test_axis_limits(void)
 {
     const double S = EF_PLAN_LIMIT_SHARE; /* of every acceleration limit */
-    ef_limits_t lim = {{10, 20, 30}, {100, 50, 100}, 0, 0.5f};
+    ef_limits_t lim = {{10, 20, 30}, {100, 50, 100}, 0, 0.5f, {0}};
     ef_plan_t p;
     EF_CHECK_EQ(ef_plan_init(&p, &lim), EF_OK);
     ef_move_t m = mk_line(ef_v3(0, 0, 0), ef_v3(10, 10, 0), 100, 0);
@@ -780,7 +780,7 @@ static double ramp_time_d(double v, double a, double j)
 static void test_curved_share(void)
 {
     const double S = EF_PLAN_LIMIT_SHARE;
-    ef_limits_t lim = {{100, 100, 100}, {1000, 1000, 1000}, 20000, 0.5f};
+    ef_limits_t lim = {{100, 100, 100}, {1000, 1000, 1000}, 20000, 0.5f, {0}};
     /* circle-like section: R 10 (k 0.1 per axis), kjerk 0.05 / mm^2 (uniform stepping's
      * ripple), and one with a geometric kjerk only (0.01) */
     static const float kj[] = {0.05f, 0.01f, 0.0f};
@@ -852,7 +852,7 @@ static void test_curvature_jump(void)
     double d1x = 3.0, d2y = 6.0 * 0.2, ky = d2y / (d1x * d1x);
     for (int c = 0; c < 3; c++) {
         float J = c == 2 ? 0.0f : 20000.0f;
-        ef_limits_t lim = {{100, 100, 100}, {1000, 1000, 1000}, J, 0.5f};
+        ef_limits_t lim = {{100, 100, 100}, {1000, 1000, 1000}, J, 0.5f, {0}};
         ef_plan_t p;
         EF_CHECK_EQ(ef_plan_init(&p, &lim), EF_OK);
         EF_CHECK_EQ(ef_plan_push(&p, &l1), EF_OK);

@@ -48,6 +48,21 @@ int ef_interp_init(ef_interp_t *ip, ef_vec3_t home, uint32_t period_us, int mode
     ip->pos = ip->end = home;
     ip->v_end = 0.0f;
     ip->last_seq = ip->last_tag = 0;
+    for (int k = 0; k < EF_AUX_N; k++)
+        ip->apos[k] = ip->aend[k] = 0.0f;
+    return EF_OK;
+}
+
+/* The auxiliary axes' position at rest (contract in ef_interp.h). */
+int ef_interp_set_aux(ef_interp_t *ip, const float *aux)
+{
+    if (!ip || !aux || ip->count > 0)
+        return EF_ERR_ARG;
+    for (int k = 0; k < EF_AUX; k++)
+        if (!ef_finitef(aux[k]) || !(ef_fabsf(aux[k]) <= EF_MAX_COORD))
+            return EF_ERR_NONFINITE;
+    for (int k = 0; k < EF_AUX; k++)
+        ip->apos[k] = ip->aend[k] = aux[k];
     return EF_OK;
 }
 
@@ -104,6 +119,35 @@ static void ip_power(const ef_move_t *m, ef_vec3_t pc[6])
     }
 }
 
+/* ip_power() for the auxiliary axes (scalars): de Casteljau's derivatives at 1/2. */
+static void ip_power_aux(const ef_move_t *m, float apc[EF_AUX_N][6])
+{
+    int n = m->degree;
+    for (int k = 0; k < EF_AUX_N; k++) {
+        float w[6][6];
+        for (int i = 0; i < 6; i++) {
+            w[0][i] = (k < EF_AUX && i <= n) ? m->ab[k][i] - m->ab[k][0] : 0.0f;
+            apc[k][i] = 0.0f;
+        }
+        /* forward differences: the k-th derivative at 1/2 is n!/(n-j)! times the de
+         * Casteljau value of the j-th differences */
+        for (int j = 1; j <= n; j++)
+            for (int i = 0; i + j <= n; i++)
+                w[j][i] = w[j - 1][i + 1] - w[j - 1][i];
+        float ff = 1.0f; /* n! / (n - j)! / j! */
+        for (int j = 0; j <= n; j++) {
+            float c[6];
+            for (int i = 0; i + j <= n; i++)
+                c[i] = w[j][i];
+            for (int r = 1; r <= n - j; r++)
+                for (int i = 0; i + r <= n - j; i++)
+                    c[i] = 0.5f * (c[i] + c[i + 1]);
+            apc[k][j] = ff * c[0];
+            ff = ff * (float)(n - j) / (float)(j + 1);
+        }
+    }
+}
+
 /* Queue a planned move that joins the previous end (contract in ef_interp.h). */
 int ef_interp_push(ef_interp_t *ip, const ef_move_t *m)
 {
@@ -112,6 +156,13 @@ int ef_interp_push(ef_interp_t *ip, const ef_move_t *m)
     int rc = ef_interp_check(m, ip->end);
     if (rc != EF_OK)
         return rc;
+    for (int k = 0; k < EF_AUX; k++) {
+        int ok = 1;
+        for (int i = 0; i <= m->degree; i++)
+            ok &= ef_finitef(m->ab[k][i]) & (ef_fabsf(m->ab[k][i]) <= EF_MAX_COORD);
+        if (!ok || !(ef_fabsf(m->ab[k][0] - ip->aend[k]) <= EF_INTERP_JOIN_TOL))
+            return EF_ERR_ARG;
+    }
     if (ip->count >= EF_INTERP_QUEUE)
         return EF_ERR_FULL;
     if (ip->count == 0) {
@@ -121,8 +172,11 @@ int ef_interp_push(ef_interp_t *ip, const ef_move_t *m)
     uint32_t slot = (ip->head + ip->count) % EF_INTERP_QUEUE;
     ip->q[slot] = *m;
     ip_power(m, ip->pc[slot]);
+    ip_power_aux(m, ip->apc[slot]);
     ip->count++;
     ip->end = m->b[m->degree];
+    for (int k = 0; k < EF_AUX; k++)
+        ip->aend[k] = m->ab[k][m->degree];
     ip->v_end = m->v_exit;
     return EF_OK;
 }
@@ -191,7 +245,8 @@ static void ip_eval(ef_interp_t *ip, const ef_move_t *m, const ef_vec3_t *pc, fl
      * where the evaluation's rounding (several ulps of ~100 mm) is a few per cent of a
      * slow 1 um step. The corrected step's chords need the same resolution. */
     ef_vec3_t d[3];
-    if (ip->mode != EF_STEP_CORRECTED || !(m->length <= EF_INTERP_CORRECTED_MAX_LEN)) {
+    if (ip->mode != EF_STEP_CORRECTED || !(m->length <= EF_INTERP_CORRECTED_MAX_LEN) ||
+        (m->flags & EF_MOVE_AUX_ONLY)) {
         ip_horner(pc, tau_law, 0, d);
         ip->tau = tau_law;
         ip->pos = ef_v3_add(m->b[0], d[0]);
@@ -316,6 +371,8 @@ int ef_interp_process_rate(ef_interp_t *ip, uint32_t dt_us, float rate, uint32_t
                 break;
             ip_kahan(&ip->t, &ip->t_c, -m->duration);
             ip->pos = m->b[m->degree];
+            for (int k = 0; k < EF_AUX; k++)
+                ip->apos[k] = m->ab[k][m->degree];
             ip->last_seq = m->seq;
             ip->last_tag = m->tag;
             ip->tau = ip->s_done = 0.0f;
@@ -326,6 +383,16 @@ int ef_interp_process_rate(ef_interp_t *ip, uint32_t dt_us, float rate, uint32_t
         if (ip->count > 0) {
             const ef_move_t *m = &ip->q[ip->head];
             ip_eval(ip, m, ip->pc[ip->head], &v);
+            /* the auxiliary axes at the parameter the step reached (either mode) */
+            float u = ip->tau - 0.5f;
+            for (int k = 0; k < EF_AUX; k++) {
+                const float *c = ip->apc[ip->head][k];
+                float a = c[5];
+                for (int j = 4; j >= 0; j--)
+                    a = c[j] + u * a;
+                ip->apos[k] = m->ab[k][0] + a;
+                sp->aux[k] = ip->apos[k];
+            }
             sp->p = ip->pos;
             sp->v_plan = v;
             sp->seq = m->seq;
@@ -335,10 +402,14 @@ int ef_interp_process_rate(ef_interp_t *ip, uint32_t dt_us, float rate, uint32_t
         }
         ip->t = ip->t_c = 0.0f;
         ip->pos = ip->end;
+        for (int k = 0; k < EF_AUX; k++)
+            ip->apos[k] = ip->aend[k];
     }
     if (ip->v_end > 0.0f)
         rc = EF_ERR_UNDERRUN; /* ran dry while moving: hold the end position */
     sp->p = ip->pos;
+    for (int k = 0; k < EF_AUX_N; k++)
+        sp->aux[k] = k < EF_AUX ? ip->apos[k] : 0.0f;
     sp->v_plan = 0.0f;
     sp->seq = ip->last_seq;
     sp->tag = ip->last_tag;

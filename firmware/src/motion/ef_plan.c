@@ -60,14 +60,23 @@ int ef_limits_check(const ef_limits_t *lim)
     if (!lim)
         return EF_ERR_ARG;
     int fin = ef_finitef(lim->j_max) & ef_finitef(lim->a_normal_frac);
-    for (int i = 0; i < 3; i++)
+    for (int i = 0; i < EF_AXES; i++)
         fin &= ef_finitef(lim->v_axis[i]) & ef_finitef(lim->a_axis[i]);
+    for (int k = 0; k < EF_AUX; k++)
+        fin &= ef_finitef(lim->j_aux[k]);
     if (!fin)
         return EF_ERR_NONFINITE;
     if (!(lim->a_normal_frac > 0.0f && lim->a_normal_frac < 1.0f))
         return EF_ERR_ARG;
     for (int i = 0; i < 3; i++)
         if (!(lim->v_axis[i] > 0.0f) || !(lim->a_axis[i] > 0.0f))
+            return EF_ERR_FEED;
+    for (int i = 3; i < EF_AXES; i++)
+        if (!(lim->v_axis[i] >= 0.0f) || !(lim->a_axis[i] >= 0.0f) ||
+            ((lim->v_axis[i] > 0.0f) != (lim->a_axis[i] > 0.0f)))
+            return EF_ERR_FEED;
+    for (int k = 0; k < EF_AUX; k++)
+        if (!(lim->j_aux[k] >= 0.0f))
             return EF_ERR_FEED;
     if (!(lim->j_max >= 0.0f))
         return EF_ERR_FEED;
@@ -520,14 +529,15 @@ uint32_t ef_plan_space(const ef_plan_t *p)
 
 /** Tangential jerk every axis leaves at speed v and tangential acceleration a:
  *  min_i (J - g_i v^3 - 3 k_i v a) / t_i over the axes the move drives. */
-static float pl_jt(const float t[3], const float k[3], const float g[3], float J, float v, float a)
+static float pl_jt(const float t[EF_AXES], const float k[EF_AXES], const float g[EF_AXES],
+                   const float J[EF_AXES], float v, float a)
 {
     float j = 0.0f;
     int have = 0;
-    for (int i = 0; i < 3; i++) {
+    for (int i = 0; i < EF_AXES; i++) {
         if (!(t[i] > 0.0f))
             continue;
-        float ji = (J - g[i] * v * v * v - 3.0f * k[i] * v * a) / t[i];
+        float ji = (J[i] - g[i] * v * v * v - 3.0f * k[i] * v * a) / t[i];
         j = have ? ef_minf(j, ji) : ji;
         have = 1;
     }
@@ -542,26 +552,38 @@ static float pl_jt(const float t[3], const float k[3], const float g[3], float J
 static void pl_limits(const ef_limits_t *l, const ef_move_t *m, float *v_out, float *a_out,
                       float *j_out)
 {
-    float t[3] = {m->tabs.x, m->tabs.y, m->tabs.z};
-    float k[3] = {m->kabs.x, m->kabs.y, m->kabs.z};
-    float g[3] = {m->kjerk.x, m->kjerk.y, m->kjerk.z};
+    /* X Y Z, then the auxiliary axes (all zero where none moves: skipped below, so a move
+     * without them is planned as before, to the bit) */
+    float t[EF_AXES] = {m->tabs.x, m->tabs.y, m->tabs.z};
+    float k[EF_AXES] = {m->kabs.x, m->kabs.y, m->kabs.z};
+    float g[EF_AXES] = {m->kjerk.x, m->kjerk.y, m->kjerk.z};
     if (m->kappa_max > 0.0f && !(k[0] > 0.0f || k[1] > 0.0f || k[2] > 0.0f))
         k[0] = k[1] = k[2] = m->kappa_max; /* a move measured without its axis parts */
+    for (int i = 0; i < EF_AUX; i++) {
+        t[3 + i] = m->atabs[i];
+        k[3 + i] = m->akabs[i];
+        g[3 + i] = m->akjerk[i];
+    }
     float J = EF_PLAN_LIMIT_SHARE * l->j_max, v = m->feed;
-    float A[3];
-    for (int i = 0; i < 3; i++)
+    float A[EF_AXES], Ji[EF_AXES];
+    for (int i = 0; i < EF_AXES; i++) {
         A[i] = EF_PLAN_LIMIT_SHARE * l->a_axis[i];
-    for (int i = 0; i < 3; i++) {
+        Ji[i] = J;
+    }
+    for (int i = 0; i < EF_AUX; i++)
+        if (J > 0.0f && l->j_aux[i] > 0.0f)
+            Ji[3 + i] = EF_PLAN_LIMIT_SHARE * l->j_aux[i];
+    for (int i = 0; i < EF_AXES; i++) {
         if (t[i] > 0.0f)
             v = ef_minf(v, l->v_axis[i] / t[i]);
         if (k[i] > 0.0f)
             v = ef_minf(v, ef_sqrtf(l->a_normal_frac * A[i] / k[i]));
         if (J > 0.0f && g[i] > 0.0f)
-            v = ef_minf(v, ef_cbrtf(EF_PLAN_JG_SHARE * J / g[i]));
+            v = ef_minf(v, ef_cbrtf(EF_PLAN_JG_SHARE * Ji[i] / g[i]));
     }
     float a = 0.0f, j = 0.0f;
     int have = 0;
-    for (int i = 0; i < 3; i++) {
+    for (int i = 0; i < EF_AXES; i++) {
         if (!(t[i] > 0.0f))
             continue;
         float ai = (A[i] - k[i] * v * v) / t[i];
@@ -569,34 +591,37 @@ static void pl_limits(const ef_limits_t *l, const ef_move_t *m, float *v_out, fl
         have = 1;
     }
     if (J > 0.0f) {
-        for (int i = 0; i < 3; i++) {
-            float gv = J - g[i] * v * v * v;
+        for (int i = 0; i < EF_AXES; i++) {
+            float gv = Ji[i] - g[i] * v * v * v;
             if (t[i] > 0.0f) {
                 /* Lower a where the centripetal growth term leaves less than the minimum. */
                 /* > 0: gv >= (1 - EF_PLAN_JG_SHARE) J, and the ramps' share stays below it
                  * whatever the two macros are set to */
                 float jt = ef_minf(EF_PLAN_JT_MIN, 0.9f * (1.0f - EF_PLAN_JG_SHARE));
-                float room = gv - jt * J * ef_minf(t[i], 1.0f);
+                float room = gv - jt * Ji[i] * ef_minf(t[i], 1.0f);
                 if (k[i] > 0.0f && v > 0.0f && 3.0f * k[i] * v * a > room)
                     a = ef_maxf(0.0f, room / (3.0f * k[i] * v));
             }
         }
         /* The jerk every axis leaves at the final a. */
-        j = pl_jt(t, k, g, J, v, a);
+        j = pl_jt(t, k, g, Ji, v, a);
         /* On a curved move a and j share the jerk budget (3 k_i v a): take the a that makes
          * the ramp from rest to v_max shortest, not the largest a. */
-        if (v > 0.0f && (k[0] > 0.0f || k[1] > 0.0f || k[2] > 0.0f)) {
+        int curved = 0;
+        for (int i = 0; i < EF_AXES; i++)
+            curved |= k[i] > 0.0f;
+        if (v > 0.0f && curved) {
             float lo = EF_PLAN_A_SEARCH_LO * a, hi = a;
             for (int it = 0; it < EF_PLAN_A_SEARCH_ITER; it++) {
                 float m1 = lo + 0.381966f * (hi - lo), m2 = hi - 0.381966f * (hi - lo);
-                float T1 = pl_ramp_time(v, m1, pl_jt(t, k, g, J, v, m1));
-                float T2 = pl_ramp_time(v, m2, pl_jt(t, k, g, J, v, m2));
+                float T1 = pl_ramp_time(v, m1, pl_jt(t, k, g, Ji, v, m1));
+                float T2 = pl_ramp_time(v, m2, pl_jt(t, k, g, Ji, v, m2));
                 if (T1 <= T2)
                     hi = m2;
                 else
                     lo = m1;
             }
-            float as = 0.5f * (lo + hi), js = pl_jt(t, k, g, J, v, as);
+            float as = 0.5f * (lo + hi), js = pl_jt(t, k, g, Ji, v, as);
             if (pl_ramp_time(v, as, js) < pl_ramp_time(v, a, j)) {
                 a = as;
                 j = js;
@@ -664,13 +689,25 @@ int ef_plan_push(ef_plan_t *p, const ef_move_t *m)
               pl_vfinite(m->tabs) & pl_v3ok(m->kabs) & pl_v3ok(m->kjerk);
     for (int i = 0; i <= m->degree; i++)
         fin &= pl_vfinite(m->b[i]);
+    float tmax = ef_maxf(m->tabs.x, ef_maxf(m->tabs.y, m->tabs.z));
+    int aux_ok = 1;
+    for (int k = 0; k < EF_AUX; k++) {
+        for (int i = 0; i <= m->degree; i++)
+            fin &= ef_finitef(m->ab[k][i]) & (ef_fabsf(m->ab[k][i]) <= EF_MAX_COORD);
+        fin &= ef_finitef(m->atabs[k]) & ef_finitef(m->akabs[k]) & ef_finitef(m->akjerk[k]);
+        aux_ok &= (m->atabs[k] >= 0.0f) & (m->akabs[k] >= 0.0f) & (m->akjerk[k] >= 0.0f);
+        tmax = ef_maxf(tmax, m->atabs[k]);
+    }
     if (!fin)
         return EF_ERR_NONFINITE;
+    /* an auxiliary move carries its axes' tangent bounds only */
     if (!(m->length >= EF_MIN_CHORD) || !(m->kappa_max >= 0.0f) || !(m->tabs.x >= 0.0f) ||
         !(m->tabs.y >= 0.0f) || !(m->tabs.z >= 0.0f) || !(m->kabs.x >= 0.0f) ||
         !(m->kabs.y >= 0.0f) || !(m->kabs.z >= 0.0f) || !(m->kjerk.x >= 0.0f) ||
-        !(m->kjerk.y >= 0.0f) || !(m->kjerk.z >= 0.0f) ||
-        !(ef_maxf(m->tabs.x, ef_maxf(m->tabs.y, m->tabs.z)) >= EF_PLAN_TABS_MIN))
+        !(m->kjerk.y >= 0.0f) || !(m->kjerk.z >= 0.0f) || !aux_ok ||
+        !(((m->flags & EF_MOVE_AUX_ONLY)
+               ? tmax
+               : ef_maxf(m->tabs.x, ef_maxf(m->tabs.y, m->tabs.z))) >= EF_PLAN_TABS_MIN))
         return EF_ERR_ARG;
     if (!(m->feed > 0.0f))
         return EF_ERR_FEED;
@@ -688,7 +725,8 @@ int ef_plan_push(ef_plan_t *p, const ef_move_t *m)
     p->have_k = 1;
     ef_move_t *q = &p->mv[(p->mhead + p->mcount) % EF_LOOKAHEAD];
     *q = *m;
-    q->flags = (uint16_t)(m->flags & (EF_MOVE_STOP_END | EF_MOVE_CLAMPED | EF_MOVE_BLEND_CLAMPED));
+    q->flags = (uint16_t)(m->flags & (EF_MOVE_STOP_END | EF_MOVE_CLAMPED | EF_MOVE_BLEND_CLAMPED |
+                                      EF_MOVE_AUX_ONLY));
     q->seq = p->seq++;
     q->v_max = vmax;
     q->a_max = amax;

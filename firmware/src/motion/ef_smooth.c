@@ -90,7 +90,21 @@ static int sm_cfg_check(const ef_smooth_cfg_t *c)
         return EF_ERR_NONFINITE;
     if (c->micro_len < 0.0f || c->micro_turn < 0.0f || c->micro_turn > 0.5f * EF_PI_F)
         return EF_ERR_ARG;
-    return ef_limits_check(&c->lim);
+    if (c->naux > EF_AUX)
+        return EF_ERR_ARG;
+    for (int k = 0; k < c->naux; k++) {
+        if (!(c->aux_tol[k] - c->aux_tol[k] == 0.0f))
+            return EF_ERR_NONFINITE;
+        if (c->aux_tol[k] < 0.0f)
+            return EF_ERR_ARG;
+    }
+    int rc = ef_limits_check(&c->lim);
+    if (rc != EF_OK)
+        return rc;
+    for (int k = 0; k < c->naux; k++)
+        if (!(c->lim.v_axis[3 + k] > 0.0f))
+            return EF_ERR_FEED;
+    return EF_OK;
 }
 
 /* Set up an empty smoother at rest at start. */
@@ -119,7 +133,140 @@ int ef_smooth_init(ef_smooth_t *s, const ef_smooth_cfg_t *cfg, ef_vec3_t start)
     s->cfg = *cfg;
     s->pos = start;
     s->out_end = start;
+    for (int k = 0; k < EF_AUX_N; k++)
+        s->apos[k] = s->aout_end[k] = 0.0f;
     return ef_plan_init(&s->plan, &cfg->lim);
+}
+
+/* The auxiliary axes' position with nothing in the smoother (ef_smooth.h). */
+int ef_smooth_set_aux(ef_smooth_t *s, const float *aux)
+{
+    if (!s || !aux || s->pn || s->sn || s->plan.mcount || s->plan.rel_n)
+        return EF_ERR_ARG;
+    for (int k = 0; k < s->cfg.naux; k++)
+        if (!sm_coord_ok(aux[k]))
+            return EF_ERR_NONFINITE;
+    for (int k = 0; k < s->cfg.naux; k++)
+        s->apos[k] = s->aout_end[k] = aux[k];
+    return EF_OK;
+}
+
+/* ---------------------------------------------------------------- auxiliary axes */
+
+/* Auxiliary axis k on held primitive h at X Y Z arc length d from its start (linear; its
+ * programmed values exactly at both ends). */
+static float sm_aux_at(const ef_smooth_prim_t *h, int k, float d)
+{
+    if (!(d > 0.0f))
+        return h->astart[k];
+    if (d >= h->len)
+        return h->pr.aux[k];
+    return h->astart[k] + (h->pr.aux[k] - h->astart[k]) * (d / h->len);
+}
+
+/* Rate of auxiliary axis k along h: units per unit of X Y Z length. */
+static float sm_aux_rate(const ef_smooth_prim_t *h, int k)
+{
+    return h->aux_only ? 0.0f : (h->pr.aux[k] - h->astart[k]) / h->len;
+}
+
+/* m's auxiliary polynomials: linear from a0 to a1 (exactly at both ends), then the
+ * auxiliary bounds; nothing to measure while no axis moves. */
+static int sm_aux_set_linear(const ef_smooth_t *s, ef_move_t *m, const float *a0, const float *a1)
+{
+    int n = m->degree;
+    for (int k = 0; k < EF_AUX_N; k++)
+        for (int i = 0; i < 6; i++)
+            m->ab[k][i] = 0.0f;
+    for (int k = 0; k < s->cfg.naux; k++)
+        for (int i = 0; i <= n; i++)
+            m->ab[k][i] = i == n ? a1[k] : a0[k] + (a1[k] - a0[k]) * ((float)i / (float)n);
+    return ef_move_measure_aux(m);
+}
+
+/* m built on h between X Y Z arc lengths d0 and d1: its auxiliary axes linear there. */
+static int sm_aux_span(const ef_smooth_t *s, const ef_smooth_prim_t *h, float d0, float d1,
+                       ef_move_t *m)
+{
+    float a0[EF_AUX_N], a1[EF_AUX_N];
+    for (int k = 0; k < EF_AUX_N; k++)
+        a0[k] = a1[k] = 0.0f;
+    for (int k = 0; k < s->cfg.naux; k++) {
+        a0[k] = sm_aux_at(h, k, d0);
+        a1[k] = sm_aux_at(h, k, d1);
+    }
+    return sm_aux_set_linear(s, m, a0, a1);
+}
+
+/* The blend m at the vertex between h and nx: per axis the quintic with the value, the rate
+ * (units per unit of X Y Z length) and zero second derivative by X Y Z arc length of the
+ * line or arc it leaves and joins, at the blend's own ends (its parametric speed sp and
+ * its rate s1 = <f', f''> / |f'| there, so the joins are G2 by arc length); then its
+ * deviation from the programmed value at the same share of the corner's length. */
+static int sm_aux_blend(ef_smooth_t *s, const ef_smooth_prim_t *h, const ef_smooth_prim_t *nx,
+                        ef_move_t *m)
+{
+    for (int k = 0; k < EF_AUX_N; k++)
+        for (int i = 0; i < 6; i++)
+            m->ab[k][i] = 0.0f;
+    if (s->cfg.naux == 0)
+        return ef_move_measure_aux(m);
+    const ef_vec3_t *b = m->b;
+    ef_vec3_t d10 = ef_v3_scale(ef_v3_sub(b[1], b[0]), 5.0f);
+    ef_vec3_t d11 = ef_v3_scale(ef_v3_sub(b[5], b[4]), 5.0f);
+    ef_vec3_t d20 = ef_v3_scale(ef_v3_add(ef_v3_sub(b[2], ef_v3_scale(b[1], 2.0f)), b[0]), 20.0f);
+    ef_vec3_t d21 = ef_v3_scale(ef_v3_add(ef_v3_sub(b[5], ef_v3_scale(b[4], 2.0f)), b[3]), 20.0f);
+    float sp0 = ef_v3_norm(d10), sp1 = ef_v3_norm(d11);
+    float s10 = ef_v3_dot(d10, d20) / ef_maxf(sp0, 1e-30f);
+    float s11 = ef_v3_dot(d11, d21) / ef_maxf(sp1, 1e-30f);
+    float te = h->trim_end, ts = nx->trim_start, D = te + ts;
+    for (int k = 0; k < s->cfg.naux; k++) {
+        float p0 = sm_aux_at(h, k, h->len - te), p1 = sm_aux_at(nx, k, ts);
+        float k0 = sm_aux_rate(h, k), k1 = sm_aux_rate(nx, k);
+        /* tau-derivatives: a' = k sp, a'' = k s1 (d2a/ds2 = 0) */
+        float v0 = k0 * sp0, v1 = k1 * sp1, w0 = k0 * s10, w1 = k1 * s11;
+        float *c = m->ab[k];
+        c[0] = p0;
+        c[1] = p0 + v0 * 0.2f;
+        c[2] = p0 + v0 * 0.4f + w0 * 0.05f;
+        c[3] = p1 - v1 * 0.4f + w1 * 0.05f;
+        c[4] = p1 - v1 * 0.2f;
+        c[5] = p1;
+        /* deviation at EF_MOVE_SAMPLES shares of the corner: the programmed value there is
+         * on h up to the vertex (te of D), then on nx */
+        float dev = 0.0f;
+        for (int i = 1; i < EF_MOVE_SAMPLES; i++) {
+            float t = (float)i / (float)EF_MOVE_SAMPLES, u = 1.0f - t;
+            float bz = u * u * u * u * u * c[0] + 5.0f * t * u * u * u * u * c[1] +
+                       10.0f * t * t * u * u * u * c[2] + 10.0f * t * t * t * u * u * c[3] +
+                       5.0f * t * t * t * t * u * c[4] + t * t * t * t * t * c[5];
+            float sg = t * D;
+            float pr = sg <= te ? sm_aux_at(h, k, h->len - te + sg) : sm_aux_at(nx, k, sg - te);
+            dev = ef_maxf(dev, ef_fabsf(bz - pr));
+        }
+        s->st.aux_dev_max = ef_maxf(s->st.aux_dev_max, dev);
+    }
+    return ef_move_measure_aux(m);
+}
+
+/* The largest trim a blend between a and b may take on either side for the auxiliary axes'
+ * tolerances (ef_smooth.h, "Auxiliary axes"); 3.4e38 where none changes its rate, 0 where
+ * one does and its tolerance is 0 (an exact stop). *kink: some axis changes its rate. */
+static float sm_aux_trim_cap(const ef_smooth_t *s, const ef_smooth_prim_t *a,
+                             const ef_smooth_prim_t *b, int *kink)
+{
+    float cap = 3.4e38f;
+    *kink = 0;
+    for (int k = 0; k < s->cfg.naux; k++) {
+        float ka = sm_aux_rate(a, k), kb = sm_aux_rate(b, k);
+        float dk = ef_fabsf(kb - ka);
+        /* equal rates to rounding (a line split in two): no kink */
+        if (!(dk > 1e-5f * ef_maxf(ef_fabsf(ka), ef_fabsf(kb)) + 1e-12f))
+            continue;
+        *kink = 1;
+        cap = ef_minf(cap, s->cfg.aux_tol[k] / (0.45f * dk));
+    }
+    return cap;
 }
 
 /* Newest staged move, or NULL. */
@@ -148,6 +295,8 @@ static void sm_stage(ef_smooth_t *s, const ef_move_t *m)
         s->st.remnants++;
         if (prev) {
             prev->b[prev->degree] = m->b[m->degree];
+            for (int k = 0; k < s->cfg.naux; k++)
+                prev->ab[k][prev->degree] = s->aout_end[k] = m->ab[k][m->degree];
             prev->flags |= (uint16_t)(m->flags & EF_MOVE_STOP_END);
             (void)ef_move_measure(prev); /* valid before, moved by < EF_MIN_CHORD */
             s->out_end = m->b[m->degree];
@@ -158,8 +307,12 @@ static void sm_stage(ef_smooth_t *s, const ef_move_t *m)
          * no next move's start covers them. Once the machine would be EF_SM_MIN_MOVE or
          * more from their end, it is driven there: a line, ending at rest as it began. */
         ef_vec3_t re = m->b[m->degree];
+        float ae[EF_AUX_N];
+        for (int k = 0; k < EF_AUX_N; k++)
+            ae[k] = m->ab[k][m->degree];
         if (!(ef_v3_norm(ef_v3_sub(re, s->out_end)) >= EF_SM_MIN_MOVE) ||
-            sm_line_move(&gap, s->out_end, re, m->feed, m->tag) != EF_OK)
+            sm_line_move(&gap, s->out_end, re, m->feed, m->tag) != EF_OK ||
+            sm_aux_set_linear(s, &gap, s->aout_end, ae) != EF_OK)
             return;
         gap.flags |= EF_MOVE_STOP_END;
         s->st.stops++;
@@ -172,6 +325,13 @@ static void sm_stage(ef_smooth_t *s, const ef_move_t *m)
     if (ef_v3_norm(ef_v3_sub(d->b[0], e)) <= 2.0f * EF_SM_MIN_MOVE + 8.0f * 1.1920929e-7f * sc)
         d->b[0] = e;
     s->out_end = d->b[d->degree];
+    for (int k = 0; k < s->cfg.naux; k++) {
+        float ea = s->aout_end[k];
+        if (ef_fabsf(d->ab[k][0] - ea) <=
+            2.0f * EF_SM_MIN_MOVE + 8.0f * 1.1920929e-7f * ef_fabsf(ea))
+            d->ab[k][0] = ea;
+        s->aout_end[k] = d->ab[k][d->degree];
+    }
     s->sn++;
     s->st.dev_max = ef_maxf(s->st.dev_max, m->dev);
 }
@@ -754,13 +914,14 @@ static void sm_job_step(ef_smooth_t *s, ef_smooth_prim_t *a, ef_smooth_prim_t *b
     const ef_vec3_t *pts = sm_run(s, a);
     switch (s->job) {
     case EF_J_VERTEX:
-        if (a->fin_stop || !b || (b->pr.flags & EF_PRIM_STOP_BEFORE) || !(b->pr.tol > 0.0f)) {
+        if (a->fin_stop || !b || (b->pr.flags & EF_PRIM_STOP_BEFORE) || !(b->pr.tol > 0.0f) ||
+            a->aux_only || b->aux_only) {
             sm_job_stop(s, a, b);
             return;
         }
         /* The section ending here is final once this vertex is: built and measured now, so
          * a section that does not fit makes this vertex a corner, not an exact stop. */
-        if (a->pr.kind == EF_PRIM_LINE && b->pr.kind == EF_PRIM_LINE &&
+        if (a->pr.kind == EF_PRIM_LINE && b->pr.kind == EF_PRIM_LINE && !a->amove && !b->amove &&
             sm_smooth_gate(s, a, b, b->pr.tol, &s->jf))
             s->job = !a->start_smooth && a->start_stop ? EF_J_SMOOTH_ARC : EF_J_SMOOTH;
         else
@@ -805,9 +966,23 @@ static void sm_job_step(ef_smooth_t *s, ef_smooth_prim_t *a, ef_smooth_prim_t *b
          * (ef_smooth.h); both primitives were checked when pushed, a->len and b->len are
          * ef_prim_check()'s. */
         float tol = b->pr.tol - ef_maxf(a->merge_dev, b->merge_dev);
+        int kink;
+        float cap = sm_aux_trim_cap(s, a, b, &kink);
+        if (kink && !(cap >= 4.0f * EF_MIN_CHORD)) {
+            /* an auxiliary axis changes its rate here and its tolerance leaves no blend */
+            s->st.aux_stops++;
+            sm_job_stop(s, a, b);
+            return;
+        }
         int rc = ef_blend_prims_valid(s->cfg.g2, a->start, &a->pr, a->len, &b->pr, b->len, tol,
-                                      0.5f * a->len, 0.5f * b->len, &a->blend);
-        if (rc == EF_ERR_REVERSAL) {
+                                      ef_minf(0.5f * a->len, cap), ef_minf(0.5f * b->len, cap),
+                                      &a->blend);
+        if (rc == EF_OK && (a->blend.flags & EF_BLEND_STRAIGHT) && kink) {
+            /* straight through, but an auxiliary axis changes its rate: no blend to carry
+             * that, so the axis would jump in speed */
+            s->st.aux_stops++;
+            sm_job_stop(s, a, b);
+        } else if (rc == EF_ERR_REVERSAL) {
             s->st.reversals++;
             sm_job_stop(s, a, b);
         } else if (rc != EF_OK || (a->blend.flags & EF_BLEND_STOP)) {
@@ -939,6 +1114,8 @@ static int sm_skip_body(ef_smooth_t *s, ef_smooth_prim_t *h, ef_move_t *m)
         /* What is left (under EF_MIN_CHORD) is taken by the move before, which then ends
          * exactly at the primitive's end, and its stop with it. */
         prev->b[prev->degree] = h->pr.end;
+        for (int k = 0; k < s->cfg.naux; k++)
+            prev->ab[k][prev->degree] = s->aout_end[k] = h->pr.aux[k];
         (void)ef_move_measure(prev);
         s->out_end = h->pr.end;
         if (h->end_kind == EF_V_STOP)
@@ -955,6 +1132,23 @@ static int sm_skip_body(ef_smooth_t *s, ef_smooth_prim_t *h, ef_move_t *m)
 static int sm_next_move(ef_smooth_t *s, ef_move_t *m)
 {
     ef_smooth_prim_t *h = sm_held(s, 0);
+    if (s->emitting == EF_E_BODY && h->aux_only) {
+        /* X Y Z still, between exact stops (both vertices stop: sm_job_step()) */
+        ef_move_t zero = {0};
+        *m = zero;
+        m->b[0] = m->b[1] = h->start;
+        m->degree = 1;
+        m->kind = EF_MOVE_LINE;
+        m->feed = h->pr.feed;
+        m->tag = h->pr.tag;
+        m->flags = EF_MOVE_AUX_ONLY | EF_MOVE_STOP_END;
+        int rc = sm_aux_span(s, h, 0.0f, h->len, m);
+        if (rc != EF_OK)
+            return rc;
+        s->st.aux_moves++;
+        s->emitting = EF_E_DONE;
+        return 1;
+    }
     if (s->emitting == EF_E_BODY) {
         int rc;
         if (h->pr.kind == EF_PRIM_ARC) {
@@ -1005,6 +1199,11 @@ static int sm_next_move(ef_smooth_t *s, ef_move_t *m)
             if (rc == EF_OK && !sm_move_ok(m))
                 rc = EF_ERR_NONFINITE;
             if (rc == EF_OK) {
+                float pa, pb;
+                sm_piece_bounds(h, s->arc_next, n, &pa, &pb);
+                rc = sm_aux_span(s, h, pa, pb, m);
+            }
+            if (rc == EF_OK) {
                 s->st.arc_pieces++;
                 if (++s->arc_next < n)
                     return 1; /* more pieces; the last one goes on below */
@@ -1018,6 +1217,8 @@ static int sm_next_move(ef_smooth_t *s, ef_move_t *m)
                 ef_prim_frame(h->start, &h->pr, a, &f0);
                 ef_prim_frame(h->start, &h->pr, b, &f1);
                 rc = sm_chord_stop(s, m, f0.p, f1.p, &h->pr);
+                if (rc == EF_OK)
+                    rc = sm_aux_span(s, h, a, b, m);
                 if (rc == EF_OK && ++s->arc_next < n)
                     return 1;
             }
@@ -1056,6 +1257,8 @@ static int sm_next_move(ef_smooth_t *s, ef_move_t *m)
                 rc = sm_line_move(m, a, b, h->pr.feed, h->pr.tag);
                 m->dev = h->merge_dev; /* the chord, off the input points by that much */
             }
+            if (rc == EF_OK)
+                rc = sm_aux_span(s, h, h->trim_start, h->len - h->trim_end, m);
         }
         if (rc != EF_OK)
             return rc;
@@ -1087,6 +1290,9 @@ static int sm_next_move(ef_smooth_t *s, ef_move_t *m)
         m->tabs = h->blend_tabs;
         m->kabs = h->blend_kabs;
         m->kjerk = h->blend_kjerk;
+        int rc = sm_aux_blend(s, h, nx, m);
+        if (rc != EF_OK)
+            return rc;
         nx->blend_in_end = m->b[5];
         s->emitting = EF_E_DONE;
         return 1;
@@ -1199,6 +1405,12 @@ static int sm_try_merge(ef_smooth_t *s, const ef_prim_t *pr)
         (pr->flags & EF_PRIM_STOP_BEFORE))
         return 0;
     ef_smooth_prim_t *h = sm_held(s, s->pn - 1);
+    /* no decimation across an auxiliary axis's motion (ef_smooth.h, "Auxiliary axes") */
+    if (h->amove || h->aux_only)
+        return 0;
+    for (int k = 0; k < s->cfg.naux; k++)
+        if (pr->aux[k] != s->apos[k])
+            return 0;
     if (h->pr.kind != EF_PRIM_LINE || h->end_kind != EF_V_OPEN || h->fin_stop ||
         h->pr.feed != pr->feed || h->nmerged >= EF_SMOOTH_MERGE_MAX || !(h->pr.tol > 0.0f))
         return 0;
@@ -1260,10 +1472,39 @@ int ef_smooth_push(ef_smooth_t *s, const ef_prim_t *pr)
     if (!sm_room(s))
         return EF_ERR_FULL;
     float len;
-    rc = ef_prim_check(s->pos, pr, &len);
-    if (rc != EF_OK)
-        return rc;
-    if (sm_try_merge(s, pr)) {
+    int aux_only = 0, amove = 0;
+    for (int k = 0; k < s->cfg.naux; k++) {
+        if (!sm_coord_ok(pr->aux[k]))
+            return EF_ERR_NONFINITE;
+        amove |= pr->aux[k] != s->apos[k];
+    }
+    if (amove && pr->kind == EF_PRIM_LINE && sm_v3_ok(pr->end) &&
+        ef_v3_norm(ef_v3_sub(pr->end, s->pos)) < EF_MIN_CHORD) {
+        /* X Y Z still: an auxiliary move, its length the axes' own distance */
+        float l2 = 0.0f;
+        for (int k = 0; k < s->cfg.naux; k++) {
+            float d = pr->aux[k] - s->apos[k];
+            l2 += d * d;
+        }
+        len = ef_sqrtf(l2);
+        aux_only = len >= EF_MIN_CHORD;
+    }
+    if (aux_only) {
+        if (pr->flags & ~EF_PRIM_STOP_BEFORE)
+            return EF_ERR_ARG;
+        if (!(pr->feed - pr->feed == 0.0f) || !(pr->tol - pr->tol == 0.0f) ||
+            !(pr->qtol - pr->qtol == 0.0f))
+            return EF_ERR_NONFINITE;
+        if (pr->tol < 0.0f || pr->qtol < 0.0f)
+            return EF_ERR_ARG;
+        if (!(pr->feed > 0.0f))
+            return EF_ERR_FEED;
+    } else {
+        rc = ef_prim_check(s->pos, pr, &len);
+        if (rc != EF_OK)
+            return rc;
+    }
+    if (!aux_only && sm_try_merge(s, pr)) {
         s->pos = pr->end;
         s->st.prims++;
         return EF_OK;
@@ -1272,6 +1513,14 @@ int ef_smooth_push(ef_smooth_t *s, const ef_prim_t *pr)
     h->pr = *pr;
     h->start = s->pos;
     h->len = len;
+    h->amove = (uint8_t)amove;
+    h->aux_only = (uint8_t)aux_only;
+    for (int k = 0; k < EF_AUX_N; k++) {
+        h->astart[k] = k < s->cfg.naux ? s->apos[k] : 0.0f;
+        h->pr.aux[k] = k < s->cfg.naux ? pr->aux[k] : 0.0f;
+    }
+    if (aux_only)
+        h->pr.end = s->pos; /* X Y Z stay exactly */
     h->trim_start = h->trim_end = 0.0f;
     h->end_kind = EF_V_OPEN;
     h->fin_stop = 0;
@@ -1290,7 +1539,9 @@ int ef_smooth_push(ef_smooth_t *s, const ef_prim_t *pr)
     h->id = s->next_id++;
     h->blend_in_end = h->start;
     s->pn++;
-    s->pos = pr->end;
+    s->pos = h->pr.end;
+    for (int k = 0; k < s->cfg.naux; k++)
+        s->apos[k] = pr->aux[k];
     s->st.prims++;
     return EF_OK;
 }

@@ -397,12 +397,48 @@ static void prim_mm_elevate(ef_vec3_t *p, int n)
 }
 
 /* Clear a move's measured fields and pass rc on, so failures leave no stale data. */
+static void prim_aux_zero(ef_move_t *m)
+{
+    for (int k = 0; k < EF_AUX_N; k++)
+        m->atabs[k] = m->akabs[k] = m->akjerk[k] = 0.0f;
+}
+
 static int prim_move_measure_fail(ef_move_t *m, int rc)
 {
     m->length = 0.0f;
     m->kappa_max = 0.0f;
     m->tabs = m->kabs = m->kjerk = ef_v3(0.0f, 0.0f, 0.0f);
+    prim_aux_zero(m);
     return rc;
+}
+
+/* Bit k set: auxiliary axis k moves on the move (its control points differ); -1 when one is
+ * not finite. */
+static int prim_aux_moving(const ef_move_t *m)
+{
+    int mask = 0;
+    for (int k = 0; k < EF_AUX; k++) {
+        const float *c = m->ab[k];
+        for (int i = 0; i <= m->degree; i++) {
+            if (!prim_finite(c[i]))
+                return -1;
+            if (c[i] != c[0])
+                mask |= 1 << k;
+        }
+    }
+    return mask;
+}
+
+/* A scalar Bernstein polynomial of degree n (<= 4) at t (de Casteljau). */
+static float prim_bern(const float *c, int n, float t)
+{
+    float w[5];
+    for (int i = 0; i <= n; i++)
+        w[i] = c[i];
+    for (int r = 1; r <= n; r++)
+        for (int i = 0; i + r <= n; i++)
+            w[i] += t * (w[i + 1] - w[i]);
+    return w[0];
 }
 
 /* Measure a move's length, curvature bound and tangent bounds (contract in ef_path.h). */
@@ -416,9 +452,29 @@ int ef_move_measure(ef_move_t *m)
     int finite = 1;
     for (int i = 0; i <= deg; i++)
         finite &= prim_v3_finite(m->b[i]);
-    if (!finite)
+    int amask = prim_aux_moving(m);
+    if (!finite || amask < 0)
         return prim_move_measure_fail(m, EF_ERR_NONFINITE);
+    prim_aux_zero(m);
 
+    if (deg == 1 && (m->flags & EF_MOVE_AUX_ONLY)) {
+        /* X Y Z stay: the path parameter is the auxiliary axes' own distance */
+        float l2 = 0.0f;
+        for (int k = 0; k < EF_AUX; k++) {
+            float d = m->ab[k][1] - m->ab[k][0];
+            l2 += d * d;
+        }
+        float l = ef_sqrtf(l2);
+        float inv = 1.0f / ef_maxf(l, 1e-30f);
+        m->length = l;
+        m->kappa_max = 0.0f;
+        m->tabs = m->kabs = m->kjerk = ef_v3(0.0f, 0.0f, 0.0f);
+        for (int k = 0; k < EF_AUX; k++)
+            m->atabs[k] = ef_fabsf(m->ab[k][1] - m->ab[k][0]) * inv;
+        if (!prim_finite(l))
+            return prim_move_measure_fail(m, EF_ERR_NONFINITE);
+        return EF_OK;
+    }
     if (deg == 1) {
         ef_vec3_t d = ef_v3_sub(m->b[1], m->b[0]);
         float l = ef_v3_norm(d);
@@ -427,9 +483,28 @@ int ef_move_measure(ef_move_t *m)
         m->kappa_max = 0.0f;
         m->tabs = ef_v3(ef_fabsf(d.x) * inv, ef_fabsf(d.y) * inv, ef_fabsf(d.z) * inv);
         m->kabs = m->kjerk = ef_v3(0.0f, 0.0f, 0.0f);
+        for (int k = 0; k < EF_AUX; k++)
+            if (amask & (1 << k))
+                m->atabs[k] = ef_fabsf(m->ab[k][1] - m->ab[k][0]) * inv;
         if (!prim_finite(l))
             return prim_move_measure_fail(m, EF_ERR_NONFINITE);
         return EF_OK;
+    }
+
+    /* The moving auxiliary axes' hodographs (scalars, not elevated: prim_bern() takes any
+     * degree). */
+    float a1[EF_AUX_N][5], a2[EF_AUX_N][4], a3[EF_AUX_N][3];
+    float aab[EF_AUX_N], aak[EF_AUX_N], aaj[EF_AUX_N];
+    for (int k = 0; k < EF_AUX; k++) {
+        aab[k] = aak[k] = aaj[k] = 0.0f;
+        if (!(amask & (1 << k)))
+            continue;
+        for (int i = 0; i < deg; i++)
+            a1[k][i] = (float)deg * (m->ab[k][i + 1] - m->ab[k][i]);
+        for (int i = 0; i + 1 < deg; i++)
+            a2[k][i] = (float)(deg - 1) * (a1[k][i + 1] - a1[k][i]);
+        for (int i = 0; i + 2 < deg; i++)
+            a3[k][i] = (float)(deg - 2) * (a2[k][i + 1] - a2[k][i]);
     }
 
     /* Hodograph (degree deg - 1) and second hodograph (deg - 2) control points, once (for a
@@ -489,6 +564,26 @@ int ef_move_measure(ef_move_t *m)
         tabs.x = ef_maxf(tabs.x, ef_fabsf(d1.x) * w);
         tabs.y = ef_maxf(tabs.y, ef_fabsf(d1.y) * w);
         tabs.z = ef_maxf(tabs.z, ef_fabsf(d1.z) * w);
+        /* An auxiliary axis a(tau) follows the same parameter: by X Y Z arc length its
+         * derivatives are a' / s, (a'' - s1 a' / s) / s^2 and the third as js's (the path's
+         * own s1, s2); by uniform tau a^(k) / L^k. The larger of each, as above. */
+        for (int q = 0; k < EF_AUX; k++) {
+            if (!(amask & (1 << q)))
+                continue;
+            float e1 = prim_bern(a1[q], deg - 1, t), e2 = prim_bern(a2[q], deg - 2, t);
+            float e3 = prim_bern(a3[q], deg - 3, t);
+            float ka = (e2 - s1 * e1 * isp) * isp * isp;
+            float ja = e3 * i3 - 3.0f * s1 * i4 * e2 + (3.0f * s1 * s1 * i4 * isp - s2 * i4) * e1;
+            aab[q] = ef_maxf(aab[q], ef_fabsf(e1) * w);
+            aak[q] = ef_maxf(aak[q], ef_maxf(ef_fabsf(ka), ef_fabsf(e2) * ilen2));
+            aaj[q] = ef_maxf(aaj[q], ef_maxf(ef_fabsf(ja), ef_fabsf(e3) * ilen3));
+        }
+    }
+    for (int k = 0; k < EF_AUX; k++) {
+        aak[k] = ef_minf(aak[k], 1e30f);
+        aaj[k] = ef_minf(aaj[k], 1e30f);
+        if (!(prim_finite(aab[k]) & prim_finite(aak[k]) & prim_finite(aaj[k])))
+            return prim_move_measure_fail(m, EF_ERR_NONFINITE);
     }
     /* A tiny curve's bounds are huge (curvature ~ 1 / L, its rate ~ 1 / L^2) but finite:
      * saturate rather than overflow, so the planner gets a small positive speed limit. */
@@ -503,5 +598,27 @@ int ef_move_measure(ef_move_t *m)
     m->tabs = tabs;
     m->kabs = kabs;
     m->kjerk = kjerk;
+    for (int k = 0; k < EF_AUX; k++) {
+        m->atabs[k] = aab[k];
+        m->akabs[k] = aak[k];
+        m->akjerk[k] = aaj[k];
+    }
     return EF_OK;
+}
+
+/* Auxiliary bounds after ab changed (contract in ef_path.h). */
+int ef_move_measure_aux(ef_move_t *m)
+{
+    if (!m)
+        return EF_ERR_ARG;
+    if (m->degree != 1 && m->degree != 3 && m->degree != 5)
+        return prim_move_measure_fail(m, EF_ERR_ARG);
+    int amask = prim_aux_moving(m);
+    if (amask < 0)
+        return prim_move_measure_fail(m, EF_ERR_NONFINITE);
+    if (amask == 0 && !(m->flags & EF_MOVE_AUX_ONLY)) {
+        prim_aux_zero(m);
+        return EF_OK;
+    }
+    return ef_move_measure(m);
 }

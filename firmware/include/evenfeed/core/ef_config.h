@@ -44,6 +44,23 @@
 #define EF_MAX_NORM_CURVATURE 1e3f
 #endif
 
+/** Axes of a primitive, a move and a setpoint: X Y Z, then A B C U V W in that order
+ *  (LinuxCNC's nine), 3 to 9; default 9, a 6-axis robot sets 6 (X Y Z A B C). The geometry
+ *  (tables, blends, the tolerance P) acts on X Y Z, the tool tip; the others, the auxiliary
+ *  axes, follow the same path parameter (docs/axes.md). Every per-axis array below is sized
+ *  by it at compile time. */
+#ifndef EF_AXES
+#define EF_AXES 9
+#endif
+#if EF_AXES < 3 || EF_AXES > 9
+#error "EF_AXES must be 3 to 9"
+#endif
+/** Auxiliary axes (A B C U V W, as many as EF_AXES has beyond X Y Z). */
+#define EF_AUX (EF_AXES - 3)
+/** Storage of a per-auxiliary-axis array: EF_AUX, at least 1 (C has no empty arrays; with
+ *  EF_AXES 3 the one entry is unused and zero). */
+#define EF_AUX_N (EF_AUX > 0 ? EF_AUX : 1)
+
 /** Maximum number of table axes (G2 quintic uses 4). */
 #define EF_TABLE_MAX_AXES 4
 /** Maximum number of DOFs stored per table node (G2 quintic uses 4). */

@@ -70,11 +70,13 @@ typedef enum {
 
 /** One setpoint. */
 typedef struct {
-    ef_vec3_t p;    /**< commanded position */
-    float v_plan;   /**< planned path speed now (units/s), the law's (at rate 1) */
-    uint32_t seq;   /**< sequence number of the move being executed (last one when idle) */
-    uint32_t tag;   /**< its tag */
-    uint8_t moving; /**< 1 while executing a move, 0 when idle or holding */
+    ef_vec3_t p;         /**< commanded position */
+    float v_plan;        /**< planned path speed now (units/s), the law's (at rate 1) */
+    uint32_t seq;        /**< sequence number of the move being executed (last one when idle) */
+    uint32_t tag;        /**< its tag */
+    uint8_t moving;      /**< 1 while executing a move, 0 when idle or holding */
+    float aux[EF_AUX_N]; /**< the auxiliary axes' commanded positions (A B C U V W), at the
+                              same parameter as p */
 } ef_setpoint_t;
 
 /** Interpolator state (public for static allocation; treat as private). */
@@ -98,6 +100,11 @@ typedef struct {
     ef_vec3_t end;      /**< where the last queued move ends */
     float v_end;        /**< exit speed of the last queued move */
     uint32_t last_seq, last_tag;
+    /** The auxiliary axes: power-basis coefficients of each queued move's ab relative to
+     *  ab[k][0], centred on t = 1/2 as pc; last setpoint; where the last queued move ends. */
+    float apc[EF_INTERP_QUEUE][EF_AUX_N][6];
+    float apos[EF_AUX_N];
+    float aend[EF_AUX_N];
 } ef_interp_t;
 
 /**
@@ -109,6 +116,16 @@ typedef struct {
  * @retval EF_ERR_NONFINITE home not finite or beyond EF_MAX_COORD
  */
 int ef_interp_init(ef_interp_t *ip, ef_vec3_t home, uint32_t period_us, int mode);
+
+/**
+ * @brief Set the auxiliary axes' position while nothing is queued (ef_interp_init() puts
+ * them at 0): where the first move's ab must start.
+ * @param aux EF_AUX positions (A B C U V W order)
+ * @retval EF_OK
+ * @retval EF_ERR_ARG       NULL, or moves queued
+ * @retval EF_ERR_NONFINITE a position not finite or beyond EF_MAX_COORD
+ */
+int ef_interp_set_aux(ef_interp_t *ip, const float *aux);
 
 /**
  * @brief Whether ef_interp_push() would accept m after a move ending at start (the checks
@@ -124,8 +141,9 @@ int ef_interp_check(const ef_move_t *m, ef_vec3_t start);
  * @brief Queue a planned move.
  * @retval EF_OK
  * @retval EF_ERR_ARG  NULL, a move that does not start within EF_INTERP_JOIN_TOL of the
- *                     previous end, duration <= 0 or not finite, degree not 1/3/5,
- *                     non-finite control points / law / length / v_exit (ip unchanged)
+ *                     previous end (on every axis, the auxiliary ones included), duration
+ *                     <= 0 or not finite, degree not 1/3/5, non-finite control points
+ *                     (auxiliary too) / law / length / v_exit (ip unchanged)
  * @retval EF_ERR_FULL queue full: process first
  */
 int ef_interp_push(ef_interp_t *ip, const ef_move_t *m);

@@ -132,14 +132,19 @@ extern "C" {
 
 /** Motion limits. Speeds in units/s, accelerations units/s^2, jerk units/s^3. */
 typedef struct {
-    float v_axis[3];     /**< largest speed per axis, > 0 */
-    float a_axis[3];     /**< largest acceleration per axis, > 0 */
-    float j_max;         /**< largest jerk of every axis; 0 = no jerk limit
-                              (constant-acceleration ramps) */
-    float a_normal_frac; /**< largest share of each axis's acceleration the centripetal part
-                              may take at a move's speed limit, in (0, 1); what is left goes
-                              to the ramps (the pipeline uses 0.5: on the LinuxCNC corpus
-                              0.5-0.85 are within 1 % of each other) */
+    float v_axis[EF_AXES]; /**< largest speed per axis (X Y Z A B C U V W), > 0 for X Y Z;
+                                >= 0 for the auxiliary axes, 0 = the machine has no such
+                                axis (a move that moves it gets no speed: EF_ERR_FEED) */
+    float a_axis[EF_AXES]; /**< largest acceleration per axis, likewise */
+    float j_max;           /**< largest jerk of X Y Z (and of every auxiliary axis whose
+                                j_aux is 0); 0 = no jerk limit on any axis
+                                (constant-acceleration ramps) */
+    float a_normal_frac;   /**< largest share of each axis's acceleration the centripetal part
+                                may take at a move's speed limit, in (0, 1); what is left goes
+                                to the ramps (the pipeline uses 0.5: on the LinuxCNC corpus
+                                0.5-0.85 are within 1 % of each other) */
+    float j_aux[EF_AUX_N]; /**< largest jerk of each auxiliary axis, >= 0; 0 = j_max (ignored
+                                when j_max is 0) */
 } ef_limits_t;
 
 /**

@@ -95,6 +95,26 @@
  * the true arc by at most max(tol / 2, ::EF_SMOOTH_ARC_TOL_MIN). Equal pieces of one arc
  * have the same normalized configuration, so checking the first checks them all.
  *
+ * ## Auxiliary axes (docs/axes.md)
+ * With cfg.naux > 0 the primitives carry A B C U V W (ef_prim_t::aux). Each moves linearly
+ * in its primitive's X Y Z arc length and every move carries it as a polynomial in the
+ * move's own parameter (ef_move_t::ab), so it follows the tool tip's path parameter:
+ * - lines and arc pieces: linear;
+ * - a corner blend: the quintic that meets both neighbours' value, rate and zero second
+ *   derivative by X Y Z arc length where the blend starts and ends (G2 on every axis); the
+ *   blend's trims are capped per axis at aux_tol / (0.45 |dk|), dk the change of the axis's
+ *   rate (units per unit of X Y Z length) at the vertex, so the axis deviates from its
+ *   programmed value at the same share of the corner by at most aux_tol (a quintic over a
+ *   kink of dk across trims d1 + d2 deviates by at most 0.192 dk (d1 + d2));
+ * - an exact stop where an axis changes rate and aux_tol is 0 or the vertex is straight
+ *   (no blend to carry it); no decimation across, and no smooth vertex beside, a primitive
+ *   that moves an auxiliary axis (a CAM 5-axis micro-segment program is blended corner by
+ *   corner);
+ * - an auxiliary move (X Y Z still) is one degree-1 move between exact stops
+ *   (::EF_MOVE_AUX_ONLY), its feed in the axes' units per second.
+ * The planner limits each axis's speed, acceleration and jerk (ef_limits_t) from the
+ * move's atabs, akabs and akjerk as it does X Y Z's.
+ *
  * ## Errors
  * A primitive that fails validation is refused with its error (nothing of it is queued; the
  * path so far is unchanged); the caller reports it and normally calls ef_smooth_finish()
@@ -174,6 +194,14 @@ typedef struct {
     uint8_t smooth_degree;    /**< 5: G2 quintic smooth sections; 3: G1 cubic */
     uint8_t keep_slow_blends; /**< nonzero: blend every corner that fits, also where an exact
                                    stop is faster (rule 1; for tests of the blend geometry) */
+    uint8_t naux;             /**< auxiliary axes in use, 0..EF_AUX (A, then B, ...): the
+                                   first naux of ef_prim_t::aux are read ("Auxiliary axes");
+                                   0 reads none (an X Y Z machine) */
+    float aux_tol[EF_AUX_N];  /**< per auxiliary axis in use, the largest deviation of a blend
+                                   from the axis's programmed value at the same share of the
+                                   corner, in the axis's units (degrees for A B C), >= 0;
+                                   0: every vertex where the axis changes its rate is an
+                                   exact stop */
 } ef_smooth_cfg_t;
 
 /** Counters, for summaries and tests. */
@@ -197,6 +225,11 @@ typedef struct {
                                 that leave it EF_MIN_CHORD or more from their end become a line
                                 to it, ending at rest (counted in stops too) */
     float dev_max;         /**< largest deviation of any emitted move from the programmed path */
+    uint32_t aux_moves;    /**< auxiliary moves (X Y Z still) */
+    uint32_t aux_stops;    /**< exact stops because an auxiliary axis changed its rate where
+                                no blend could take it (aux_tol 0, or a straight vertex) */
+    float aux_dev_max;     /**< largest deviation of a blend from an auxiliary axis's
+                                programmed value, in that axis's units (ef_smooth_cfg_t) */
 } ef_smooth_stats_t;
 
 /** One held primitive with what the geometry stage has decided about it. */
@@ -215,28 +248,31 @@ typedef struct {
     ef_frame_t fs, fe;                /**< smooth vertex frames at start / end */
     ef_blend_t blend;                 /**< blend at its end (when end_kind says so) */
     ef_vec3_t blend_in_end;           /**< where the blend at its start ended (its first point) */
-    float blend_len;       /**< end blend's length (measured once, when the vertex is decided) */
-    float blend_kmax;      /**< end blend's curvature bound (likewise) */
-    ef_vec3_t blend_tabs;  /**< end blend's axis tangent bounds (likewise) */
-    ef_vec3_t blend_kabs;  /**< end blend's axis curvature-vector bounds (likewise) */
-    ef_vec3_t blend_kjerk; /**< end blend's axis third-derivative bounds (likewise) */
-    uint32_t nmerged;      /**< inner vertices merged into it (band decimation) */
-    float merge_dev;       /**< largest distance of those vertices from it: the blends at
-                                its ends get only tol - merge_dev */
-    float piece_max;       /**< longest input line merged into it (the micro_len test) */
-    uint32_t id;           /**< sequence number: its run slot is id % EF_SMOOTH_RUNS */
-    uint8_t sec;           /**< its smooth section: 0 none / not built yet, 1 fits, 2 does
-                                not (driven as its chord between exact stops) */
-    float sec_dev;         /**< that section's measured deviation (when sec == 1) */
-    ef_vec3_t sec_b[6];    /**< that section's control points (when sec == 1): emitted as
-                                built and measured, not built a second time */
-    uint8_t sec_degree;    /**< its degree (5, or 3 for G1 cubic sections) */
-    uint16_t sec_flags;    /**< its EF_MOVE_* flags (a clamped lookup) */
-    float sec_len;         /**< its measured length (ef_move_measure()) */
-    float sec_kmax;        /**< its curvature bound (likewise) */
-    ef_vec3_t sec_tabs;    /**< its axis tangent bounds (likewise) */
-    ef_vec3_t sec_kabs;    /**< its axis curvature-vector bounds (likewise) */
-    ef_vec3_t sec_kjerk;   /**< its axis third-derivative bounds (likewise) */
+    float blend_len;        /**< end blend's length (measured once, when the vertex is decided) */
+    float blend_kmax;       /**< end blend's curvature bound (likewise) */
+    ef_vec3_t blend_tabs;   /**< end blend's axis tangent bounds (likewise) */
+    ef_vec3_t blend_kabs;   /**< end blend's axis curvature-vector bounds (likewise) */
+    ef_vec3_t blend_kjerk;  /**< end blend's axis third-derivative bounds (likewise) */
+    uint32_t nmerged;       /**< inner vertices merged into it (band decimation) */
+    float merge_dev;        /**< largest distance of those vertices from it: the blends at
+                                 its ends get only tol - merge_dev */
+    float piece_max;        /**< longest input line merged into it (the micro_len test) */
+    uint32_t id;            /**< sequence number: its run slot is id % EF_SMOOTH_RUNS */
+    uint8_t sec;            /**< its smooth section: 0 none / not built yet, 1 fits, 2 does
+                                 not (driven as its chord between exact stops) */
+    float sec_dev;          /**< that section's measured deviation (when sec == 1) */
+    ef_vec3_t sec_b[6];     /**< that section's control points (when sec == 1): emitted as
+                                 built and measured, not built a second time */
+    uint8_t sec_degree;     /**< its degree (5, or 3 for G1 cubic sections) */
+    uint16_t sec_flags;     /**< its EF_MOVE_* flags (a clamped lookup) */
+    float astart[EF_AUX_N]; /**< the auxiliary axes where it starts */
+    uint8_t amove;          /**< an auxiliary axis moves along it */
+    uint8_t aux_only;       /**< an auxiliary move: X Y Z still, len the axes' distance */
+    float sec_len;          /**< its measured length (ef_move_measure()) */
+    float sec_kmax;         /**< its curvature bound (likewise) */
+    ef_vec3_t sec_tabs;     /**< its axis tangent bounds (likewise) */
+    ef_vec3_t sec_kabs;     /**< its axis curvature-vector bounds (likewise) */
+    ef_vec3_t sec_kjerk;    /**< its axis third-derivative bounds (likewise) */
 } ef_smooth_prim_t;
 
 /** Run slots: the vertices merged into a held line are needed until its end vertex is
@@ -254,8 +290,10 @@ typedef struct {
     uint32_t next_id; /**< id of the next held primitive */
     /** Vertices merged into the held lines whose end vertex is still open, in order. */
     ef_vec3_t runs[EF_SMOOTH_RUNS][EF_SMOOTH_MERGE_MAX];
-    ef_vec3_t pos;     /**< end of the last accepted primitive */
-    ef_vec3_t out_end; /**< where the last emitted move ends (moves chain exactly) */
+    ef_vec3_t pos;            /**< end of the last accepted primitive */
+    ef_vec3_t out_end;        /**< where the last emitted move ends (moves chain exactly) */
+    float apos[EF_AUX_N];     /**< the auxiliary axes at the end of the last accepted one */
+    float aout_end[EF_AUX_N]; /**< ... where the last emitted move ends */
     ef_move_t stage[EF_SMOOTH_STAGE];
     uint32_t sh, sn;   /**< staged moves waiting for planner room */
     uint32_t arc_next; /**< arc emission cursor: next piece of the oldest primitive */
@@ -276,12 +314,23 @@ typedef struct {
  * @brief Initialise at rest at `start`.
  * @retval EF_OK
  * @retval EF_ERR_ARG       NULL, missing table, smooth_degree not 3 or 5, micro_len < 0,
- *                          micro_turn outside [0, pi/2]
+ *                          micro_turn outside [0, pi/2], naux above EF_AUX, an aux_tol < 0
  * @retval EF_ERR_KIND      a table of the wrong kind
  * @retval EF_ERR_NONFINITE start not finite / beyond EF_MAX_COORD, or a non-finite setting
- * @retval EF_ERR_FEED      as ef_limits_check()
+ * @retval EF_ERR_FEED      as ef_limits_check(), or an auxiliary axis in use without a
+ *                          speed and acceleration limit
  */
 int ef_smooth_init(ef_smooth_t *s, const ef_smooth_cfg_t *cfg, ef_vec3_t start);
+
+/**
+ * @brief Where the auxiliary axes are (ef_smooth_init() puts them at 0), while nothing is
+ * held, staged or planned (after init, or once a finish has been pulled empty).
+ * @param aux cfg.naux positions (A B C U V W order; the rest are not read)
+ * @retval EF_OK
+ * @retval EF_ERR_ARG       NULL, or moves still in the smoother
+ * @retval EF_ERR_NONFINITE a position not finite or beyond EF_MAX_COORD
+ */
+int ef_smooth_set_aux(ef_smooth_t *s, const float *aux);
 
 /**
  * @brief Push the next primitive (it starts at the previous one's end), after one unit of
@@ -292,7 +341,10 @@ int ef_smooth_init(ef_smooth_t *s, const ef_smooth_cfg_t *cfg, ef_vec3_t start);
  * @retval EF_ERR_FEED, EF_ERR_NONFINITE  a staged move the planner refused (not expected:
  *                      every move is checked when built); nothing taken
  * @retval EF_ERR_ARG, EF_ERR_NONFINITE, EF_ERR_FEED, EF_ERR_DEGENERATE, EF_ERR_ARC
- *                      as ef_prim_check(): the primitive is refused, nothing of it taken
+ *                      as ef_prim_check() (an auxiliary value in use not finite or beyond
+ *                      EF_MAX_COORD: EF_ERR_NONFINITE; an auxiliary move: its flags and
+ *                      feed checked as a line's): the primitive is refused, nothing of it
+ *                      taken
  *                      (checked once there is room for it: a refusal may come after
  *                      EF_ERR_FULL; the unit done before it is the smoother's own work)
  */

@@ -83,16 +83,22 @@ typedef enum {
 typedef struct {
     uint8_t kind; /**< ::ef_prim_kind_t */
     uint8_t pad[3];
-    uint32_t flags;   /**< EF_PRIM_* */
-    ef_vec3_t end;    /**< end point */
-    ef_vec3_t centre; /**< ARC: centre, at the start's position along the axis */
-    ef_vec3_t axis;   /**< ARC: unit axis (e.g. +Z for G17) */
-    float sweep;      /**< ARC: signed angle about the axis (rad), full turns included, != 0 */
-    float feed;       /**< commanded feed (units/s), > 0 */
-    float tol;        /**< path tolerance P at the vertex where this primitive starts
-                           (G64 P); 0 means exact stop there */
-    float qtol;       /**< collinearity tolerance Q (G64 Q), >= 0; 0 disables merging */
-    uint32_t tag;     /**< caller's reference, e.g. the source line; copied to moves */
+    uint32_t flags;      /**< EF_PRIM_* */
+    ef_vec3_t end;       /**< end point */
+    ef_vec3_t centre;    /**< ARC: centre, at the start's position along the axis */
+    ef_vec3_t axis;      /**< ARC: unit axis (e.g. +Z for G17) */
+    float sweep;         /**< ARC: signed angle about the axis (rad), full turns included, != 0 */
+    float feed;          /**< commanded feed (units/s), > 0 */
+    float tol;           /**< path tolerance P at the vertex where this primitive starts
+                              (G64 P); 0 means exact stop there */
+    float qtol;          /**< collinearity tolerance Q (G64 Q), >= 0; 0 disables merging */
+    uint32_t tag;        /**< caller's reference, e.g. the source line; copied to moves */
+    float aux[EF_AUX_N]; /**< A B C U V W (the first ef_smooth_cfg_t::naux of them) at the end:
+                              they move linearly in the primitive's arc length; the smoother
+                              reads none of them while naux is 0. A line whose X Y Z stay
+                              (shorter than EF_MIN_CHORD) and whose auxiliary axes move is an
+                              auxiliary move: planned on those axes alone, between exact
+                              stops, `feed` in their units per second (docs/axes.md) */
 } ef_prim_t;
 
 /** Geometry at a point of a primitive or move. */
@@ -245,6 +251,9 @@ typedef enum {
 #define EF_MOVE_CLAMPED 2u
 /** Move flag: a neighbour limited the blend (deviation below the tolerance). */
 #define EF_MOVE_BLEND_CLAMPED 4u
+/** Move flag: an auxiliary move: X Y Z stay (b[0] == b[1], degree 1), the auxiliary axes
+ *  move; `length` is their Euclidean distance and every speed is in their units. */
+#define EF_MOVE_AUX_ONLY 8u
 
 /** Phases of a time law: three per ramp and the cruise between them. */
 #define EF_TIMELAW_PHASES 7
@@ -289,6 +298,15 @@ typedef struct {
     float v_exit;     /**< planned speed at tau = 1 */
     float duration;   /**< seconds, sum of law.dt */
     ef_timelaw_t law; /**< tau(t) */
+    /** The auxiliary axes (A B C U V W): control points ab[k][0..degree] of axis k as a
+     *  polynomial in the same parameter tau (Bernstein form, the move's degree); all zero
+     *  where a caller uses no auxiliary axis. */
+    float ab[EF_AUX_N][6];
+    float atabs[EF_AUX_N];  /**< as tabs, for each auxiliary axis: its speed is at most
+                                 atabs_k v */
+    float akabs[EF_AUX_N];  /**< as kabs: its acceleration at constant speed at most
+                                 akabs_k v^2 */
+    float akjerk[EF_AUX_N]; /**< as kjerk: its jerk at constant speed about akjerk_k v^3 */
 } ef_move_t;
 
 /**
@@ -303,13 +321,27 @@ typedef struct {
  * elevated to the quintic's degrees) in Bernstein form.
  * A zero speed at a sample (a cusp) gives an infinite curvature: EF_ERR_NONFINITE. On error
  * length, kappa_max, tabs, kabs and kjerk are zero.
- * @param m  move with b and degree set; m->length, m->kappa_max, m->tabs, m->kabs and
- *           m->kjerk are filled
+ * The auxiliary axes' bounds atabs, akabs and akjerk are taken at the same samples from the
+ * derivatives of ab by X Y Z arc length (and by tau / L, the larger, as for X Y Z); an axis
+ * whose control points are all equal stays still and gets zeros without being sampled. An
+ * ::EF_MOVE_AUX_ONLY move (degree 1) has `length` the auxiliary axes' distance, X Y Z bounds
+ * zero and atabs_k = |ab[k][1] - ab[k][0]| / length.
+ * @param m  move with b, ab, degree and flags set; m->length, m->kappa_max, m->tabs,
+ *           m->kabs, m->kjerk, m->atabs, m->akabs and m->akjerk are filled
  * @retval EF_OK
  * @retval EF_ERR_ARG       NULL move or degree not 1, 3 or 5
  * @retval EF_ERR_NONFINITE non-finite control points or result
  */
 int ef_move_measure(ef_move_t *m);
+
+/**
+ * @brief The auxiliary bounds (atabs, akabs, akjerk) after ab was set on a measured move:
+ * zeros at once while no auxiliary axis moves (the X Y Z fields untouched), otherwise
+ * ef_move_measure() (which gives the X Y Z fields the same bits again).
+ * @retval EF_OK
+ * @retval EF_ERR_ARG, EF_ERR_NONFINITE as ef_move_measure()
+ */
+int ef_move_measure_aux(ef_move_t *m);
 
 /** Samples ef_move_measure() takes along a curve. */
 #ifndef EF_MOVE_SAMPLES
