@@ -27,12 +27,17 @@ static void ef_fuzz_fail(const char *what, long a)
     abort();
 }
 
-/* Position within the reader's documented limits. */
-static void ef_fuzz_vec(const double *v, const char *what)
+/* Position within the reader's documented limits (n axes). */
+static void ef_fuzz_axes(const double *v, int n, const char *what)
 {
-    for (int k = 0; k < 3; k++)
+    for (int k = 0; k < n; k++)
         if (!isfinite(v[k]) || fabs(v[k]) > EF_GCODE_MAX_COORD * (1 + 1e-12))
             ef_fuzz_fail(what, k);
+}
+
+static void ef_fuzz_vec(const double *v, const char *what)
+{
+    ef_fuzz_axes(v, 3, what);
 }
 
 /* Read the whole input; 0 when it read to an end item, else the error code. */
@@ -78,6 +83,8 @@ static int ef_fuzz_read1(ef_gcode_t *rp, const uint8_t *data, size_t size)
         ef_fuzz_vec(it.start, "start");
         ef_fuzz_vec(it.end, "end");
         ef_fuzz_vec(it.centre, "centre");
+        ef_fuzz_axes(it.astart, EF_GCODE_AUX, "astart");
+        ef_fuzz_axes(it.aend, EF_GCODE_AUX, "aend");
         if ((it.kind == EF_GC_LINE || it.kind == EF_GC_ARC) &&
             !(it.feed > 0 && it.feed <= EF_GCODE_MAX_FEED))
             ef_fuzz_fail("feed", it.kind);

@@ -424,7 +424,7 @@ static void test_errors(void)
     EXPECT_ERR_AT("G1.5 X1\n", "1:1", "unsupported G1.5");
     EXPECT_ERR_AT("G1.55 X1\n", "1:1", "malformed G code");
     EXPECT_ERR_AT("M98 P100\n", "1:1", "unsupported M98");
-    EXPECT_ERR_AT("G0 A10\n", "1:4", "axis word 'A' not supported");
+    EXPECT_ERR_AT("G0 A10 E1\n", "1:8", "unsupported word 'E'"); /* A is read, E is not */
     EXPECT_ERR_AT("G0 X1 O100 sub\n", "1:7", "O-word not at the start");
     EXPECT_ERR_AT("G0 E1\n", "1:4", "unsupported word 'E'");
     EXPECT_ERR_AT("X10\n", "1:1", "axis word with no motion mode");
@@ -607,6 +607,112 @@ static void test_dialect(void)
     EF_CHECK(n == 4 && I[0].kind == EF_GC_IGNORED && I[1].kind == EF_GC_IGNORED);
 }
 
+/* The axes beyond X Y Z: A B C (degrees, never scaled) and U V W (mm, G20 converted), in
+ * astart/aend of every item with a start and an end, with LinuxCNC's offsets and feeds. */
+static void test_axes(void)
+{
+    /* G90 and G91; a move of A B C U V W alone is a rapid or line with X Y Z still */
+    int n = rd("G0 A10\nG91 A5 B-2\nG90 G1 A90 F100\nG1 X10 A0 W3\nM2\n");
+    EF_CHECK_EQ(n, 5);
+    EF_CHECK(n == 5 && I[0].kind == EF_GC_RAPID && I[0].aend[0] == 10 && I[0].astart[0] == 0);
+    EF_CHECK(n == 5 && I[0].end[0] == I[0].start[0] && I[0].end[2] == I[0].start[2]);
+    EF_CHECK(n == 5 && I[1].astart[0] == 10 && I[1].aend[0] == 15 && I[1].aend[1] == -2);
+    EF_CHECK(n == 5 && I[2].kind == EF_GC_LINE && I[2].aend[0] == 90 && I[2].aend[1] == -2);
+    EF_CHECK(n == 5 && I[2].start[0] == 0 && I[2].end[0] == 0 && I[2].feed == 100);
+    /* X with A: the feed is along X Y Z, A follows */
+    EF_CHECK(n == 5 && I[3].kind == EF_GC_LINE && I[3].end[0] == 10 && I[3].aend[0] == 0);
+    EF_CHECK(n == 5 && I[3].aend[5] == 3 && I[3].astart[0] == 90 && I[3].feed == 100);
+    /* an arc moves A linearly beside its X Y arc */
+    n = rd("G0 X10 A5\nG3 X-10 Y0 I-10 A185 F100\nM2\n");
+    EF_CHECK_EQ(n, 3);
+    EF_CHECK(n == 3 && I[1].kind == EF_GC_ARC && I[1].astart[0] == 5 && I[1].aend[0] == 185);
+    if (n == 3) {
+        EF_CHECK_NEAR(I[1].end[0], -10, 1e-12);
+        EF_CHECK_NEAR(I[1].sweep, M_PI, 1e-12);
+        EF_CHECK_NEAR(I[1].feed, 100, 0);
+        EF_CHECK_NEAR(R.acur[0], 185, 0);
+    }
+    /* a full circle with only A: IJK, end = start on X Y Z */
+    n = rd("G1 X1 F10\nG2 I-1 A90\nM2\n");
+    EF_CHECK(n == 3 && I[1].kind == EF_GC_ARC && I[1].aend[0] == 90);
+    EF_CHECK_NEAR(n == 3 ? I[1].sweep : 0, -2 * M_PI, 1e-12);
+    /* zero moves only when all nine axes stay */
+    n = rd("G0 A10\nA10\nG1 A10 F1\nX0 W1\nB0 C0 U0 V0 W1\nM2\n");
+    EF_CHECK_EQ(n, 6);
+    EF_CHECK(n == 6 && I[1].kind == EF_GC_ZERO_MOVE && I[2].kind == EF_GC_ZERO_MOVE);
+    EF_CHECK(n == 6 && I[1].aend[0] == 10 && I[2].astart[0] == 10);
+    EF_CHECK(n == 6 && I[3].kind == EF_GC_LINE && I[3].aend[5] == 1 && I[3].feed == 1);
+    EF_CHECK(n == 6 && I[4].kind == EF_GC_ZERO_MOVE);
+    /* work offsets: G10 L2 (no XY rotation of A), L20, #5224.. and G55's #5244 */
+    n = rd("G10 L2 P1 X0 Y0 R90 A30 U5\nG0 X1 A10 U1\nG10 L20 P1 A0\nG0 A5\n#5244=7\nG55 G0 "
+           "A0\nG53 G0 A2\nG54 G0 X#5224 Y#5227\nM2\n");
+    EF_CHECK_EQ(n, 6);
+    if (n == 6) {
+        EF_CHECK_NEAR(I[0].end[1], 1, 1e-12); /* X1 rotated by 90 degrees: machine Y */
+        EF_CHECK_NEAR(I[0].aend[0], 40, 0);
+        EF_CHECK_NEAR(I[0].aend[3], 6, 0);
+        EF_CHECK_NEAR(I[1].aend[0], 45, 0); /* L20 A0 here: offset 40 */
+        EF_CHECK_NEAR(I[2].aend[0], 7, 0);
+        EF_CHECK_NEAR(I[3].aend[0], 2, 0);     /* G53: machine A */
+        EF_CHECK_NEAR(I[4].end[1], 40, 1e-12); /* #5224 (A of G54) read as X */
+        EF_CHECK_NEAR(I[4].end[0], -5, 1e-12); /* #5227 (U of G54) read as Y, rotated */
+    }
+    /* G92 A, its #5214, G92.1 */
+    n = rd("G0 A10\nG92 A0\nG0 A5\nG0 X#5214\nG92.1\nG0 A5\nM2\n");
+    EF_CHECK_EQ(n, 5);
+    EF_CHECK(n == 5 && I[1].aend[0] == 15 && I[2].end[0] == 10 && I[3].aend[0] == 5);
+    /* G28 through an intermediate A, then to the stored A only; G28 alone: all nine axes */
+    n = rd("#5164=45\n#5169=2\nG0 X5 A10 W9\nG28 A20\nG28\nG0 A33\nG28.1\nM2\n");
+    EF_CHECK_EQ(n, 6);
+    if (n == 6) {
+        EF_CHECK(I[1].kind == EF_GC_RAPID && I[1].aend[0] == 20 && I[1].end[0] == 5);
+        EF_CHECK(I[2].kind == EF_GC_RAPID && I[2].aend[0] == 45 && I[2].aend[5] == 9);
+        EF_CHECK(I[2].end[0] == 5);
+        EF_CHECK(I[3].kind == EF_GC_RAPID && I[3].end[0] == 0 && I[3].aend[5] == 2);
+        EF_CHECK_NEAR(R.g28[3], 33, 0);
+    }
+    /* G20: U converted, A not; the A feed is the F number; #5423.. and #<_a> */
+    n = rd("G20 G0 U1 A2\nG0 X#5426 Y#5423 Z#<_a>\nG1 A10 F10\nG1 U2\nG21 G1 A20\nF10 A30\nM2\n");
+    EF_CHECK_EQ(n, 7);
+    if (n == 7) {
+        EF_CHECK_NEAR(I[0].aend[3], 25.4, 1e-12);
+        EF_CHECK_NEAR(I[0].aend[0], 2, 0);
+        EF_CHECK_NEAR(I[1].end[0], 25.4, 1e-12);
+        EF_CHECK_NEAR(I[1].end[1], 50.8, 1e-12);
+        EF_CHECK_NEAR(I[1].end[2], 50.8, 1e-12);
+        EF_CHECK_NEAR(I[2].feed, 10, 0);     /* deg/min */
+        EF_CHECK_NEAR(I[3].feed, 254, 1e-9); /* mm/min along U */
+        EF_CHECK_NEAR(I[4].feed, 10, 0);     /* the angular rate stays as written */
+        EF_CHECK_NEAR(I[5].feed, 10, 0);
+    }
+    /* G93: F x the X Y Z length, else the U V W length, else the A B C length (degrees) */
+    n = rd("G93 G1 A90 F2\nG1 X3 Y4 A0 F2\nG1 U3 V4 A90 F2\nG1 A120 B40 F0.5\nM2\n");
+    EF_CHECK_EQ(n, 5);
+    if (n == 5) {
+        EF_CHECK_NEAR(I[0].feed, 180, 1e-12);
+        EF_CHECK_NEAR(I[1].feed, 10, 1e-12);
+        EF_CHECK_NEAR(I[2].feed, 10, 1e-12);
+        EF_CHECK_NEAR(I[3].feed, 25, 1e-12);
+    }
+    /* refusals: canned cycles, tool offsets of A..W, bad values as for X Y Z */
+    EXPECT_ERR("G81 X1 Y1 Z-1 R1 A5 F100\nM2\n",
+               "t.ngc:1:18: axis word 'A' not supported in a canned cycle");
+    EXPECT_ERR_AT("G0 Z5\nG81 X1 Z-1 R1 F100\nX2 V1\n", "3:4",
+                  "axis word 'V' not supported in a canned");
+    EXPECT_ERR_AT("G43.1 Z1 B2\nM2\n", "1:10", "axis word 'B' not supported in a tool offset");
+    EXPECT_ERR_AT("G10 L1 P1 Z1 C2\nM2\n", "1:14", "axis word 'C' not supported in a tool offset");
+    EXPECT_ERR_AT("G0 A[SQRT[-1]]\n", "1:6", "SQRT of negative");
+    EXPECT_ERR_AT("G0 A[EXP[1000]]\n", "1:6", "not finite");
+    EXPECT_ERR_AT("G0 B[0/0]\n", "1:7", "division by zero");
+    EXPECT_ERR_AT("G0 A2000000\n", "1:4", "coordinate A 2e+06 deg outside +-1e+06 deg");
+    EXPECT_ERR_AT("G20 G0 U50000\n", "1:8", "coordinate U 1.27e+06 mm outside +-1e+06 mm");
+    EXPECT_ERR_AT("G91 G0 W900000\nW900000\n", "2:1", "outside");
+    EXPECT_ERR_AT("G10 L2 P1 C2000000\n", "1:11", "work offset C 2e+06 deg outside");
+    EXPECT_ERR_AT("A10\n", "1:1", "axis word with no motion mode");
+    n = rd("G92 A0 X0\nM2\n"); /* G92 with only A: allowed */
+    EF_CHECK_EQ(n, 1);
+}
+
 /* Write text to a fresh temporary file; its path in buf. */
 static void tmpfile_with(char *buf, size_t n, const char *text)
 {
@@ -715,6 +821,13 @@ static void test_machine_files(void)
     n = rd_machine("G0 X1\nM2\n", "5221 7\n5222 x\n", NULL, &lrc);
     EF_CHECK_EQ(lrc, EF_ERR_ARG);
     EF_CHECK_NEAR(R.g5x[0][0], 0, 0);
+    /* offsets of A B C U V W from the file take effect (#5224-5229, G28 #5164-5169) */
+    n = rd_machine("G0 A1 U1\nG28\nM2\n", "5224 90\n5227 -5\n5164 12\n5229 3\n", NULL, &lrc);
+    EF_CHECK_EQ(lrc, EF_OK);
+    EF_CHECK_EQ(n, 3);
+    EF_CHECK(n == 3 && I[0].aend[0] == 91 && I[0].aend[3] == -4 && I[0].aend[5] == 0);
+    EF_CHECK_NEAR(R.g5x[0][8], 3, 0);
+    EF_CHECK(n == 3 && I[1].aend[0] == 12 && I[1].aend[3] == 0);
     /* a missing file, and loading after the program started */
     ef_gcode_free(&R);
     ef_gcode_init(&R, "G0 X1\nM2\n", 9, "t.ngc");
@@ -785,6 +898,7 @@ int main(int argc, char **argv)
         {"errors", test_errors},
         {"dialect_errors", test_dialect_errors},
         {"dialect", test_dialect},
+        {"axes", test_axes},
         {"machine_files", test_machine_files},
         {"file", test_file},
     };

@@ -62,27 +62,43 @@ static int gc_is_letter(char ch)
 
 /* ---- parameters ----------------------------------------------------------------------- */
 
-/* Length parameters held in mm: a pointer to the value, or NULL. */
-static double *gc_param_len(ef_gcode_t *r, int n)
+/* Scale of program input on axis k of X Y Z A B C U V W: 25.4 for the linear axes under
+ * G20, 1 for the rotary A B C (degrees in every unit mode, as LinuxCNC). */
+static double gc_axis_scale(const ef_gcode_t *r, int k)
 {
-    if (n >= 5161 && n <= 5163)
-        return &r->g28[n - 5161];
-    if (n >= 5181 && n <= 5183)
-        return &r->g30[n - 5181];
-    if (n >= 5211 && n <= 5213)
-        return &r->g92_saved[n - 5211];
-    if (n >= 5221 && n <= 5390 && (n - 5221) % 20 < 3)
-        return &r->g5x[(n - 5221) / 20][(n - 5221) % 20];
+    return r->units == 20 && (k < 3 || k >= 6) ? EF_GC_INCH : 1.0;
+}
+
+/* Per-axis parameters of the nine axes held in mm (degrees for A B C): a pointer to the
+ * value and its axis (0..8, X..W), or NULL. */
+static double *gc_param_axis(ef_gcode_t *r, int n, int *axis)
+{
+    if (n >= 5161 && n <= 5169)
+        return &r->g28[*axis = n - 5161];
+    if (n >= 5181 && n <= 5189)
+        return &r->g30[*axis = n - 5181];
+    if (n >= 5211 && n <= 5219)
+        return &r->g92_saved[*axis = n - 5211];
+    if (n >= 5221 && n <= 5390 && (n - 5221) % 20 < 9)
+        return &r->g5x[(n - 5221) / 20][*axis = (n - 5221) % 20];
     return NULL;
+}
+
+/* Program coordinates of the current A B C U V W: no rotation and no tool offset. */
+static void gc_aux_to_prog(const ef_gcode_t *r, double p[EF_GCODE_AUX])
+{
+    for (int j = 0; j < EF_GCODE_AUX; j++)
+        p[j] = r->acur[j] - r->g5x[r->cs - 1][3 + j] - r->g92[3 + j];
 }
 
 double ef_gc_param_get(const ef_gcode_t *r, int n)
 {
     double scale = r->units == 20 ? EF_GC_INCH : 1.0;
-    ef_gcode_t *w = (ef_gcode_t *)r; /* gc_param_len only points into r */
-    const double *p = gc_param_len(w, n);
+    ef_gcode_t *w = (ef_gcode_t *)r; /* gc_param_axis only points into r */
+    int k;
+    const double *p = gc_param_axis(w, n, &k);
     if (p)
-        return *p / scale;
+        return *p / gc_axis_scale(r, k);
     if (n == 5210)
         return r->g92_on;
     if (n == 5220)
@@ -93,20 +109,21 @@ double ef_gc_param_get(const ef_gcode_t *r, int n)
         return r->tool_cur;
     if (n >= 5401 && n <= 5403)
         return r->tlo[n - 5401] / scale;
-    if (n >= 5420 && n <= 5422) {
-        double pp[3];
+    if (n >= 5420 && n <= 5428) {
+        double pp[3], pa[EF_GCODE_AUX];
         ef_gc_to_prog(r, r->cur, pp);
-        return pp[n - 5420] / scale;
+        gc_aux_to_prog(r, pa);
+        return (n < 5423 ? pp[n - 5420] : pa[n - 5423]) / gc_axis_scale(r, n - 5420);
     }
     return r->param[n];
 }
 
 void ef_gc_param_set(ef_gcode_t *r, int n, double v)
 {
-    double scale = r->units == 20 ? EF_GC_INCH : 1.0;
-    double *p = gc_param_len(r, n);
+    int k;
+    double *p = gc_param_axis(r, n, &k);
     if (p)
-        *p = v * scale;
+        *p = v * gc_axis_scale(r, k);
     else if (n >= 5230 && n <= 5390 && (n - 5230) % 20 == 0)
         r->rot[(n - 5230) / 20] = v;
     else if (n == 5210)
@@ -117,10 +134,15 @@ void ef_gc_param_set(ef_gcode_t *r, int n, double v)
 /* Read-only names LinuxCNC predefines; -1 when name is not one of them. */
 static int gc_named_builtin(const ef_gcode_t *r, const char *name, double *v)
 {
-    double scale = r->units == 20 ? EF_GC_INCH : 1.0, pp[3];
+    double scale = r->units == 20 ? EF_GC_INCH : 1.0, pp[3], pa[EF_GCODE_AUX];
+    static const char aux_letters[] = "ABCUVW";
+    const char *al = name[0] == '_' && name[1] && !name[2] ? strchr(aux_letters, name[1]) : NULL;
     ef_gc_to_prog(r, r->cur, pp);
+    gc_aux_to_prog(r, pa);
     if (!strcmp(name, "_X") || !strcmp(name, "_Y") || !strcmp(name, "_Z"))
         *v = pp[name[1] - 'X'] / scale;
+    else if (al)
+        *v = pa[al - aux_letters] / gc_axis_scale(r, 3 + (int)(al - aux_letters));
     else if (!strcmp(name, "_FEED"))
         *v = r->feed / scale;
     else if (!strcmp(name, "_METRIC"))
@@ -632,11 +654,9 @@ static int gc_words(ef_gc_line_t *L, int *n_words)
         }
         if (!gc_is_letter(ch))
             return ef_gc_err(L->r, col, "expected a word letter, found '%c'", ch);
-        if (strchr("ABCUVW", ch))
-            return ef_gc_err(L->r, col, "axis word '%c' not supported (X Y Z only)", ch);
         if (ch == 'O')
             return ef_gc_err(L->r, col, "O-word not at the start of the line");
-        if (!strchr("DFGHIJKLMNPQRSTXYZ", ch))
+        if (!strchr("ABCDFGHIJKLMNPQRSTUVWXYZ", ch))
             return ef_gc_err(L->r, col, "unsupported word '%c'", ch);
         L->i++;
         if (L->i >= L->n)
@@ -860,6 +880,17 @@ static int gc_coord_ok(ef_gcode_t *r, double v, uint32_t col, const char *what)
     return EF_OK;
 }
 
+/* The same for A B C U V W (aux index j): degrees for A B C, where 1e6 is as far as a
+ * position may go before float resolution downstream means nothing either. */
+static int gc_aux_ok(ef_gcode_t *r, int j, double v, uint32_t col, const char *what)
+{
+    const char *u = j < 3 ? "deg" : "mm";
+    if (!isfinite(v) || fabs(v) > EF_GCODE_MAX_COORD)
+        return ef_gc_err(r, col, "%s %c %.6g %s outside +-%g %s", what, "ABCUVW"[j], v, u,
+                         EF_GCODE_MAX_COORD, u);
+    return EF_OK;
+}
+
 /* Plane axes: first and second in-plane axis, normal, and the offset letters of each. */
 static void gc_plane_axes(int plane, int *a, int *b, int *nrm, char *la, char *lb, char *ln)
 {
@@ -886,20 +917,38 @@ static int gc_feed_clamp(ef_gcode_t *r, double *f, uint32_t col, const char *wha
     return EF_OK;
 }
 
-int ef_gc_emit_straight(ef_gcode_t *r, int rapid, const double end[3], double feed, uint32_t col)
+int ef_gc_emit_straight(ef_gcode_t *r, int rapid, const double end[3],
+                        const double aend[EF_GCODE_AUX], uint32_t col)
 {
     int rc;
+    double ae[EF_GCODE_AUX], la = 0, lu = 0, feed = 0;
     for (int k = 0; k < 3; k++)
         if ((rc = gc_coord_ok(r, end[k], col, "coordinate")) != 0)
             return rc;
+    for (int j = 0; j < EF_GCODE_AUX; j++) {
+        ae[j] = aend ? aend[j] : r->acur[j];
+        if ((rc = gc_aux_ok(r, j, ae[j], col, "coordinate")) != 0)
+            return rc;
+        double d = ae[j] - r->acur[j];
+        *(j < 3 ? &la : &lu) += d * d;
+    }
+    la = sqrt(la);
+    lu = sqrt(lu);
     double len = sqrt((end[0] - r->cur[0]) * (end[0] - r->cur[0]) +
                       (end[1] - r->cur[1]) * (end[1] - r->cur[1]) +
                       (end[2] - r->cur[2]) * (end[2] - r->cur[2]));
-    int zero = len <= EF_GCODE_ZERO_LEN;
-    if (!rapid && !zero && r->inverse_time) {
-        feed = feed * len; /* G93: F is 1 / minutes for this move */
-        if ((rc = gc_feed_clamp(r, &feed, col, "inverse-time feed")) != 0)
-            return rc;
+    int zero = len <= EF_GCODE_ZERO_LEN && la <= EF_GCODE_ZERO_LEN && lu <= EF_GCODE_ZERO_LEN;
+    if (!rapid) {
+        /* LinuxCNC (find_straight_length, canon's feed rates): the feed is along X Y Z if
+         * they move, else along U V W, else along A B C in degrees, with the F number as
+         * written (its angular feed rate is never converted by G20) */
+        int xyz = len > EF_GCODE_ZERO_LEN, uvw = !xyz && lu > EF_GCODE_ZERO_LEN;
+        feed = xyz || uvw || zero ? r->feed : r->feed_ang;
+        if (!zero && r->inverse_time) {
+            feed = r->feed * (xyz ? len : uvw ? lu : la); /* G93: F is 1 / minutes */
+            if ((rc = gc_feed_clamp(r, &feed, col, "inverse-time feed")) != 0)
+                return rc;
+        }
     }
     ef_gcode_item_t *it = ef_gc_push(r,
                                      zero    ? EF_GC_ZERO_MOVE
@@ -910,12 +959,16 @@ int ef_gc_emit_straight(ef_gcode_t *r, int rapid, const double end[3], double fe
         return r->err;
     memcpy(it->start, r->cur, sizeof it->start);
     memcpy(it->end, zero ? r->cur : end, sizeof it->end);
+    memcpy(it->astart, r->acur, sizeof it->astart);
+    memcpy(it->aend, zero ? r->acur : ae, sizeof it->aend);
     if (!rapid)
         it->feed = feed;
-    if (zero)
+    if (zero) {
         snprintf(it->text, sizeof it->text, "G%d", rapid ? 0 : 1);
-    else
+    } else {
         memcpy(r->cur, end, sizeof r->cur);
+        memcpy(r->acur, ae, sizeof r->acur);
+    }
     return EF_OK;
 }
 
@@ -971,10 +1024,10 @@ static int gc_ignored_once(ef_gcode_t *r, int bit, uint32_t col, const char *tex
     return EF_OK;
 }
 
-/* Arc from the current position (program frame sp, mm) to ep; the item in machine
- * coordinates. Errors point at col. */
+/* Arc from the current position (program frame sp, mm) to ep, A B C U V W going linearly
+ * to the machine position aem; the item in machine coordinates. Errors point at col. */
 static int gc_arc(ef_gcode_t *r, const ef_gc_line_t *L, const double sp[3], const double ep[3],
-                  int g3, double scale, uint32_t col)
+                  const double aem[EF_GCODE_AUX], int g3, double scale, uint32_t col)
 {
     int a, b, nrm;
     char la, lb, ln;
@@ -1081,12 +1134,17 @@ static int gc_arc(ef_gcode_t *r, const ef_gc_line_t *L, const double sp[3], cons
         if ((rc = gc_coord_ok(r, em[k], col, "coordinate")) != 0 ||
             (rc = gc_coord_ok(r, cm[k], col, "arc centre")) != 0)
             return rc;
+    for (int j = 0; j < EF_GCODE_AUX; j++)
+        if ((rc = gc_aux_ok(r, j, aem[j], col, "coordinate")) != 0)
+            return rc;
     ef_gcode_item_t *it = ef_gc_push(r, EF_GC_ARC, col);
     if (!it)
         return r->err;
     memcpy(it->start, r->cur, sizeof it->start);
     memcpy(it->end, em, sizeof it->end);
     memcpy(it->centre, cm, sizeof it->centre);
+    memcpy(it->astart, r->acur, sizeof it->astart);
+    memcpy(it->aend, aem, sizeof it->aend);
     it->centre[nrm] = r->cur[nrm];
     it->radius = radius;
     it->radius_end = r1;
@@ -1096,6 +1154,7 @@ static int gc_arc(ef_gcode_t *r, const ef_gc_line_t *L, const double sp[3], cons
     it->turns = turns;
     it->feed = feed;
     memcpy(r->cur, em, sizeof r->cur);
+    memcpy(r->acur, aem, sizeof r->acur);
     return EF_OK;
 }
 
@@ -1124,9 +1183,20 @@ static int gc_int_word(ef_gcode_t *r, const ef_gc_word_t *w, int lo, int hi, con
     return EF_OK;
 }
 
+/* A B C U V W words where only X Y Z have a meaning here (tool offsets): refused. */
+static int gc_no_aux(ef_gcode_t *r, const ef_gc_word_t *const aux[EF_GCODE_AUX], const char *what)
+{
+    for (int j = 0; j < EF_GCODE_AUX; j++)
+        if (aux[j])
+            return ef_gc_err(r, aux[j]->col, "axis word '%c' not supported in %s", aux[j]->letter,
+                             what);
+    return EF_OK;
+}
+
 /* G10 L1 / L2 / L10 / L11 / L20: tool table and work offsets. */
 static int gc_g10(ef_gcode_t *r, const ef_gc_line_t *L, const ef_gc_word_t *g,
-                  const ef_gc_word_t *axis[3], double scale)
+                  const ef_gc_word_t *axis[3], const ef_gc_word_t *const aux[EF_GCODE_AUX],
+                  double scale)
 {
     const ef_gc_word_t *wl = ef_gc_get(L, 'L'), *wp = ef_gc_get(L, 'P'), *wr = ef_gc_get(L, 'R');
     int l = 0, p = 0, rc;
@@ -1162,6 +1232,15 @@ static int gc_g10(ef_gcode_t *r, const ef_gc_line_t *L, const ef_gc_word_t *g,
             if ((rc = gc_coord_ok(r, o[k], axis[k] ? axis[k]->col : g->col, "work offset")) != 0)
                 return rc;
         }
+        /* A B C U V W: no rotation; L20 keeps the others' reading, as for X Y Z */
+        for (int j = 0; j < EF_GCODE_AUX; j++) {
+            if (!aux[j])
+                continue;
+            double v = aux[j]->v * gc_axis_scale(r, 3 + j);
+            o[3 + j] = l == 2 ? v : r->acur[j] - v - r->g92[3 + j];
+            if ((rc = gc_aux_ok(r, j, o[3 + j], aux[j]->col, "work offset")) != 0)
+                return rc;
+        }
         if (wr) {
             if (!isfinite(wr->v) || fabs(wr->v) > 1e6)
                 return ef_gc_err(r, wr->col, "G10 rotation R%.6g out of range", wr->v);
@@ -1171,6 +1250,8 @@ static int gc_g10(ef_gcode_t *r, const ef_gc_line_t *L, const ef_gc_word_t *g,
     }
     if (l == 1 || l == 10 || l == 11) {
         if ((rc = gc_int_word(r, wp, 1, 99999, "G10 tool", &p)) != 0)
+            return rc;
+        if ((rc = gc_no_aux(r, aux, "a tool offset (X Y Z only)")) != 0)
             return rc;
         ef_gcode_tool_t *t = ef_gc_tool(r, p, 1);
         if (!t)
@@ -1203,13 +1284,26 @@ static int gc_g10(ef_gcode_t *r, const ef_gc_line_t *L, const ef_gc_word_t *g,
 }
 
 /* G28 / G30 (go to a stored position, through an intermediate point given by axis words). */
-static int gc_home(ef_gcode_t *r, const double stored[3], const ef_gc_word_t *axis[3], double scale,
-                   uint32_t col)
+static int gc_home(ef_gcode_t *r, const double stored[9], const ef_gc_word_t *axis[3],
+                   const ef_gc_word_t *const aux[EF_GCODE_AUX], double scale, uint32_t col)
 {
     int any = axis[0] || axis[1] || axis[2], rc;
-    double cp[3], ip[3], im[3], end[3];
+    double cp[3], ip[3], im[3], end[3], ap[EF_GCODE_AUX], aim[EF_GCODE_AUX], aend[EF_GCODE_AUX];
+    for (int j = 0; j < EF_GCODE_AUX; j++)
+        any |= aux[j] != NULL;
     ef_gc_to_prog(r, r->cur, cp);
+    gc_aux_to_prog(r, ap);
     if (any) {
+        for (int j = 0; j < EF_GCODE_AUX; j++) {
+            aim[j] = r->acur[j];
+            if (aux[j]) {
+                double v = aux[j]->v * gc_axis_scale(r, 3 + j);
+                double d = (r->absolute ? v : ap[j] + v) - ap[j];
+                aim[j] = d == 0 ? r->acur[j] : r->acur[j] + d;
+                if ((rc = gc_aux_ok(r, j, aim[j], aux[j]->col, "coordinate")) != 0)
+                    return rc;
+            }
+        }
         for (int k = 0; k < 3; k++) {
             ip[k] = cp[k];
             if (axis[k]) {
@@ -1220,25 +1314,39 @@ static int gc_home(ef_gcode_t *r, const double stored[3], const ef_gc_word_t *ax
             }
         }
         ef_gc_from_prog(r, ip, im);
-        if ((rc = ef_gc_emit_straight(r, 1, im, 0, col)) != 0)
+        if ((rc = ef_gc_emit_straight(r, 1, im, aim, col)) != 0)
             return rc;
     }
     for (int k = 0; k < 3; k++)
         end[k] = !any || axis[k] ? stored[k] + r->tlo[k] : r->cur[k];
-    return ef_gc_emit_straight(r, 1, end, 0, col);
+    for (int j = 0; j < EF_GCODE_AUX; j++)
+        aend[j] = !any || aux[j] ? stored[3 + j] : r->acur[j];
+    return ef_gc_emit_straight(r, 1, end, aend, col);
 }
 
 /* G92 / G92.1 / G92.2 / G92.3. */
-static int gc_g92(ef_gcode_t *r, int code, const ef_gc_word_t *axis[3], double scale, uint32_t col)
+static int gc_g92(ef_gcode_t *r, int code, const ef_gc_word_t *axis[3],
+                  const ef_gc_word_t *const aux[EF_GCODE_AUX], double scale, uint32_t col)
 {
     int rc;
     if (code == 920) {
-        if (!axis[0] && !axis[1] && !axis[2])
+        int any = axis[0] || axis[1] || axis[2];
+        for (int j = 0; j < EF_GCODE_AUX; j++)
+            any |= aux[j] != NULL;
+        if (!any)
             return ef_gc_err(r, col, "G92 needs at least one axis word");
         /* G92 lives in the program frame (before the rotation): the offset that makes the
          * current point read the given values */
-        double cp[3];
+        double cp[3], ap[EF_GCODE_AUX];
         ef_gc_to_prog(r, r->cur, cp);
+        gc_aux_to_prog(r, ap);
+        for (int j = 0; j < EF_GCODE_AUX; j++) {
+            if (!aux[j])
+                continue;
+            r->g92[3 + j] = ap[j] + r->g92[3 + j] - aux[j]->v * gc_axis_scale(r, 3 + j);
+            if ((rc = gc_aux_ok(r, j, r->g92[3 + j], aux[j]->col, "G92 offset")) != 0)
+                return rc;
+        }
         for (int k = 0; k < 3; k++) {
             if (!axis[k])
                 continue;
@@ -1332,7 +1440,7 @@ static int gc_execute(ef_gcode_t *r, ef_gc_line_t *L)
     if (grp[GR_FEEDMODE]) {
         int inv = grp[GR_FEEDMODE]->code == 930;
         if (inv != r->inverse_time)
-            r->feed = 0; /* LinuxCNC: a feed mode change needs a new F */
+            r->feed = r->feed_ang = 0; /* LinuxCNC: a feed mode change needs a new F */
         r->inverse_time = inv;
     }
     if (grp[GR_UNITS])
@@ -1355,6 +1463,9 @@ static int gc_execute(ef_gcode_t *r, ef_gc_line_t *L)
         if (!r->inverse_time && (rc = gc_feed_clamp(r, &f, wf->col, "feed")) != 0)
             return rc;
         r->feed = f;
+        /* A B C moves take the number as written: LinuxCNC's canon converts F by the length
+         * units for its linear rate only, and keeps that angular rate across G20/G21 */
+        r->feed_ang = r->inverse_time || wf->v <= r->max_feed ? wf->v : r->max_feed;
     }
 
     /* Which words have a use on this line. */
@@ -1364,10 +1475,17 @@ static int gc_execute(ef_gcode_t *r, ef_gc_line_t *L)
     if (grp[GR_MOTION])
         motion = grp[GR_MOTION]->code == 800 ? -1 : grp[GR_MOTION]->code;
     const ef_gc_word_t *axis[3] = {ef_gc_get(L, 'X'), ef_gc_get(L, 'Y'), ef_gc_get(L, 'Z')};
-    const ef_gc_word_t *first_axis = NULL;
+    const ef_gc_word_t *aux[EF_GCODE_AUX], *first_axis = NULL, *first_aux = NULL;
+    for (int j = 0; j < EF_GCODE_AUX; j++) {
+        aux[j] = ef_gc_get(L, "ABCUVW"[j]);
+        if (aux[j] && (!first_aux || aux[j]->col < first_aux->col))
+            first_aux = aux[j];
+    }
     for (int k = 0; k < 3; k++)
         if (axis[k] && (!first_axis || axis[k]->col < first_axis->col))
             first_axis = axis[k];
+    if (first_aux && (!first_axis || first_aux->col < first_axis->col))
+        first_axis = first_aux;
     int g4 = g0c == 40, g53 = g0c == 530, g10 = g0c == 100;
     int axis_owner = g10 || g0c == 280 || g0c == 300 || g0c == 920 ||
                      (grp[GR_TOOLLEN] && grp[GR_TOOLLEN]->code == 431);
@@ -1404,6 +1522,14 @@ static int gc_execute(ef_gcode_t *r, ef_gc_line_t *L)
                              arc_letters[k]);
         }
     }
+    /* LinuxCNC refuses A B C in canned cycles; U V W drill only in its G17.1-G19.1 planes,
+     * which are not read here */
+    if (cycle && first_aux)
+        return ef_gc_err(r, first_aux->col, "axis word '%c' not supported in a canned cycle",
+                         first_aux->letter);
+    if (grp[GR_TOOLLEN] && grp[GR_TOOLLEN]->code == 431 &&
+        (rc = gc_no_aux(r, aux, "a tool offset (X Y Z only)")) != 0)
+        return rc;
     const ef_gc_word_t *wp = ef_gc_get(L, 'P'), *wq = ef_gc_get(L, 'Q'), *wl = ef_gc_get(L, 'L');
     if (wp && !g4 && !g64 && !arc && !cycle && !g10 && !m_takes_pq)
         return ef_gc_err(r, wp->col,
@@ -1540,17 +1666,18 @@ static int gc_execute(ef_gcode_t *r, ef_gc_line_t *L)
     }
 
     /* Offsets and stored positions (non-modal group). */
-    if (g10 && (rc = gc_g10(r, L, g0, axis, scale)) != 0)
+    if (g10 && (rc = gc_g10(r, L, g0, axis, aux, scale)) != 0)
         return rc;
     if (g0c == 281 || g0c == 301) {
         double *s = g0c == 281 ? r->g28 : r->g30;
         for (int k = 0; k < 3; k++)
             s[k] = r->cur[k] - r->tlo[k];
+        memcpy(s + 3, r->acur, sizeof r->acur);
     }
     if ((g0c == 280 || g0c == 300) &&
-        (rc = gc_home(r, g0c == 280 ? r->g28 : r->g30, axis, scale, g0->col)) != 0)
+        (rc = gc_home(r, g0c == 280 ? r->g28 : r->g30, axis, aux, scale, g0->col)) != 0)
         return rc;
-    if (g0c >= 920 && g0c <= 923 && (rc = gc_g92(r, g0c, axis, scale, g0->col)) != 0)
+    if (g0c >= 920 && g0c <= 923 && (rc = gc_g92(r, g0c, axis, aux, scale, g0->col)) != 0)
         return rc;
 
     /* Motion. */
@@ -1566,9 +1693,20 @@ static int gc_execute(ef_gcode_t *r, ef_gc_line_t *L)
         if ((rc = ef_gc_cycle(r, L, motion, same_cycle, axis, scale, col)) != 0)
             return rc;
     } else if (moves) {
-        double cp[3], ep[3], em[3];
+        double cp[3], ep[3], em[3], ap[EF_GCODE_AUX], aem[EF_GCODE_AUX];
         uint32_t col = mcol;
         ef_gc_to_prog(r, r->cur, cp);
+        gc_aux_to_prog(r, ap);
+        for (int j = 0; j < EF_GCODE_AUX; j++) {
+            aem[j] = r->acur[j];
+            if (!aux[j])
+                continue;
+            /* program = machine - G5x - G92 on these axes: delta-based like X Y Z */
+            double v = aux[j]->v * gc_axis_scale(r, 3 + j), t = r->absolute ? v : ap[j] + v;
+            if ((rc = gc_aux_ok(r, j, g53 ? v : t, aux[j]->col, "coordinate")) != 0)
+                return rc;
+            aem[j] = g53 ? v : t == ap[j] ? r->acur[j] : r->acur[j] + (t - ap[j]);
+        }
         for (int k = 0; k < 3; k++) {
             ep[k] = cp[k];
             em[k] = r->cur[k];
@@ -1585,12 +1723,12 @@ static int gc_execute(ef_gcode_t *r, ef_gc_line_t *L)
         if (motion != 0 && !(r->feed > 0))
             return ef_gc_err(r, col, "feed move with no feed rate (F missing or zero)");
         if (arc) {
-            if ((rc = gc_arc(r, L, cp, ep, motion == 30, scale, col)) != 0)
+            if ((rc = gc_arc(r, L, cp, ep, aem, motion == 30, scale, col)) != 0)
                 return rc;
         } else {
             if (!g53)
                 ef_gc_from_prog(r, ep, em);
-            if ((rc = ef_gc_emit_straight(r, motion == 0, em, r->feed, col)) != 0)
+            if ((rc = ef_gc_emit_straight(r, motion == 0, em, aem, col)) != 0)
                 return rc;
         }
     }

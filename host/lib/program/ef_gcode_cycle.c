@@ -55,7 +55,7 @@ static int cy_move(ef_gcode_t *r, const cy_axes_t *x, int rapid, double a, doubl
     p[x->b] = b;
     p[x->c] = c;
     ef_gc_from_prog(r, p, m);
-    return ef_gc_emit_straight(r, rapid, m, r->feed, col);
+    return ef_gc_emit_straight(r, rapid, m, NULL, col);
 }
 
 /* Spindle on again after a stop inside a cycle, in the direction it had. */

@@ -78,8 +78,11 @@ void ef_gc_jump(ef_gcode_t *r, ef_gcode_mark_t at);
 /* The mark of the next line to read. */
 ef_gcode_mark_t ef_gc_here_mark(const ef_gcode_t *r);
 
-/* Straight move (G0: rapid 1, G1: 0) to a machine-coordinate end; zero moves reported. */
-int ef_gc_emit_straight(ef_gcode_t *r, int rapid, const double end[3], double feed, uint32_t col);
+/* Straight move (G0: rapid 1, G1: 0) to a machine-coordinate end, X Y Z and A B C U V W
+ * (aend NULL: those stay); the feed comes from the reader's state by LinuxCNC's rule of
+ * which axes it applies to. Zero moves (all nine axes still) are reported. */
+int ef_gc_emit_straight(ef_gcode_t *r, int rapid, const double end[3],
+                        const double aend[EF_GCODE_AUX], uint32_t col);
 
 /* A dwell event "G4 Pn". */
 int ef_gc_emit_dwell(ef_gcode_t *r, double seconds, uint32_t col);

@@ -16,12 +16,17 @@
  *   (x 25.4) and every item records the units the program was in
  *   (::ef_gcode_item_t::units). Feeds are in mm/min (G93 converted), clamped to
  *   ::EF_GCODE_MAX_FEED or ef_gcode_set_max_feed()'s limit with a note.
- * - The program starts at machine (0, 0, 0) with G21 G90 G91.1 G17 G94 G99 G64, zero
- *   offsets, no motion mode and no feed: axis words before the first motion code are an
- *   error, as is a feed move before the first positive F.
- * - A G0/G1 whose end equals its start (within ::EF_GCODE_ZERO_LEN) is reported as a
- *   ::EF_GC_ZERO_MOVE item, never dropped silently. An IJK arc whose end equals its start
- *   is a full circle (times the P word, default 1).
+ * - The other LinuxCNC axes A B C (rotary, degrees) and U V W (linear, mm) are read too
+ *   and carried beside X Y Z (::ef_gcode_item_t::astart, ::ef_gcode_item_t::aend), with
+ *   work offsets, G92 and G28/G30 positions as in LinuxCNC; no XY rotation and no tool
+ *   offset applies to them. A move of only those axes is a RAPID or LINE item whose X Y Z
+ *   start and end are equal; its feed follows LinuxCNC's rule (::ef_gcode_item_t::feed).
+ * - The program starts at machine (0, 0, 0) (all nine axes) with G21 G90 G91.1 G17 G94
+ *   G99 G64, zero offsets, no motion mode and no feed: axis words before the first motion
+ *   code are an error, as is a feed move before the first positive F.
+ * - A G0/G1 whose end equals its start on all nine axes (within ::EF_GCODE_ZERO_LEN) is
+ *   reported as a ::EF_GC_ZERO_MOVE item, never dropped silently. An IJK arc whose end
+ *   equals its start is a full circle (times the P word, default 1).
  * - Arc radius rule (LinuxCNC 2.9's): an arc whose end radius differs from its start
  *   radius within the rule of ::EF_GCODE_ARC_ABS_TOL_MM is a spiral (radius_end differs
  *   from radius, linear in the angle); beyond it the arc is an error.
@@ -42,10 +47,14 @@
 extern "C" {
 #endif
 
-/** Moves not longer than this (mm) are ::EF_GC_ZERO_MOVE items. */
+/** Moves not longer than this (mm; degrees for A B C) are ::EF_GC_ZERO_MOVE items. */
 #define EF_GCODE_ZERO_LEN 1e-9
-/** Largest accepted coordinate magnitude (mm), for positions, centres and radii. */
+/** Largest accepted coordinate magnitude (mm), for positions, centres and radii; for the
+ *  rotary axes A B C the same number in degrees. */
 #define EF_GCODE_MAX_COORD 1e6
+/** Axes beyond X Y Z, in this order in every array of them: A B C (rotary, degrees, never
+ *  scaled by G20) and U V W (linear, mm, G20 input converted like X Y Z). */
+#define EF_GCODE_AUX 6
 /** Feeds above this (mm/min) are clamped to it, with an ::EF_GC_NOTE naming the line
  *  (ef_gcode_set_max_feed() lowers it to a machine's limit). */
 #define EF_GCODE_MAX_FEED 1e7
@@ -93,7 +102,7 @@ typedef enum {
     EF_GC_LINE = 2,      /**< G1 straight feed move: start, end, feed */
     EF_GC_ARC = 3,       /**< G2/G3 arc, helix or spiral: start, end, centre, radius,
                               radius_end, dir, plane, turns, feed */
-    EF_GC_ZERO_MOVE = 4, /**< G0/G1 whose end equals its start: position unchanged */
+    EF_GC_ZERO_MOVE = 4, /**< G0/G1 whose end equals its start on all nine axes */
     EF_GC_EVENT = 5,     /**< words that do not move the path, as text (e.g. "T1 M6") */
     EF_GC_IGNORED = 6,   /**< a word or line accepted and ignored, reported on first use */
     EF_GC_TOLERANCE = 7, /**< path control change: G61 / G61.1 (exact) or G64 P Q */
@@ -109,21 +118,30 @@ typedef enum {
 
 /** One item of the stream. Fields not used by a kind are zero. Positions are machine
  *  coordinates in mm: work offsets (G54-G59.3, G10 L2/L20), G92 offsets and the tool
- *  length offset (G43) applied. */
+ *  length offset (G43, X Y Z only) applied. Items with a start and an end (RAPID, LINE,
+ *  ARC, ZERO_MOVE) carry all nine axes: X Y Z in start/end, A B C U V W in astart/aend. */
 typedef struct {
     int kind;          /**< ::ef_gcode_kind_t */
     uint32_t line;     /**< 1-based source line */
     uint32_t col;      /**< 1-based column (bytes) of the word that produced it */
     int units;         /**< program units when the item was read: 20 (inch) or 21 (mm) */
     double start[3];   /**< X Y Z at the start (mm); also set for ZERO_MOVE */
-    double end[3];     /**< X Y Z at the end (mm) */
+    double end[3];     /**< X Y Z at the end (mm); equal to start for a move of only
+                            A B C U V W */
     double centre[3];  /**< arc centre (mm); its normal-axis coordinate is the start's */
     double radius;     /**< arc radius at the start (mm) */
     double radius_end; /**< arc radius at the end (mm): equal to radius for a circle; a
                             spiral's radius is linear in the angle between the two */
     double sweep;      /**< arc angle (rad) about the plane normal: > 0 for G3, < 0 for G2,
                             full turns included */
-    double feed;       /**< LINE/ARC: feed in mm/min (> 0; G93 converted) */
+    double feed;       /**< LINE/ARC: feed (> 0; G93 converted), the speed along the length
+                            LinuxCNC applies it to: the X Y Z length (mm/min) when X, Y or
+                            Z moves (always for an ARC), else the U V W length (mm/min)
+                            when U, V or W moves, else the A B C length in degrees
+                            (deg/min). The A B C feed is the F number as written, not
+                            converted under G20 (LinuxCNC's angular feed); G93 makes it F
+                            x that length. The other axes move in step with it. The
+                            A B C feed is clamped to the same number as mm/min feeds. */
     int dir;           /**< arc direction: +1 G3 (counter-clockwise), -1 G2 (clockwise) */
     int plane;         /**< arc plane: 17 (XY, normal +Z), 18 (ZX, normal +Y), 19 (YZ, +X) */
     int turns;         /**< arc: P word, number of times the end angle is passed (>= 1) */
@@ -132,6 +150,12 @@ typedef struct {
     double q_tol;      /**< TOLERANCE: G64 Q, collinearity tolerance (mm), 0 when not given */
     char text[128];    /**< EVENT/IGNORED/NOTE: the words ("T1 M6", "G40") or the note;
                             END: what ended it ("M2", "M30", "%", "end of text") */
+
+    double astart[EF_GCODE_AUX]; /**< A B C (degrees) and U V W (mm) at the start, machine
+                                      coordinates (work and G92 offsets applied; no tool
+                                      offset, no XY rotation) */
+    double aend[EF_GCODE_AUX];   /**< A B C U V W at the end; an arc moves them linearly
+                                      from astart to aend while its X Y Z follow the arc */
 } ef_gcode_item_t;
 
 /** A named parameter: its value and the call level that owns it (-1: global, "_name"). */
@@ -202,20 +226,22 @@ typedef struct {
     int motion;            /**< modal motion: G code x 10 (0, 10, 20, 30, 810...), -1 none */
     double feed;           /**< mm/min, 0 until an F word */
     double max_feed;       /**< feeds above are clamped (mm/min) */
-    double cur[3];         /**< current position, machine coordinates (mm) */
+    double feed_ang;       /**< deg/min: the F number as written (feed of A B C-only moves) */
+    double cur[3];         /**< current position, machine coordinates (mm); acur: the rest */
     uint32_t ignored_seen; /**< bit set of ignored words already reported */
     double param[EF_GCODE_NPARAM];           /**< numbered parameters (offsets held below, in mm) */
     ef_gcode_named_t named[EF_GCODE_NNAMED]; /**< named parameters */
     int nnamed;                              /**< named parameters defined */
-    /* offsets (mm; rotation in degrees) */
+    /* offsets of the nine axes X Y Z A B C U V W (mm; A B C and rotation in degrees) */
     int cs;                                 /**< coordinate system 1..9 (G54..G59.3) */
-    double g5x[9][3];                       /**< work offsets (#5221...) */
+    double g5x[9][9];                       /**< work offsets (#5221-5229...) */
     double rot[9];                          /**< XY rotation of each system (#5230...) */
-    double g92[3];                          /**< G92 offset in force */
-    double g92_saved[3];                    /**< #5211-5213 */
+    double g92[9];                          /**< G92 offset in force */
+    double g92_saved[9];                    /**< #5211-5219 */
     int g92_on;                             /**< #5210 */
-    double g28[3], g30[3];                  /**< #5161-5163, #5181-5183 */
-    double tlo[3];                          /**< tool length offset in force */
+    double g28[9], g30[9];                  /**< #5161-5169, #5181-5189 */
+    double tlo[3];                          /**< tool length offset in force (X Y Z only) */
+    double acur[EF_GCODE_AUX];              /**< current A B C (deg) U V W (mm), machine coords */
     ef_gcode_tool_t tools[EF_GCODE_NTOOLS]; /**< tool table (in memory) */
     int ntools;
     int tool_prep, tool_cur;           /**< T word, tool in the spindle (M6, M61) */
@@ -299,9 +325,10 @@ int ef_gcode_set_max_feed(ef_gcode_t *r, double feed);
 
 /**
  * @brief Start from a machine's saved parameters: a LinuxCNC parameter file (one
- *        "NUMBER VALUE" per line; blank lines and ';' comments allowed), lengths in mm.
- *        Work offsets (5221-5390, rotations included), G28/G30 positions (5161-5163,
- *        5181-5183), G92 (5210-5213) and the active coordinate system (5220) take effect;
+ *        "NUMBER VALUE" per line; blank lines and ';' comments allowed), lengths in mm,
+ *        A B C in degrees. Work offsets of all nine axes X Y Z A B C U V W (5221-5390,
+ *        rotations included), G28/G30 positions (5161-5169, 5181-5189), G92 (5210-5219)
+ *        and the active coordinate system (5220) take effect;
  *        other numbers are set as parameters. Call after ef_gcode_init()/ef_gcode_open()
  *        and before the first ef_gcode_next(). Nothing is applied when a line is bad.
  * @param r    reader.
