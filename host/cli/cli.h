@@ -149,7 +149,11 @@ enum {
     CLI_PIPE_STEP,
     CLI_PIPE_MICRO,
     CLI_PIPE_G1,
-    CLI_PIPE_KEEP_BLENDS
+    CLI_PIPE_KEEP_BLENDS,
+    CLI_PIPE_AXES,
+    CLI_PIPE_VMAX_ROT,
+    CLI_PIPE_AMAX_ROT,
+    CLI_PIPE_AUX_TOL
 };
 /* clang-format off */
 /** The smoothing options' longopts entries (smooth and stream list them). */
@@ -162,7 +166,11 @@ enum {
     {"step", required_argument, NULL, CLI_PIPE_STEP},                                              \
     {"micro-len", required_argument, NULL, CLI_PIPE_MICRO},                                        \
     {"g1", no_argument, NULL, CLI_PIPE_G1},                                                        \
-    {"keep-blends", no_argument, NULL, CLI_PIPE_KEEP_BLENDS}
+    {"keep-blends", no_argument, NULL, CLI_PIPE_KEEP_BLENDS},                                      \
+    {"axes", required_argument, NULL, CLI_PIPE_AXES},                                              \
+    {"vmax-rot", required_argument, NULL, CLI_PIPE_VMAX_ROT},                                      \
+    {"amax-rot", required_argument, NULL, CLI_PIPE_AMAX_ROT},                                      \
+    {"aux-tol", required_argument, NULL, CLI_PIPE_AUX_TOL}
 /* clang-format on */
 
 /** Apply smoothing option key (a CLI_PIPE_* key cli_getopt() returned; value in g->val).

@@ -185,7 +185,27 @@ static int crep_move(void *user, const ef_move_t *m, const ef_pipe_move_info_t *
             }
             fputc(']', fp);
         }
-        fputs("]}}", fp);
+        fputs("]}", fp);
+        /* the auxiliary axes' control points (deg for A B C, mm for U V W), for a move where
+         * one is not at 0: a program of X Y Z alone writes what it always did */
+        int any = 0;
+        for (int a = 0; a < c->o->cfg.naux; a++)
+            for (int k = 0; k <= m->degree && k < 6; k++)
+                any |= m->ab[a][k] != 0.0f;
+        if (any) {
+            fputs(", \"aux_control_points\": {", fp);
+            for (int a = 0; a < c->o->cfg.naux; a++) {
+                fprintf(fp, "%s\"%c\": [", a ? ", " : "", "abcuvw"[a]);
+                for (int k = 0; k <= m->degree && k < 6; k++) {
+                    if (k)
+                        fputs(", ", fp);
+                    cli_json_num(fp, m->ab[a][k]);
+                }
+                fputc(']', fp);
+            }
+            fprintf(fp, "}, \"aux_only\": %s", (m->flags & EF_MOVE_AUX_ONLY) ? "true" : "false");
+        }
+        fputc('}', fp);
     }
     if (c->o->svg && m->kind == EF_MOVE_BLEND) {
         for (int k = 0; k <= 16; k++) {
@@ -221,9 +241,13 @@ static int crep_setpoint(void *user, double t, const ef_setpoint_t *sp,
     }
     c->prev = *sp;
     c->have_prev = 1;
-    if (c->csv)
-        fprintf(c->csv, "%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%u,%u\n", t, sp->p.x * f, sp->p.y * f,
+    if (c->csv) {
+        fprintf(c->csv, "%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%u,%u", t, sp->p.x * f, sp->p.y * f,
                 sp->p.z * f, sp->v_plan * f, feed * f, (unsigned)sp->seq, (unsigned)sp->tag);
+        for (int a = 0; a < c->o->cfg.naux; a++)
+            fprintf(c->csv, ",%.6f", sp->aux[a]);
+        fputc('\n', c->csv);
+    }
     if (c->o->svg) {
         double r[SP_REC] = {sp->p.x * f, sp->p.y * f, sp->v_plan * f, mi->rapid};
         if (!mi->rapid && sp->v_plan * f > c->vmax_seen)
@@ -457,6 +481,11 @@ static void crep_summary(const crep_ctx_t *c, const char *title, const ef_pipe_s
            "tolerance\n",
            st->dev_max * f, u, (unsigned)st->dev_max_line, st->dev_max_tol * f, u,
            (unsigned)st->dev_over);
+    if (sm->aux_moves || sm->aux_stops || sm->aux_dev_max > 0.0f)
+        printf("axes A B C U V W %u moves of them alone, %u exact stops for their rate changes, "
+               "blend deviation max %.4g (deg or mm; tolerance %.4g)\n",
+               (unsigned)sm->aux_moves, (unsigned)sm->aux_stops, (double)sm->aux_dev_max,
+               c->o->cfg.aux_tol[0]);
     printf("cycle time       %.3f s (rapids %.3f s), path length %.2f %s\n", st->cycle_time,
            st->rapid_time, st->length * f, u);
     printf("end position     %.4f %.4f %.4f %s\n", st->end[0] * f, st->end[1] * f, st->end[2] * f,
@@ -552,6 +581,7 @@ void cli_smooth_opts_default(cli_smooth_opts_t *o)
     o->cfg.g2 = cli_default_table(EF_TABLE_G2_QUINTIC);
     o->cfg.g1 = cli_default_table(EF_TABLE_G1_CUBIC);
     o->cfg.interp_modes = EF_PIPE_INTERP_UNIFORM | EF_PIPE_INTERP_CORRECTED;
+    o->cfg.naux = EF_AUX; /* all nine axes unless --axes says fewer */
 }
 
 int cli_smooth_run(ef_gcode_t *r, const char *title, const cli_smooth_opts_t *o)
@@ -571,7 +601,10 @@ int cli_smooth_run(ef_gcode_t *r, const char *title, const cli_smooth_opts_t *o)
         c.csv = fopen(o->out, "w");
         if (!c.csv)
             return cli_error(EF_ERR_IO, "smooth: cannot write %s", o->out);
-        fputs("t,x,y,z,v_plan,feed,seq,line\n", c.csv);
+        fputs("t,x,y,z,v_plan,feed,seq,line", c.csv);
+        for (int a = 0; a < o->cfg.naux; a++)
+            fprintf(c.csv, ",%c", "abcuvw"[a]);
+        fputc('\n', c.csv);
     } else if (o->out) {
         return cli_error(EF_ERR_ARG, "smooth: -o %s: the name must end in .json or .csv", o->out);
     }

@@ -227,16 +227,38 @@ int cli_pipe_opt(const cli_getopt_t *g, int key, ef_pipe_cfg_t *cfg)
             cfg->tol_default = x;
         break;
     case CLI_PIPE_VMAX:
+        /* X Y Z and U V W (linear axes); A B C: --vmax-rot */
         if ((rc = cutil_pipe_num(g, 0, 1, &x)) == EF_OK) {
-            for (int i = 0; i < 3; i++)
-                cfg->lim.v_axis[i] = (float)x;
+            for (int i = 0; i < EF_AXES; i++)
+                if (i < 3 || i >= 6)
+                    cfg->lim.v_axis[i] = (float)x;
             cfg->rapid_speed = x;
         }
         break;
     case CLI_PIPE_AMAX:
         if ((rc = cutil_pipe_num(g, 0, 1, &x)) == EF_OK)
-            for (int i = 0; i < 3; i++)
+            for (int i = 0; i < EF_AXES; i++)
+                if (i < 3 || i >= 6)
+                    cfg->lim.a_axis[i] = (float)x;
+        break;
+    case CLI_PIPE_VMAX_ROT:
+        if ((rc = cutil_pipe_num(g, 0, 1, &x)) == EF_OK)
+            for (int i = 3; i < EF_AXES && i < 6; i++)
+                cfg->lim.v_axis[i] = (float)x;
+        break;
+    case CLI_PIPE_AMAX_ROT:
+        if ((rc = cutil_pipe_num(g, 0, 1, &x)) == EF_OK)
+            for (int i = 3; i < EF_AXES && i < 6; i++)
                 cfg->lim.a_axis[i] = (float)x;
+        break;
+    case CLI_PIPE_AXES:
+        if ((rc = cli_opt_int(g, 3, EF_AXES, &n)) == EF_OK)
+            cfg->naux = (int)n - 3;
+        break;
+    case CLI_PIPE_AUX_TOL:
+        if ((rc = cutil_pipe_num(g, 0, 0, &x)) == EF_OK)
+            for (int i = 0; i < EF_AUX; i++)
+                cfg->aux_tol[i] = x;
         break;
     case CLI_PIPE_JERK:
         if ((rc = cutil_pipe_num(g, 0, 0, &x)) == EF_OK)

@@ -334,6 +334,11 @@ int cli_cmd_stream(int argc, char **argv)
     }
     if (k < 0)
         return k;
+    if (c.pipe.naux > 0)
+        return cli_error(EF_ERR_ARG,
+                         "stream: --axes %d: streaming to drives carries X Y Z only "
+                         "(a program that moves A B C U V W is refused; docs/axes.md)",
+                         c.pipe.naux + 3);
     if (addr && iface)
         return cli_error(EF_ERR_ARG, "stream: --modbus or --can, not both");
     if ((!addr && !iface) || !path) {

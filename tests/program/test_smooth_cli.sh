@@ -70,7 +70,7 @@ expect 0 'end position +0.0000 1.0000 0.0000 in' -- smooth "$tmp/inch.ngc"
 
 # CSV: header and rows; the last row is at rest at the program end.
 "$ef" smooth "$bracket" -o "$tmp/b.csv" --step uniform >/dev/null 2>&1 && ok || bad "smooth -o b.csv"
-[ "$(head -1 "$tmp/b.csv")" = "t,x,y,z,v_plan,feed,seq,line" ] && ok || bad "CSV header"
+[ "$(head -1 "$tmp/b.csv")" = "t,x,y,z,v_plan,feed,seq,line,a,b,c,u,v,w" ] && ok || bad "CSV header"
 rows=$(($(wc -l <"$tmp/b.csv") - 1))
 [ "$rows" -gt 1000 ] && ok || bad "CSV rows $rows"
 tail -1 "$tmp/b.csv" | grep -qE '^[0-9.]+,75\.0000[0-9]*,40\.0000[0-9]*,25\.0000[0-9]*,0\.000000,' && ok ||
@@ -120,6 +120,45 @@ expect 1 '--vmax' -- smooth "$bracket" --vmax 0
 expect 1 '--tol' -- smooth "$bracket" --tol -1
 expect 1 '--period-us' -- smooth "$bracket" --period-us 0
 expect 1 "'nan' is not a finite number" -- smooth "$bracket" --amax nan
+# Nine axes (docs/axes.md): A with X Y through blends, A alone, B C U V W; the JSON carries
+# the auxiliary control points, the CSV ends at every programmed value.
+cat >"$tmp/axes.ngc" <<'EOF2'
+G21 G90 G64 P0.05
+G1 X40 A30 F1200
+G1 Y40
+G1 X0 A-10
+G1 A80 F2700
+G1 X-20 B10 C90 U5 V3 W1 F1200
+M2
+EOF2
+expect 0 'axes A B C U V W 1 moves of them alone, 0 exact stops for their rate changes, blend deviation max [0-9.e-]+ \(deg or mm; tolerance 0.02\)' -- smooth "$tmp/axes.ngc" --keep-blends
+"$ef" smooth "$tmp/axes.ngc" --keep-blends -o "$tmp/axes.csv" >/dev/null 2>&1 && ok || bad "smooth axes.ngc -o csv"
+tail -1 "$tmp/axes.csv" | grep -qE ',-20\.000000,40\.000000,0\.000000,0\.000000,0\.000000,[0-9]+,6,80\.000000,10\.000000,90\.000000,5\.000000,3\.000000,1\.000000$' && ok ||
+    bad "axes CSV last row: $(tail -1 "$tmp/axes.csv")"
+"$ef" smooth "$tmp/axes.ngc" --keep-blends -o "$tmp/axes.json" >/dev/null 2>&1 && ok || bad "smooth axes.ngc -o json"
+if [ $have_py -eq 1 ]; then
+    python3 - "$tmp/axes.json" <<'PY' && ok || bad "JSON auxiliary control points"
+import json, sys
+segs = json.load(open(sys.argv[1]))["segments"]
+aux = [s for s in segs if "aux_control_points" in s]
+assert len(aux) >= 4, len(aux)
+assert sum(1 for s in aux if s["aux_only"]) == 1
+prev = None
+for s in segs:
+    a = s.get("aux_control_points", {"a": [0.0] * (s["degree"] + 1)})["a"]
+    assert len(a) == s["degree"] + 1
+    if prev is not None:
+        assert abs(a[0] - prev) < 1e-4, (s["seq"], a[0], prev)
+    prev = a[-1]
+assert abs(prev - 80) < 1e-6
+PY
+fi
+expect 0 'end position +-20.0000 40.0000 0.0000 mm' -- smooth "$tmp/axes.ngc" --axes 9
+expect 1 'axes.ngc:2: axis A moves, the machine has X Y Z only' -- smooth "$tmp/axes.ngc" --axes 3
+expect 1 'axes.ngc:6: axis B moves, the machine has X Y Z A only' -- smooth "$tmp/axes.ngc" --axes 4
+expect 1 "--axes '10': a whole number 3..9" -- smooth "$tmp/axes.ngc" --axes 10
+expect 1 'streaming to drives carries X Y Z only' -- stream "$tmp/axes.ngc" --can vcan0 --axes 4
+
 expect 9 'cannot write' -- smooth "$bracket" --svg "$tmp/no/such/dir.svg"
 expect 0 'usage: evenfeed smooth' -- smooth --help
 

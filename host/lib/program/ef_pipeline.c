@@ -22,7 +22,8 @@ typedef struct {
     uint32_t seq;
     int valid;
     float v_max;
-    float feed; /* programmed feed (units/s) */
+    float feed;   /* programmed feed (units/s) */
+    int aux_only; /* an auxiliary move: X Y Z still, its speeds in the axes' units */
     ef_pipe_move_info_t mi;
 } ef_pipe_seq_t;
 
@@ -60,6 +61,11 @@ void ef_pipe_cfg_default(ef_pipe_cfg_t *cfg)
     for (int k = 0; k < 3; k++) {
         cfg->lim.v_axis[k] = 100.0f;
         cfg->lim.a_axis[k] = 1000.0f;
+    }
+    for (int k = 0; k < EF_AUX; k++) {
+        cfg->lim.v_axis[3 + k] = k < 3 ? 90.0f : 100.0f;
+        cfg->lim.a_axis[3 + k] = k < 3 ? 900.0f : 1000.0f;
+        cfg->aux_tol[k] = 0.02;
     }
     cfg->lim.j_max = 20000.0f;
     cfg->lim.a_normal_frac = EF_PIPE_A_NORMAL_FRAC;
@@ -178,7 +184,7 @@ static int pipe_step(ef_pipe_t *P, int k, ef_msg_t *m)
     double t = (double)P->tick[k] * dt;
     fl->end_time = t;
     const ef_pipe_seq_t *si = pipe_seq_info(P, sp.seq);
-    if (P->have_prev[k] && P->prev[k].moving && sp.moving && si) {
+    if (P->have_prev[k] && P->prev[k].moving && sp.moving && si && !si->aux_only) {
         double dx = (double)sp.p.x - P->prev[k].p.x, dy = (double)sp.p.y - P->prev[k].p.y;
         double dz = (double)sp.p.z - P->prev[k].p.z;
         double vm = sqrt(dx * dx + dy * dy + dz * dz) / dt;
@@ -223,7 +229,8 @@ static int pipe_move(ef_pipe_t *P, const ef_move_t *mv, ef_msg_t *m)
     st->moves++;
     if (mv->kind >= 1 && mv->kind <= 4)
         st->moves_kind[mv->kind]++;
-    st->length += mv->length;
+    if (!(mv->flags & EF_MOVE_AUX_ONLY))
+        st->length += mv->length; /* the X Y Z path */
     st->cycle_time += mv->duration;
     if (mi.rapid)
         st->rapid_time += mv->duration;
@@ -243,6 +250,7 @@ static int pipe_move(ef_pipe_t *P, const ef_move_t *mv, ef_msg_t *m)
     s->valid = 1;
     s->v_max = mv->v_max;
     s->feed = mv->feed;
+    s->aux_only = (mv->flags & EF_MOVE_AUX_ONLY) != 0;
     s->mi = mi;
     if (P->cb.on_move) {
         int rc = P->cb.on_move(P->cb.user, mv, &mi);
@@ -355,6 +363,23 @@ static int pipe_prim(ef_pipe_t *P, const ef_gcode_item_t *it, ef_msg_t *m)
     if (rc)
         return ef_fail(m, rc, "%s:%u: bad path item", P->r->name, (unsigned)it->line);
     int rapid = it->kind == EF_GC_RAPID;
+    for (int k = 0; k < EF_GCODE_AUX; k++) {
+        if (k < P->cfg->naux) {
+            pr.aux[k] = (float)it->aend[k];
+            continue;
+        }
+        if (it->aend[k] != it->astart[k]) {
+            ef_msg_t dm;
+            int rc2 = pipe_drain(P, &dm); /* controlled stop at the last accepted end */
+            const char *axes = "XYZABCUVW";
+            if (rc2)
+                return ef_fail(m, rc2, "%s:%u: axis %c moves; then %s", P->r->name,
+                               (unsigned)it->line, axes[3 + k], dm.text);
+            return ef_fail(m, EF_ERR_ARG, "%s:%u: axis %c moves, the machine has X Y Z%s%.*s only",
+                           P->r->name, (unsigned)it->line, axes[3 + k], P->cfg->naux ? " " : "",
+                           P->cfg->naux, axes + 3);
+        }
+    }
     pr.tag = it->line;
     pr.tol = (float)P->tol;
     pr.qtol = (float)P->qtol;
@@ -486,6 +511,12 @@ static int pipe_item(ef_pipe_t *P, const ef_gcode_item_t *it, ef_msg_t *m)
         if ((rc = ef_pipe_spiral_piece(it, k, n, &piece)) != 0)
             return ef_fail(m, rc, "%s:%u: spiral arc piece %d of %d is degenerate", P->r->name,
                            (unsigned)it->line, k + 1, n);
+        /* the auxiliary axes linear in the angle, as over the whole arc */
+        for (int j = 0; j < EF_GCODE_AUX; j++) {
+            double d = it->aend[j] - it->astart[j];
+            piece.astart[j] = it->astart[j] + d * k / n;
+            piece.aend[j] = k == n - 1 ? it->aend[j] : it->astart[j] + d * (k + 1) / n;
+        }
         if ((rc = pipe_prim(P, &piece, m)) != 0)
             return rc;
     }
@@ -507,6 +538,8 @@ static int pipe_check_cfg(const ef_pipe_cfg_t *c, const ef_pipe_cb_t *cb, ef_msg
         !isfinite(c->qtol_default))
         return ef_fail(m, EF_ERR_ARG, "pipeline: tolerance P %g / Q %g (must be >= 0)",
                        c->tol_default, c->qtol_default);
+    if (c->naux < 0 || c->naux > EF_AUX)
+        return ef_fail(m, EF_ERR_ARG, "pipeline: %d auxiliary axes (0 to %d)", c->naux, EF_AUX);
     if (!c->period_us)
         return ef_fail(m, EF_ERR_ARG, "pipeline: servo period 0");
     if (c->step_mode != EF_STEP_UNIFORM && c->step_mode != EF_STEP_CORRECTED)
@@ -630,7 +663,15 @@ int ef_pipe_run(ef_gcode_t *r, const ef_pipe_cfg_t *cfg, const ef_pipe_cb_t *cb,
     sc.micro_turn = (float)cfg->micro_turn;
     sc.smooth_degree = (uint8_t)cfg->smooth_degree;
     sc.keep_slow_blends = cfg->keep_slow_blends != 0;
+    sc.naux = (uint8_t)(cfg->naux > 0 ? cfg->naux : 0);
+    float astart[EF_AUX_N] = {0};
+    for (int k = 0; k < EF_AUX; k++) {
+        sc.aux_tol[k] = (float)cfg->aux_tol[k];
+        astart[k] = k < cfg->naux ? (float)r->acur[k] : 0.0f;
+    }
     rc = ef_smooth_init(&P->sm, &sc, start);
+    if (!rc)
+        rc = ef_smooth_set_aux(&P->sm, astart);
     if (rc) {
         rc = ef_fail(m, rc, "smoother configuration: %s", ef_err_str(rc));
     } else {
@@ -638,6 +679,8 @@ int ef_pipe_run(ef_gcode_t *r, const ef_pipe_cfg_t *cfg, const ef_pipe_cb_t *cb,
             if (!(cfg->interp_modes & (1u << k)))
                 continue;
             rc = ef_interp_init(&P->ip[k], start, cfg->period_us, k);
+            if (!rc)
+                rc = ef_interp_set_aux(&P->ip[k], astart);
             if (rc)
                 rc = ef_fail(m, rc, "interpolator configuration: %s", ef_err_str(rc));
         }

@@ -28,6 +28,10 @@
  *   ef_smooth_finish(), every move drained (and interpolated to rest), then on_event, so
  *   moves and events keep their order. The first primitive after an event has
  *   ::EF_PRIM_STOP_BEFORE. The program end is handled the same way.
+ * - A B C U V W (the item's aend): the primitive's auxiliary values for the first naux of
+ *   them (ef_smooth.h, "Auxiliary axes"; a move of those alone is an auxiliary move at the
+ *   item's feed in their units); an item that moves an axis beyond naux is refused with
+ *   EF_ERR_ARG, "name:line: axis A moves, the machine has X Y Z only" (controlled stop).
  * - ZERO_MOVE items, IGNORED and NOTE items and lines too short for float32 (refused by the
  *   firmware as ::EF_ERR_DEGENERATE) go to on_note with "name:line:col: ..."; nothing is
  *   dropped silently.
@@ -89,24 +93,30 @@ typedef struct {
 
 /** Configuration (ef_pipe_cfg_default() fills every field). */
 typedef struct {
-    const ef_table_t *g2;  /**< G2 quintic table (required) */
-    const ef_table_t *g1;  /**< G1 cubic table (required when smooth_degree == 3) */
-    ef_limits_t lim;       /**< motion limits (mm/s, mm/s^2, mm/s^3) */
-    double tol_default;    /**< P (mm) at program start and for G64 without P */
-    double qtol_default;   /**< Q (mm) at program start and for G64 without Q (0: Q = P) */
-    double micro_len;      /**< longest CAM micro-segment (mm); 0 disables smooth sections */
-    double micro_turn;     /**< largest turn at a smooth vertex (rad) */
-    int smooth_degree;     /**< 5 (G2 quintic) or 3 (G1 cubic) smooth sections */
-    double rapid_speed;    /**< G0 path speed (mm/s), > 0 */
-    int rapid_exact;       /**< nonzero: exact stops at both ends of every G0 (0: blended) */
-    int keep_slow_blends;  /**< nonzero: blend every corner that fits, also where an exact
-                                stop is faster (ef_smooth_cfg_t::keep_slow_blends; 0: stop) */
-    uint32_t period_us;    /**< servo period (us), > 0 */
-    int step_mode;         /**< ::ef_step_mode_t whose setpoints go to on_setpoint */
-    unsigned interp_modes; /**< EF_PIPE_INTERP_* bits: interpolators to run (0: none) */
+    const ef_table_t *g2;     /**< G2 quintic table (required) */
+    const ef_table_t *g1;     /**< G1 cubic table (required when smooth_degree == 3) */
+    ef_limits_t lim;          /**< motion limits (mm/s, mm/s^2, mm/s^3) */
+    double tol_default;       /**< P (mm) at program start and for G64 without P */
+    double qtol_default;      /**< Q (mm) at program start and for G64 without Q (0: Q = P) */
+    double micro_len;         /**< longest CAM micro-segment (mm); 0 disables smooth sections */
+    double micro_turn;        /**< largest turn at a smooth vertex (rad) */
+    int smooth_degree;        /**< 5 (G2 quintic) or 3 (G1 cubic) smooth sections */
+    double rapid_speed;       /**< G0 path speed (mm/s), > 0 */
+    int rapid_exact;          /**< nonzero: exact stops at both ends of every G0 (0: blended) */
+    int keep_slow_blends;     /**< nonzero: blend every corner that fits, also where an exact
+                                   stop is faster (ef_smooth_cfg_t::keep_slow_blends; 0: stop) */
+    int naux;                 /**< auxiliary axes the machine has: the first naux of A B C U V
+                                   W (0..EF_AUX; ef_smooth_cfg_t::naux); a program that moves
+                                   another one is refused at its line (0: X Y Z only) */
+    double aux_tol[EF_AUX_N]; /**< per auxiliary axis, the blends' largest deviation from it
+                                   (deg for A B C, mm for U V W; ef_smooth_cfg_t::aux_tol) */
+    uint32_t period_us;       /**< servo period (us), > 0 */
+    int step_mode;            /**< ::ef_step_mode_t whose setpoints go to on_setpoint */
+    unsigned interp_modes;    /**< EF_PIPE_INTERP_* bits: interpolators to run (0: none) */
 } ef_pipe_cfg_t;
 
-/** Feed fluctuation of one step mode, measured on consecutive setpoints:
+/** Feed fluctuation of one step mode, measured on consecutive setpoints (of X Y Z moves:
+ *  an auxiliary move has no X Y Z speed to compare):
  *  |(|p_k - p_k-1| / period) - v_ref| / v_ref with v_ref the mean planned speed of the two. */
 typedef struct {
     uint64_t setpoints;     /**< setpoints produced */
@@ -137,7 +147,7 @@ typedef struct {
     uint32_t moves;         /**< moves emitted */
     uint32_t moves_kind[5]; /**< by ::ef_move_kind_t (index 1..4) */
     ef_smooth_stats_t sm;   /**< the smoother's counters */
-    double length;          /**< path length of the moves (mm) */
+    double length;          /**< X Y Z path length of the moves (mm; auxiliary moves add 0) */
     double cycle_time;      /**< sum of the moves' durations (s) */
     double rapid_time;      /**< of which rapids (s) */
     double dev_max;         /**< largest move deviation (mm) */
@@ -151,7 +161,10 @@ typedef struct {
     ef_pipe_fluct_t fl[2];  /**< per ::ef_step_mode_t, when interpolated */
 } ef_pipe_stats_t;
 
-/** Defaults: P 0.02 mm, Q 0 (Q = P), 100 mm/s and 1000 mm/s^2 per axis, jerk 20000 mm/s^3,
+/** Defaults: no auxiliary axis (naux 0), with limits set for all of them should a caller
+ *  raise naux: A B C 90 deg/s, 900 deg/s^2, U V W as X Y Z, jerk j_max, aux_tol 0.02 (deg or
+ *  mm).
+ *  P 0.02 mm, Q 0 (Q = P), 100 mm/s and 1000 mm/s^2 per axis, jerk 20000 mm/s^3,
  *  a_normal_frac 0.5, micro_len 1 mm, micro_turn 0.35 rad, quintic smooth sections, rapid
  *  100 mm/s blended (rapid_exact 0), period 1000 us, corrected stepping, no interpolation; tables
  * NULL. */
