@@ -12,6 +12,8 @@
  *                 acceleration limit)
  *   tolerance=P   path tolerance for G64 without P, units (default 0.02)
  *   plan_share=S  share of acceleration and jerk the planner plans to (default 0.9)
+ *   aux_tolerance=T  largest deviation of a blend from A B C U V W, deg or units
+ *                 (default 0.02; docs/axes.md)
  *   trace=FILE    record every call motmod makes, for tests/lcnc (not for production)
  */
 #include <math.h>
@@ -39,6 +41,8 @@ static char *tolerance = "";
 RTAPI_MP_STRING(tolerance, "path tolerance for G64 without P (units)");
 static char *plan_share = "";
 RTAPI_MP_STRING(plan_share, "share of acceleration and jerk the planner plans to");
+static char *aux_tolerance = "";
+RTAPI_MP_STRING(aux_tolerance, "blend tolerance of A B C U V W (deg or units)");
 static char *trace = "";
 RTAPI_MP_STRING(trace, "file to record motmod's calls to (tests)");
 
@@ -57,7 +61,7 @@ static void (*aio_write)(int, double);
 static double (*vel_limit)(int);
 static double (*acc_limit)(int);
 static int spindle_sync;
-static double user_jerk, user_tol, user_share;
+static double user_jerk, user_tol, user_share, user_aux_tol;
 
 /* ---- call trace (tests/lcnc/: replayed by test_tp under ASan) ---- */
 static FILE *tr;
@@ -139,6 +143,13 @@ static void refresh_cfg(int force)
         if (a > 0.0 && isfinite(a))
             c.a_axis[k] = a;
     }
+    for (int k = 3; k < EF_TP_AXES; k++) {
+        double v = vel_limit ? vel_limit(k) : 0.0, a = acc_limit ? acc_limit(k) : 0.0;
+        if (v > 0.0 && isfinite(v))
+            c.v_aux[k - 3] = v;
+        if (a > 0.0 && isfinite(a))
+            c.a_aux[k - 3] = a;
+    }
     double amin = fmin(c.a_axis[0], fmin(c.a_axis[1], c.a_axis[2]));
     c.j_max = user_jerk > 0.0 ? user_jerk : 20.0 * amin;
     if (mcfg && mcfg->maxFeedScale >= 1.0 && mcfg->maxFeedScale <= 100.0)
@@ -152,6 +163,12 @@ static void refresh_cfg(int force)
             fprintf(tr, "cfg %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n",
                     c.period_s, c.max_feed_scale, c.v_axis[0], c.v_axis[1], c.v_axis[2],
                     c.a_axis[0], c.a_axis[1], c.a_axis[2], c.j_max, c.plan_share, c.tol_default);
+            fprintf(tr, "cfgaux");
+            for (int k = 0; k < EF_TP_AXES - 3; k++)
+                fprintf(tr, " %.17g", c.v_aux[k]);
+            for (int k = 0; k < EF_TP_AXES - 3; k++)
+                fprintf(tr, " %.17g", c.a_aux[k]);
+            fprintf(tr, " %.17g\n", c.aux_tol);
         }
     } else {
         rtapi_print_msg(RTAPI_MSG_ERR, "%s\n", ef_tp_msg(&ef));
@@ -169,10 +186,11 @@ int rtapi_app_main(void)
     user_jerk = param(jerk, 0.0);
     user_tol = param(tolerance, 0.02);
     user_share = param(plan_share, 0.9);
-    if (!(user_jerk >= 0.0) || !(user_tol > 0.0) || !(user_share > 0.0 && user_share <= 1.0)) {
-        rtapi_print_msg(
-            RTAPI_MSG_ERR,
-            "evenfeedtp: bad parameter (jerk >= 0, tolerance > 0, 0 < plan_share <= 1)\n");
+    user_aux_tol = param(aux_tolerance, 0.02);
+    if (!(user_jerk >= 0.0) || !(user_tol > 0.0) || !(user_share > 0.0 && user_share <= 1.0) ||
+        !(user_aux_tol > 0.0)) {
+        rtapi_print_msg(RTAPI_MSG_ERR, "evenfeedtp: bad parameter (jerk >= 0, tolerance > 0, 0 < "
+                                       "plan_share <= 1, aux_tolerance > 0)\n");
         hal_exit(comp_id);
         return -1;
     }
@@ -234,6 +252,7 @@ int tpCreate(TP_STRUCT *const tp, int _queueSize, int id)
     ef_tp_cfg_default(&cfg);
     cfg.g2 = &ef_tbl_g2_default;
     cfg.tol_default = user_tol;
+    cfg.aux_tol = user_aux_tol;
     cfg.plan_share = user_share;
     if (user_jerk > 0.0)
         cfg.j_max = user_jerk;

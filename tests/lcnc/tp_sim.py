@@ -18,8 +18,9 @@ through tests/bench/lcnc/lcnc_run.sh, and samples every servo period's commanded
   xyza       tp_xyza.ngc on the XYZA machine (tests/lcnc/xyza/): A turns alone between XYZ
              moves; A within its own speed, acceleration and jerk limits, never moving
              together with X Y Z, and at its programmed end
-  mixed      tp_xyza_mixed.ngc on the XYZA machine: a move of X and A together must end the
-             run with LinuxCNC's error and evenfeed's reason
+  mixed      tp_xyza_mixed.ngc on the XYZA machine with aux_tolerance=0.5: X Y and A
+             together through blended corners and an arc; A within its limits and moving
+             together with X Y, the path within P, every axis at its end
 
 Checks on every evenfeedtp run, from the sampled positions: each setpoint within P of the
 programmed path (evenfeed's G-code reader gives the path); per-axis speed, acceleration
@@ -56,7 +57,7 @@ CASES = {
                  "DISPLAY MAX_FEED_OVERRIDE 1.5"),
     "abort": ("tp_long.ngc", "line=12 abort", ""),
     "xyza": ("tp_xyza.ngc", "", ""),
-    "mixed": ("tp_xyza_mixed.ngc", "", ""),
+    "mixed": ("tp_xyza_mixed.ngc", "", ""),  # with aux_tolerance=0.5 (main())
 }
 
 
@@ -159,10 +160,10 @@ def check_run(ck, name, program, traj, aborted):
     return st
 
 
-def check_a(ck, traj, a_end):
+def check_a(ck, traj, a_end, together=False, name="xyza"):
     """A's own limits (1 ms differences for speed and acceleration, 4 ms for jerk, plus the
     rounding of the float32 setpoints and of the samples' 6 decimals), A never moving while
-    X Y Z do, A at its end."""
+    X Y Z do (together: A moving while X Y Z do for most of its motion), A at its end."""
     a = traj.a
     e = 0.5 * C.ulp32(max(abs(x) for x in a)) + 0.5e-6  # float32 setpoints, 6 decimals
     v = max(abs(a[k] - a[k - 1]) for k in range(1, len(a))) / C.DT
@@ -172,14 +173,20 @@ def check_a(ck, traj, a_end):
             for k in range(3 * h, len(a))) / (h * C.DT) ** 3
     both = sum(1 for k in range(1, len(a))
                if a[k] != a[k - 1] and traj.pos[k] != traj.pos[k - 1])
-    print("xyza      A: speed %.2f deg/s (limit %.0f), acceleration %.1f deg/s^2 (limit %.0f), "
+    print("%-9s A: speed %.2f deg/s (limit %.0f), acceleration %.1f deg/s^2 (limit %.0f), "
           "jerk over 4 ms %.0f deg/s^3 (limit %.0f), periods with A and X Y Z both moving %d, "
-          "A at the end %.4f" % (v, A_V, acc, A_A, j, 20 * A_A, both, a[-1]))
-    ck.check(v <= A_V + 2 * e / C.DT + 1e-6, "xyza: A speed %.3f above its limit" % v)
-    ck.check(acc <= A_A + 4 * e / C.DT ** 2, "xyza: A acceleration %.1f above its limit" % acc)
-    ck.check(j <= 20 * A_A + 8 * e / (h * C.DT) ** 3, "xyza: A jerk %.0f above its limit" % j)
+          "A at the end %.4f" % (name, v, A_V, acc, A_A, j, 20 * A_A, both, a[-1]))
+    ck.check(v <= A_V + 2 * e / C.DT + 1e-6, "%s: A speed %.3f above its limit" % (name, v))
+    ck.check(acc <= A_A + 4 * e / C.DT ** 2,
+             "%s: A acceleration %.1f above its limit" % (name, acc))
+    ck.check(j <= 20 * A_A + 8 * e / (h * C.DT) ** 3, "%s: A jerk %.0f above its limit" % (name, j))
+    ck.check(abs(a[-1] - a_end) < 1e-5, "%s: A ends at %.6f, not %g" % (name, a[-1], a_end))
+    if together:
+        moving = sum(1 for k in range(1, len(a)) if a[k] != a[k - 1])
+        ck.check(both > 0.8 * moving, "%s: A moved with X Y Z in only %d of its %d periods"
+                 % (name, both, moving))
+        return
     ck.check(both == 0, "xyza: A moved together with X Y Z in %d periods" % both)
-    ck.check(abs(a[-1] - a_end) < 1e-6, "xyza: A ends at %.6f, not %g" % (a[-1], a_end))
     ck.check(max(a) >= 180.0 - 1e-6, "xyza: A never reached 180")
 
 
@@ -206,9 +213,7 @@ def main():
         for name in cases:
             prog_name, actions, ini_set = CASES[name]
             prog = os.path.join(HERE, "programs", prog_name)
-            if name == "mixed":
-                program = None
-            elif name == "xyza":
+            if name == "xyza":
                 # evenfeed's reader takes X Y Z only: the path without the A-only lines
                 # (each kept as a comment, so line numbers stay)
                 xyz = os.path.join(args.work, "tp_xyza_path.ngc")
@@ -220,22 +225,31 @@ def main():
                 program = C.Program(args.evenfeed, prog)
             trace = os.path.join(args.record, name + ".trace") if args.record else None
             out = os.path.join(args.work, name + ".tsv")
-            if name == "mixed":
-                rc, text = run(prog, out, "evenfeedtp", actions, ini_set, trace, XYZA,
-                               expect_error=True)
-                want = ("moving X Y Z together with A B C U V W is not supported",
-                        "can't add linear move at line 7")
-                found = [w for w in want if w in text]
-                print("mixed     evenfeedtp: run ended with status %d; LinuxCNC reported: %s"
-                      % (rc, "; ".join(found) or "(nothing expected)"))
-                ck.check(rc == 2 and len(found) == len(want),
-                         "mixed: expected LinuxCNC's error with evenfeed's reason:\n" + text)
-                continue
-            traj = run(prog, out, "evenfeedtp", actions, ini_set, trace,
-                       XYZA if name == "xyza" else None)
+            tpmod = "evenfeedtp aux_tolerance=0.5" if name == "mixed" else "evenfeedtp"
+            traj = run(prog, out, tpmod, actions, ini_set, trace,
+                       XYZA if name in ("xyza", "mixed") else None)
             st = check_run(ck, name, program, traj, name == "abort")
             if name == "xyza":
                 check_a(ck, traj, 0.0)
+            if name == "mixed":
+                check_a(ck, traj, 0.0, together=True, name=name)
+                # LinuxCNC's own planner on the same program and machine, for the record
+                lc = run(prog, out, "", "", "", None, XYZA)
+                ls = C.motion_stats(lc)
+                both = sum(1 for k in range(1, len(lc.a))
+                           if lc.a[k] != lc.a[k - 1] and lc.pos[k] != lc.pos[k - 1])
+                la, h = lc.a, C.JERK_BASE
+                lacc = max(abs(la[k] - 2 * la[k - 1] + la[k - 2])
+                           for k in range(2, len(la))) / C.DT ** 2
+                ljrk = max(abs(la[k] - 3 * la[k - h] + 3 * la[k - 2 * h] - la[k - 3 * h])
+                           for k in range(3 * h, len(la))) / (h * C.DT) ** 3
+                print("%-9s LinuxCNC's planner: %.3f s (evenfeedtp / LinuxCNC %.2f), periods "
+                      "with A and X Y Z both moving %d, A acceleration %.0f deg/s^2, A jerk "
+                      "over 4 ms %.0f deg/s^3, end %s"
+                      % (name, ls["cycle"], st["cycle"] / ls["cycle"], both, lacc, ljrk,
+                         tuple(round(c, 4) for c in ls["end"])))
+                ck.check(math.dist(ls["end"], st["end"]) < 1e-3,
+                         "mixed: the two planners end at different points")
             if name == "mix":
                 lc = run(prog, out, "", "", "", None)
                 ls = C.motion_stats(lc)

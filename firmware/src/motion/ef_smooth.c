@@ -249,6 +249,19 @@ static int sm_aux_blend(ef_smooth_t *s, const ef_smooth_prim_t *h, const ef_smoo
     return ef_move_measure_aux(m);
 }
 
+/* h's feed, capped by what its auxiliary axes' speed limits leave the path (the speed the
+ * lines around a corner run at, which a blend is weighed against). */
+static float sm_aux_vmax(const ef_smooth_t *s, const ef_smooth_prim_t *h)
+{
+    float v = h->pr.feed;
+    for (int k = 0; k < s->cfg.naux; k++) {
+        float r = ef_fabsf(sm_aux_rate(h, k));
+        if (r > 0.0f)
+            v = ef_minf(v, s->cfg.lim.v_axis[3 + k] / r);
+    }
+    return v;
+}
+
 /* The largest trim a blend between a and b may take on either side for the auxiliary axes'
  * tolerances (ef_smooth.h, "Auxiliary axes"); 3.4e38 where none changes its rate, 0 where
  * one does and its tolerance is 0 (an exact stop). *kink: some axis changes its rate. */
@@ -1018,7 +1031,7 @@ static void sm_job_step(ef_smooth_t *s, ef_smooth_prim_t *a, ef_smooth_prim_t *b
             return;
         }
         if (!s->cfg.keep_slow_blends && a->pr.kind == EF_PRIM_LINE && b->pr.kind == EF_PRIM_LINE &&
-            sm_stop_is_faster(&s->cfg.lim, probe, ef_minf(a->pr.feed, b->pr.feed))) {
+            sm_stop_is_faster(&s->cfg.lim, probe, ef_minf(sm_aux_vmax(s, a), sm_aux_vmax(s, b)))) {
             s->st.slow_corners++;
             sm_job_stop(s, a, b);
             return;

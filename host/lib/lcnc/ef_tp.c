@@ -11,6 +11,14 @@
 #define TP_PI 3.14159265358979323846
 /* A and the other non-XYZ axes count as unchanged within this (degrees or units). */
 #define TP_AXIS_EPS 1e-9
+#if EF_AUX < EF_TP_AXES - 3
+#error "the planner module needs the firmware built with EF_AXES 9 (LinuxCNC's nine axes)"
+#endif
+
+/* Jerk of A B C U V W per unit of their acceleration limit (1/s): LinuxCNC gives their
+ * speed and acceleration limits, not a jerk (X Y Z default to the same rule, ef_tp.h). */
+#define TP_AUX_JERK 20.0
+
 /* Smallest rate headroom share used for the follower's bounds (keeps it moving at r = 1). */
 #define TP_HEAD_MIN 0.02
 
@@ -23,6 +31,11 @@ void ef_tp_cfg_default(ef_tp_cfg_t *cfg)
         cfg->v_axis[k] = 100.0;
         cfg->a_axis[k] = 1000.0;
     }
+    for (int k = 0; k < EF_TP_AXES - 3; k++) {
+        cfg->v_aux[k] = 100.0;
+        cfg->a_aux[k] = 1000.0;
+    }
+    cfg->aux_tol = 0.02;
     cfg->j_max = 20000.0;
     cfg->plan_share = 0.9;
     cfg->tol_default = 0.02;
@@ -55,6 +68,13 @@ static int lt_cfg_check(ef_tp_t *tp, const ef_tp_cfg_t *c)
               isfinite(c->a_axis[k])))
             return lt_fail(tp, EF_ERR_ARG,
                            "evenfeed: an X/Y/Z speed or acceleration limit is not > 0");
+    for (int k = 0; k < EF_TP_AXES - 3; k++)
+        if (!(c->v_aux[k] > 0.0 && c->a_aux[k] > 0.0 && isfinite(c->v_aux[k]) &&
+              isfinite(c->a_aux[k])))
+            return lt_fail(tp, EF_ERR_ARG,
+                           "evenfeed: an A/B/C/U/V/W speed or acceleration limit is not > 0");
+    if (!(c->aux_tol > 0.0 && isfinite(c->aux_tol)))
+        return lt_fail(tp, EF_ERR_ARG, "evenfeed: A B C U V W tolerance not > 0");
     if (!(c->j_max > 0.0 && isfinite(c->j_max)))
         return lt_fail(tp, EF_ERR_ARG, "evenfeed: jerk limit not > 0");
     if (!(c->plan_share > 0.0 && c->plan_share <= 1.0))
@@ -92,6 +112,16 @@ static int lt_restart(ef_tp_t *tp)
         s->lim.v_axis[k] = (float)c->v_axis[k];
         s->lim.a_axis[k] = (float)(c->a_axis[k] * c->plan_share);
     }
+    /* A B C U V W through the smoother too (ef_smooth.h, "Auxiliary axes") */
+    s->naux = EF_TP_AXES - 3;
+    for (int k = 0; k < EF_TP_AXES - 3; k++) {
+        /* 1 % under the limit: an axis turning at its speed limit along a blend is bounded
+         * from 17 samples of the curve (ef_path.h), and LinuxCNC checks every period */
+        s->lim.v_axis[3 + k] = (float)(0.99 * c->v_aux[k]);
+        s->lim.a_axis[3 + k] = (float)(c->a_aux[k] * c->plan_share);
+        s->aux_tol[k] = (float)c->aux_tol;
+        s->lim.j_aux[k] = (float)(TP_AUX_JERK * c->a_aux[k] * c->plan_share);
+    }
     s->lim.j_max = (float)(c->j_max * c->plan_share);
     s->lim.a_normal_frac = 0.5f;
     s->micro_len = (float)c->micro_len;
@@ -102,13 +132,22 @@ static int lt_restart(ef_tp_t *tp)
     tp->st.smooth += tp->sm.st.smooth;
     tp->st.merged += tp->sm.st.merged;
     tp->st.stops += tp->sm.st.stops;
+    tp->st.slow_corners += tp->sm.st.slow_corners;
+    tp->st.aux_stops += tp->sm.st.aux_stops;
+    tp->st.aux_dev_max = fmaxf(tp->st.aux_dev_max, tp->sm.st.aux_dev_max);
     int rc = ef_smooth_init(&tp->sm, s, p);
+    for (int k = 0; k < EF_TP_AXES - 3; k++)
+        tp->aux_f[k] = (float)tp->pos[3 + k];
+    if (rc == EF_OK)
+        rc = ef_smooth_set_aux(&tp->sm, tp->aux_f);
     if (rc != EF_OK)
         return lt_fail(tp, rc, "evenfeed: smoother settings refused");
     tp->period_us = (uint32_t)lround(c->period_s * 1e6);
     if (tp->period_us == 0u)
         tp->period_us = 1u;
     rc = ef_interp_init(&tp->ip, p, tp->period_us, EF_STEP_CORRECTED);
+    if (rc == EF_OK)
+        rc = ef_interp_set_aux(&tp->ip, tp->aux_f);
     if (rc != EF_OK)
         return lt_fail(tp, rc, "evenfeed: interpolator settings refused");
     tp->mh = tp->mn = 0;
@@ -330,6 +369,17 @@ static int lt_aux_moves(const ef_tp_t *tp, const double end[EF_TP_AXES], int *xy
     return 0;
 }
 
+/* A B C U V W of a primitive: where the move takes them when it moves them (aux), else
+ * exactly those of the one before, so the smoother sees them still. */
+static void lt_prim_aux(ef_tp_t *tp, ef_prim_t *pr, const double end[EF_TP_AXES], int aux)
+{
+    for (int k = 0; k < EF_TP_AXES - 3; k++) {
+        if (aux)
+            tp->aux_f[k] = (float)end[3 + k];
+        pr->aux[k] = tp->aux_f[k];
+    }
+}
+
 int ef_tp_add_line(ef_tp_t *tp, const double end[EF_TP_AXES], int motion_type, double vel,
                    double ini_maxvel, double acc, int enables, int atspeed)
 {
@@ -338,16 +388,14 @@ int ef_tp_add_line(ef_tp_t *tp, const double end[EF_TP_AXES], int motion_type, d
     ef_prim_t pr;
     int rc = lt_add_begin(tp, end, motion_type, vel, ini_maxvel, &pr);
     int xyz = 0, aux = rc == EF_OK && lt_aux_moves(tp, end, &xyz);
-    if (aux && xyz)
-        rc = lt_fail(tp, EF_ERR_ARG,
-                     "evenfeed: moving X Y Z together with A B C U V W is not supported");
     if (rc != EF_OK) {
         tp->st.refused++;
         return rc;
     }
     pr.kind = EF_PRIM_LINE;
     pr.end = lt_v3(end);
-    if (aux) {
+    lt_prim_aux(tp, &pr, end, aux);
+    if (aux && !xyz) {
         /* A B C U V W alone, at LinuxCNC's speed and acceleration along the move */
         double v = fmin(vel * tp->cfg.max_feed_scale, ini_maxvel), d2 = 0.0; /* (checked) */
         for (int k = 3; k < EF_TP_AXES; k++)
@@ -371,9 +419,7 @@ int ef_tp_add_arc(ef_tp_t *tp, const double end[EF_TP_AXES], const double centre
         return EF_ERR_ARG;
     ef_prim_t pr;
     int rc = lt_add_begin(tp, end, motion_type, vel, ini_maxvel, &pr);
-    int xyz = 0;
-    if (rc == EF_OK && lt_aux_moves(tp, end, &xyz))
-        rc = lt_fail(tp, EF_ERR_ARG, "evenfeed: arcs that move A B C U V W are not supported");
+    int xyz = 0, aux = rc == EF_OK && lt_aux_moves(tp, end, &xyz);
     if (rc != EF_OK) {
         tp->st.refused++;
         return rc;
@@ -417,6 +463,7 @@ int ef_tp_add_arc(ef_tp_t *tp, const double end[EF_TP_AXES], const double centre
     }
     pr.kind = EF_PRIM_ARC;
     pr.end = lt_v3(end);
+    lt_prim_aux(tp, &pr, end, aux);
     pr.centre = lt_v3(c);
     pr.axis = lt_v3(n);
     pr.sweep = (float)sweep;
@@ -516,11 +563,21 @@ static int lt_feed(ef_tp_t *tp, int now)
     return EF_OK;
 }
 
+/* An A B C U V W move is done: the smoother and the interpolator (both empty: it ran from
+ * rest) go on from where it ended, as the next primitive's start. */
+static void lt_aux_sync(ef_tp_t *tp, const ef_tp_item_t *it)
+{
+    float a[EF_TP_AXES - 3];
+    for (int k = 0; k < EF_TP_AXES - 3; k++)
+        a[k] = (float)it->aux_to[k];
+    (void)ef_smooth_set_aux(&tp->sm, a);
+    (void)ef_interp_set_aux(&tp->ip, a);
+}
+
 /* Start an A B C U V W move from rest: a degree-1 law along its straight line in those
  * axes' space (length in their units), at the planner's share of its acceleration and a
  * jerk of TP_AUX_JERK per second times that. A move below the firmware's resolution is
  * done at once (it moves less than one float32 step of the law). */
-#define TP_AUX_JERK 20.0
 static void lt_aux_start(ef_tp_t *tp, const ef_tp_item_t *it)
 {
     double d2 = 0.0;
@@ -539,6 +596,7 @@ static void lt_aux_start(ef_tp_t *tp, const ef_tp_item_t *it)
     tp->aux_on = ef_plan_timelaw(m, (float)(TP_AUX_JERK * m->a_max)) == EF_OK;
     if (!tp->aux_on) {
         memcpy(tp->pos + 3, it->aux_to, sizeof it->aux_to);
+        lt_aux_sync(tp, it);
         tp->qp++;
     }
 }
@@ -551,6 +609,7 @@ static void lt_aux_step(ef_tp_t *tp)
     tp->aux_t += tp->rate * tp->cfg.period_s;
     if (tp->aux_t >= m->duration) {
         memcpy(tp->pos + 3, it->aux_to, sizeof it->aux_to);
+        lt_aux_sync(tp, it);
         tp->aux_on = 0;
         tp->v_plan = 0.0;
         tp->qp++;
@@ -684,30 +743,40 @@ static void lt_rate_bounds(const ef_tp_t *tp, double r, double *r1, double *r2)
     uint32_t n = EF_INTERP_QUEUE - ef_interp_space(&tp->ip);
     if (n == 0)
         return; /* nothing executing: the rate moves nothing */
-    double an[3] = {0, 0, 0}, jn[3] = {0, 0, 0}, tv[3] = {0, 0, 0}, known = 0.0;
+    double an[EF_TP_AXES] = {0}, jn[EF_TP_AXES] = {0}, tv[EF_TP_AXES] = {0}, known = 0.0;
     for (uint32_t q = 0; q < n + tp->mn && known < TP_HORIZON; q++) {
         const ef_move_t *m = q < n ? &tp->ip.q[(tp->ip.head + q) % EF_INTERP_QUEUE]
                                    : &tp->mv[(tp->mh + q - n) % EF_TP_MOVES];
         double am = 0.0, jm = 0.0;
         known += lt_law_max(m, q == 0 ? tp->ip.t : 0.0, &am, &jm);
         double v = fmin(m->v_max, fmax(m->feed, fmax(m->v_entry, m->v_exit)));
-        const float mt[3] = {m->tabs.x, m->tabs.y, m->tabs.z};
-        const float mk[3] = {m->kabs.x, m->kabs.y, m->kabs.z};
-        const float mg[3] = {m->kjerk.x, m->kjerk.y, m->kjerk.z};
-        for (int i = 0; i < 3; i++) {
+        float mt[EF_TP_AXES] = {m->tabs.x, m->tabs.y, m->tabs.z};
+        float mk[EF_TP_AXES] = {m->kabs.x, m->kabs.y, m->kabs.z};
+        float mg[EF_TP_AXES] = {m->kjerk.x, m->kjerk.y, m->kjerk.z};
+        for (int i = 3; i < EF_TP_AXES; i++) {
+            mt[i] = m->atabs[i - 3];
+            mk[i] = m->akabs[i - 3];
+            mg[i] = m->akjerk[i - 3];
+        }
+        for (int i = 0; i < EF_TP_AXES; i++) {
             an[i] = fmax(an[i], mt[i] * am + mk[i] * v * v);
             jn[i] = fmax(jn[i], mt[i] * jm + 3.0 * mk[i] * v * am + mg[i] * v * v * v);
             tv[i] = fmax(tv[i], mt[i] * v);
         }
     }
-    for (int i = 0; i < 3; i++) {
-        if (known < TP_HORIZON) { /* after the known moves: a line at the planner's limits */
-            an[i] = fmax(an[i], c->plan_share * c->a_axis[i]);
+    for (int i = 0; i < EF_TP_AXES; i++) {
+        double ai = i < 3 ? c->a_axis[i] : c->a_aux[i - 3];
+        double vi = i < 3 ? c->v_axis[i] : c->v_aux[i - 3];
+        if (known < TP_HORIZON && i < 3) { /* after the known moves: a line at the limits */
+            an[i] = fmax(an[i], c->plan_share * ai);
             jn[i] = fmax(jn[i], c->plan_share * c->j_max);
-            tv[i] = fmax(tv[i], c->v_axis[i]);
+            tv[i] = fmax(tv[i], vi);
         }
-        double A = fmax(TP_LIMIT * c->a_axis[i] - r * r * an[i], TP_HEAD_MIN * c->a_axis[i]);
-        double J = fmax(TP_LIMIT * c->j_max - r * r * r * jn[i], TP_HEAD_MIN * c->j_max);
+        if (i >= 3 && !(tv[i] > 0.0))
+            continue; /* an axis the known moves leave still */
+        double ji = i < 3 ? c->j_max : TP_AUX_JERK * ai;
+        double A = fmax(TP_LIMIT * ai - r * r * an[i], TP_HEAD_MIN * ai);
+        double J = fmax(TP_LIMIT * ji - r * r * r * jn[i], TP_HEAD_MIN * ji);
         double t = fmax(tv[i], 1e-9);
         *r1 = fmin(*r1, 0.5 * A / t);
         *r2 = fmin(*r2, 0.5 * J / t);
@@ -837,6 +906,9 @@ int ef_tp_cycle(ef_tp_t *tp, double scale, ef_tp_status_t *st)
     tp->pos[0] = sp.p.x;
     tp->pos[1] = sp.p.y;
     tp->pos[2] = sp.p.z;
+    if (!tp->aux_on) /* (during one the interpolator idles where it began) */
+        for (int k = 0; k < EF_TP_AXES - 3; k++)
+            tp->pos[3 + k] = sp.aux[k];
     tp->v_plan = sp.moving ? sp.v_plan : 0.0;
     if (sp.moving) {
         tp->exec_seq = sp.tag;

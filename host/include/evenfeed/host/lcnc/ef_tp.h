@@ -128,22 +128,26 @@ typedef struct {
 /** Configuration (ef_tp_cfg_default() fills every field). Units: LinuxCNC's machine units
  *  (mm or inch) and seconds. */
 typedef struct {
-    const ef_table_t *g2;     /**< G2 quintic table (required) */
-    double v_axis[3];         /**< X Y Z speed limits (units/s), > 0 */
-    double a_axis[3];         /**< X Y Z acceleration limits (units/s^2), > 0 */
-    double j_max;             /**< jerk limit of every axis (units/s^3), > 0 */
-    double plan_share;        /**< share of acceleration and jerk the planner plans to, in
-                                   (0, 1]; the rest is for override changes at full speed */
-    double tol_default;       /**< P for G64 without P (LinuxCNC: 0 = no limit), > 0 */
-    double period_s;          /**< servo period (tpSetCycleTime), > 0 */
-    double max_feed_scale;    /**< largest net feed scale ([DISPLAY]MAX_FEED_OVERRIDE), >= 1 */
-    double start_wait_s;      /**< FILLING: start after this long without an add */
-    double guard_s;           /**< RUNNING: released move time kept ahead of the setpoint */
-    uint32_t units_per_cycle; /**< smoother work units per cycle, >= 1 */
-    double micro_len;         /**< longest line taken as a CAM micro-segment (units): the
-                                   smoother's micro_len; LinuxCNC's canon has already merged
-                                   collinear runs within G64 Q (= P without Q), so its lines
-                                   are longer than a CAM post's (default 2) */
+    const ef_table_t *g2;         /**< G2 quintic table (required) */
+    double v_axis[3];             /**< X Y Z speed limits (units/s), > 0 */
+    double a_axis[3];             /**< X Y Z acceleration limits (units/s^2), > 0 */
+    double v_aux[EF_TP_AXES - 3]; /**< A B C U V W speed limits (deg/s or units/s), > 0 */
+    double a_aux[EF_TP_AXES - 3]; /**< A B C U V W acceleration limits, > 0 */
+    double aux_tol;               /**< largest deviation of a blend from A B C U V W (deg or
+                                       units, ef_smooth_cfg_t::aux_tol), > 0 */
+    double j_max;                 /**< jerk limit of every axis (units/s^3), > 0 */
+    double plan_share;            /**< share of acceleration and jerk the planner plans to, in
+                                       (0, 1]; the rest is for override changes at full speed */
+    double tol_default;           /**< P for G64 without P (LinuxCNC: 0 = no limit), > 0 */
+    double period_s;              /**< servo period (tpSetCycleTime), > 0 */
+    double max_feed_scale;        /**< largest net feed scale ([DISPLAY]MAX_FEED_OVERRIDE), >= 1 */
+    double start_wait_s;          /**< FILLING: start after this long without an add */
+    double guard_s;               /**< RUNNING: released move time kept ahead of the setpoint */
+    uint32_t units_per_cycle;     /**< smoother work units per cycle, >= 1 */
+    double micro_len;             /**< longest line taken as a CAM micro-segment (units): the
+                                       smoother's micro_len; LinuxCNC's canon has already merged
+                                       collinear runs within G64 Q (= P without Q), so its lines
+                                       are longer than a CAM post's (default 2) */
 } ef_tp_cfg_t;
 
 /** One queued primitive and what LinuxCNC said about it. */
@@ -197,6 +201,9 @@ typedef struct {
     uint32_t smooth;    /**<   over every stretch between rests (it restarts at each) */
     uint32_t merged;
     uint32_t stops;
+    uint32_t slow_corners; /**< of the stops, corners where stopping was faster */
+    uint32_t aux_stops;    /**< of the stops, where A B C U V W changed rate unblended */
+    float aux_dev_max;     /**< largest deviation of a blend from A B C U V W */
 } ef_tp_stats_t;
 
 /** Planner state (static allocation; treat as private). */
@@ -241,9 +248,11 @@ typedef struct {
     ef_move_t aux_m; /**< its time law (degree 1, its length along the aux axes) */
     double aux_t;    /**< time into it (s, at rate 1) */
     double aux_from[EF_TP_AXES - 3];
-    uint32_t exec_seq; /**< sequence number executing (0: none yet) */
-    int error;         /**< the smoother failed: refuses adds until ef_tp_clear() */
-    char msg[160];     /**< the last refusal's reason */
+    float aux_f[EF_TP_AXES - 3]; /**< A B C U V W of the last primitive queued for the
+                                      smoother (float32, as it compares them) */
+    uint32_t exec_seq;           /**< sequence number executing (0: none yet) */
+    int error;                   /**< the smoother failed: refuses adds until ef_tp_clear() */
+    char msg[160];               /**< the last refusal's reason */
     ef_tp_stats_t st;
 } ef_tp_t;
 
