@@ -17,6 +17,7 @@
 static ef_limits_t mk_limits(float v, float a, float j, float frac)
 {
     ef_limits_t l;
+    memset(&l, 0, sizeof l);
     for (int i = 0; i < 3; i++) {
         l.v_axis[i] = v;
         l.a_axis[i] = a / EF_PLAN_LIMIT_SHARE;
