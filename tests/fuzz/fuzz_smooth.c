@@ -13,7 +13,10 @@
  * (second differences) must stay within its limit and, with a jerk limit, its jerk (third
  * differences) within J, up to the float32 and sampling margins of
  * tests/motion/ef_sp_check.h. A refused primitive must leave the stream usable. Broken
- * invariants abort.
+ * invariants abort. With configuration bit 32 the machine has auxiliary axes A and B
+ * (ef_smooth.h, "Auxiliary axes") and primitives may move them (hostile values too, and
+ * moves of A B alone): their control values must chain, their setpoints stay finite and
+ * within each axis's speed, acceleration and jerk limit, and end at the last accepted value.
  *
  * Built with -DEF_FUZZ_REPLAY_MAIN it is a plain-C replay driver (smooth_fuzz_replay
  * DIR|FILE...): every seed ("ok-*") must run without breaking an invariant. With
@@ -102,7 +105,13 @@ typedef struct {
     float length;
     spc_t chk; /* setpoint continuity over consecutive 1 ms periods */
     double t;  /* time of the last setpoint (s) */
+    int naux;  /* auxiliary axes in use (0 or EF_FZ_AUX) */
+    float aend[EF_AUX_N], alast[EF_AUX_N], v_aux[EF_AUX_N], ascale;
+    spc_t achk; /* A and B through the checker's X and Y */
 } ef_fz_state_t;
+
+/* Auxiliary axes the fuzzer uses (configuration bit 32). */
+#define EF_FZ_AUX (EF_AUX < 2 ? EF_AUX : 2)
 
 static ef_smooth_t S;
 static ef_interp_t IP;
@@ -148,6 +157,10 @@ static void ef_fz_move(ef_fz_state_t *st, const ef_move_t *m)
                 (double)m->v_entry, (double)m->v_exit, (double)m->v_max, (double)m->a_max,
                 (double)m->j_max, (double)m->duration, (unsigned)m->flags,
                 (double)m->b[m->degree].x, (double)m->b[m->degree].y, (double)m->b[m->degree].z);
+    for (int a = 0; ef_fz_trace && a < st->naux; a++)
+        fprintf(stderr, "  aux %d: %.9g .. %.9g, atabs %.6g akabs %.6g akjerk %.6g\n", a,
+                (double)m->ab[a][0], (double)m->ab[a][m->degree], (double)m->atabs[a],
+                (double)m->akabs[a], (double)m->akjerk[a]);
     if (m->degree != 1 && m->degree != 3 && m->degree != 5)
         ef_fz_fail("degree", m->degree);
     for (int k = 0; k <= m->degree; k++)
@@ -188,6 +201,21 @@ static void ef_fz_move(ef_fz_state_t *st, const ef_move_t *m)
     for (int k = 1; k <= m->degree; k++)
         ext = fmax(ext, (double)ef_v3_norm(ef_v3_sub(m->b[k], m->b[0])));
     spc_scale(&st->chk, ext);
+    double aext = 0.0;
+    for (int a = 0; a < st->naux; a++) {
+        for (int k = 0; k <= m->degree; k++) {
+            if (!isfinite(m->ab[a][k]))
+                ef_fz_fail("auxiliary control value not finite", a);
+            aext = fmax(aext, fabs((double)m->ab[a][k] - m->ab[a][0]));
+            st->ascale = fmaxf(st->ascale, fabsf(m->ab[a][k]));
+        }
+        float agap = fabsf(m->ab[a][0] - st->aend[a]);
+        if (!(agap <= 1e-6f * (1.0f + fabsf(st->aend[a]))))
+            ef_fz_fail("auxiliary axis does not start where the previous move ended", agap);
+        st->aend[a] = m->ab[a][m->degree];
+    }
+    if (st->naux)
+        spc_scale(&st->achk, fmax(aext, ext));
     st->end = m->b[m->degree];
     st->v_exit = m->v_exit;
     for (int k = 0; k <= m->degree; k++)
@@ -220,6 +248,15 @@ static void ef_fz_tick(ef_fz_state_t *st, uint32_t dt_us)
         fprintf(stderr, "sp t %.4f %.9g %.9g %.9g v %.6g seq %u moving %d rc %d\n", st->t,
                 (double)sp.p.x, (double)sp.p.y, (double)sp.p.z, (double)sp.v_plan, (unsigned)sp.seq,
                 sp.moving, rc);
+    for (int a = 0; a < st->naux; a++) {
+        if (!isfinite(sp.aux[a]))
+            ef_fz_fail("auxiliary setpoint not finite", a);
+        float d = sp.aux[a] - st->alast[a];
+        if (st->have_sp && !(fabsf(d) <= st->v_aux[a] * (float)dt_us * 1e-6f * 1.02f + 1e-6f +
+                                             4e-7f * (fabsf(sp.aux[a]) + st->ascale)))
+            ef_fz_fail("auxiliary axis faster than its limit", d);
+        st->alast[a] = sp.aux[a];
+    }
     st->last = sp.p;
     st->have_sp = 1;
     /* continuity: differences only over consecutive periods (a late call starts anew) */
@@ -231,6 +268,18 @@ static void ef_fz_tick(ef_fz_state_t *st, uint32_t dt_us)
         ef_fz_fail(st->chk.a_over ? "axis acceleration above its limit"
                                   : "axis jerk above the limit",
                    st->chk.a_over ? st->chk.wa.value : st->chk.wj.value);
+    }
+    if (st->naux) {
+        if (dt_us != 1000u)
+            spc_break(&st->achk);
+        ef_setpoint_t as = sp;
+        as.p = ef_v3(sp.aux[0], st->naux > 1 ? sp.aux[1] : 0.0f, 0.0f);
+        if (spc_push(&st->achk, st->t, &as) > 0) {
+            spc_report(&st->achk, "smooth fuzz, auxiliary axes", stderr);
+            ef_fz_fail(st->achk.a_over ? "auxiliary acceleration above its limit"
+                                       : "auxiliary jerk above the limit",
+                       st->achk.a_over ? st->achk.wa.value : st->achk.wj.value);
+        }
     }
 }
 
@@ -314,6 +363,15 @@ static void ef_fz_run(const uint8_t *data, size_t size)
     c.micro_turn = 0.35f;
     c.smooth_degree = (cf & 4u) ? 3 : 5;
     float scale = (cf & 8u) ? 2.0f : 50.0f; /* micro-segments or ordinary moves */
+    if (cf & 32u) {
+        c.naux = EF_FZ_AUX;
+        uint8_t at = ef_fz_u8(&in);
+        for (int a = 0; a < EF_FZ_AUX; a++) {
+            c.lim.v_axis[3 + a] = 30.0f + 10.0f * (float)(at & 7u);
+            c.lim.a_axis[3 + a] = 300.0f + 100.0f * (float)((at >> 3) & 7u);
+            c.aux_tol[a] = (at & 64u) ? 0.0f : (at & 128u) ? 0.5f : 0.02f;
+        }
+    }
     if (ef_smooth_init(&S, &c, ef_v3(0, 0, 0)) != EF_OK)
         ef_fz_fail("init", 0);
     if (ef_interp_init(&IP, ef_v3(0, 0, 0), 1000u,
@@ -323,6 +381,16 @@ static void ef_fz_run(const uint8_t *data, size_t size)
     memset(&st, 0, sizeof st);
     for (int i = 0; i < 3; i++)
         st.v_axis[i] = c.lim.v_axis[i];
+    st.naux = c.naux;
+    if (st.naux) {
+        ef_limits_t al = c.lim; /* A and B in the checker's X and Y slots */
+        al.a_axis[0] = c.lim.a_axis[3];
+        al.a_axis[1] = c.naux > 1 ? c.lim.a_axis[4] : c.lim.a_axis[3];
+        spc_init(&st.achk, 1e-3, &al);
+        for (int a = 0; a < st.naux; a++)
+            st.v_aux[a] = c.lim.v_axis[3 + a];
+    }
+    float apos[EF_AUX_N] = {0};
     st.a_min = fminf(c.lim.a_axis[0], fminf(c.lim.a_axis[1], c.lim.a_axis[2]));
     spc_init(&st.chk, 1e-3, &c.lim);
     ef_vec3_t pos = ef_v3(0, 0, 0);
@@ -340,6 +408,16 @@ static void ef_fz_run(const uint8_t *data, size_t size)
             ef_fz_finish(&st, 2000, "finish");
             if (st.gave_up)
                 return;
+        }
+        for (int a = 0; a < EF_AUX_N; a++)
+            p.aux[a] = apos[a];
+        if (st.naux && (ef_fz_u8(&in) & 1u)) {
+            /* the auxiliary axes move (hostile values too); a line with X Y Z still below is
+             * then a move of them alone */
+            for (int a = 0; a < st.naux; a++) {
+                float da = ef_fz_val(&in, 45.0f);
+                p.aux[a] = apos[a] + da;
+            }
         }
         if (p.kind == EF_PRIM_LINE) {
             /* one read per statement: the order of a call's arguments is unspecified (gcc
@@ -382,9 +460,13 @@ static void ef_fz_run(const uint8_t *data, size_t size)
         }
         if (st.gave_up)
             return; /* too slow to simulate: what ran so far was checked */
-        if (rc == EF_OK)
-            pos = p.end;
-        else if (rc > 0 || !strcmp(ef_err_str(rc), "unknown error"))
+        if (rc == EF_OK) {
+            /* an auxiliary move keeps X Y Z exactly where they were */
+            if (!(ef_v3_norm(ef_v3_sub(p.end, pos)) < EF_MIN_CHORD && st.naux))
+                pos = p.end;
+            for (int a = 0; a < st.naux; a++)
+                apos[a] = p.aux[a];
+        } else if (rc > 0 || !strcmp(ef_err_str(rc), "unknown error"))
             ef_fz_fail("refusal that is not an ef_err code", rc);
         ef_fz_drain(&st, 50);
         if (st.gave_up)
@@ -401,6 +483,9 @@ static void ef_fz_run(const uint8_t *data, size_t size)
         ef_fz_fail("chain does not end at the last accepted end", 0);
     if (st.v_exit != 0.0f)
         ef_fz_fail("chain does not end at rest", st.v_exit);
+    for (int a = 0; a < st.naux; a++)
+        if (!(fabsf(st.aend[a] - apos[a]) <= 1e-6f * (1.0f + fabsf(apos[a]))))
+            ef_fz_fail("auxiliary axis does not end at its last accepted value", st.aend[a]);
 }
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)

@@ -567,7 +567,7 @@ int ef_move_measure(ef_move_t *m)
         /* An auxiliary axis a(tau) follows the same parameter: by X Y Z arc length its
          * derivatives are a' / s, (a'' - s1 a' / s) / s^2 and the third as js's (the path's
          * own s1, s2); by uniform tau a^(k) / L^k. The larger of each, as above. */
-        for (int q = 0; k < EF_AUX; k++) {
+        for (int q = 0; q < EF_AUX; q++) {
             if (!(amask & (1 << q)))
                 continue;
             float e1 = prim_bern(a1[q], deg - 1, t), e2 = prim_bern(a2[q], deg - 2, t);
