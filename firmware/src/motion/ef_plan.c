@@ -530,11 +530,11 @@ uint32_t ef_plan_space(const ef_plan_t *p)
 /** Tangential jerk every axis leaves at speed v and tangential acceleration a:
  *  min_i (J - g_i v^3 - 3 k_i v a) / t_i over the axes the move drives. */
 static float pl_jt(const float t[EF_AXES], const float k[EF_AXES], const float g[EF_AXES],
-                   const float J[EF_AXES], float v, float a)
+                   const float J[EF_AXES], int na, float v, float a)
 {
     float j = 0.0f;
     int have = 0;
-    for (int i = 0; i < EF_AXES; i++) {
+    for (int i = 0; i < na; i++) {
         if (!(t[i] > 0.0f))
             continue;
         float ji = (J[i] - g[i] * v * v * v - 3.0f * k[i] * v * a) / t[i];
@@ -559,21 +559,25 @@ static void pl_limits(const ef_limits_t *l, const ef_move_t *m, float *v_out, fl
     float g[EF_AXES] = {m->kjerk.x, m->kjerk.y, m->kjerk.z};
     if (m->kappa_max > 0.0f && !(k[0] > 0.0f || k[1] > 0.0f || k[2] > 0.0f))
         k[0] = k[1] = k[2] = m->kappa_max; /* a move measured without its axis parts */
+    /* na: X Y Z and the auxiliary axes up to the last that moves (loops stop there) */
+    int na = 3;
     for (int i = 0; i < EF_AUX; i++) {
         t[3 + i] = m->atabs[i];
         k[3 + i] = m->akabs[i];
         g[3 + i] = m->akjerk[i];
+        if (t[3 + i] > 0.0f || k[3 + i] > 0.0f || g[3 + i] > 0.0f)
+            na = 4 + i;
     }
     float J = EF_PLAN_LIMIT_SHARE * l->j_max, v = m->feed;
     float A[EF_AXES], Ji[EF_AXES];
-    for (int i = 0; i < EF_AXES; i++) {
+    for (int i = 0; i < na; i++) {
         A[i] = EF_PLAN_LIMIT_SHARE * l->a_axis[i];
         Ji[i] = J;
     }
-    for (int i = 0; i < EF_AUX; i++)
-        if (J > 0.0f && l->j_aux[i] > 0.0f)
-            Ji[3 + i] = EF_PLAN_LIMIT_SHARE * l->j_aux[i];
-    for (int i = 0; i < EF_AXES; i++) {
+    for (int i = 3; i < na; i++)
+        if (J > 0.0f && l->j_aux[i - 3] > 0.0f)
+            Ji[i] = EF_PLAN_LIMIT_SHARE * l->j_aux[i - 3];
+    for (int i = 0; i < na; i++) {
         if (t[i] > 0.0f)
             v = ef_minf(v, l->v_axis[i] / t[i]);
         if (k[i] > 0.0f)
@@ -583,7 +587,7 @@ static void pl_limits(const ef_limits_t *l, const ef_move_t *m, float *v_out, fl
     }
     float a = 0.0f, j = 0.0f;
     int have = 0;
-    for (int i = 0; i < EF_AXES; i++) {
+    for (int i = 0; i < na; i++) {
         if (!(t[i] > 0.0f))
             continue;
         float ai = (A[i] - k[i] * v * v) / t[i];
@@ -591,7 +595,7 @@ static void pl_limits(const ef_limits_t *l, const ef_move_t *m, float *v_out, fl
         have = 1;
     }
     if (J > 0.0f) {
-        for (int i = 0; i < EF_AXES; i++) {
+        for (int i = 0; i < na; i++) {
             float gv = Ji[i] - g[i] * v * v * v;
             if (t[i] > 0.0f) {
                 /* Lower a where the centripetal growth term leaves less than the minimum. */
@@ -604,24 +608,24 @@ static void pl_limits(const ef_limits_t *l, const ef_move_t *m, float *v_out, fl
             }
         }
         /* The jerk every axis leaves at the final a. */
-        j = pl_jt(t, k, g, Ji, v, a);
+        j = pl_jt(t, k, g, Ji, na, v, a);
         /* On a curved move a and j share the jerk budget (3 k_i v a): take the a that makes
          * the ramp from rest to v_max shortest, not the largest a. */
         int curved = 0;
-        for (int i = 0; i < EF_AXES; i++)
+        for (int i = 0; i < na; i++)
             curved |= k[i] > 0.0f;
         if (v > 0.0f && curved) {
             float lo = EF_PLAN_A_SEARCH_LO * a, hi = a;
             for (int it = 0; it < EF_PLAN_A_SEARCH_ITER; it++) {
                 float m1 = lo + 0.381966f * (hi - lo), m2 = hi - 0.381966f * (hi - lo);
-                float T1 = pl_ramp_time(v, m1, pl_jt(t, k, g, Ji, v, m1));
-                float T2 = pl_ramp_time(v, m2, pl_jt(t, k, g, Ji, v, m2));
+                float T1 = pl_ramp_time(v, m1, pl_jt(t, k, g, Ji, na, v, m1));
+                float T2 = pl_ramp_time(v, m2, pl_jt(t, k, g, Ji, na, v, m2));
                 if (T1 <= T2)
                     hi = m2;
                 else
                     lo = m1;
             }
-            float as = 0.5f * (lo + hi), js = pl_jt(t, k, g, Ji, v, as);
+            float as = 0.5f * (lo + hi), js = pl_jt(t, k, g, Ji, na, v, as);
             if (pl_ramp_time(v, as, js) < pl_ramp_time(v, a, j)) {
                 a = as;
                 j = js;
@@ -690,14 +694,20 @@ int ef_plan_push(ef_plan_t *p, const ef_move_t *m)
     for (int i = 0; i <= m->degree; i++)
         fin &= pl_vfinite(m->b[i]);
     float tmax = ef_maxf(m->tabs.x, ef_maxf(m->tabs.y, m->tabs.z));
-    int aux_ok = 1;
+    /* the auxiliary values and bounds, branch-free (every move comes through here): z turns
+     * NaN at a NaN or an infinity, big is the largest |value|, low the smallest bound */
+    float z = 0.0f, big = 0.0f, low = 0.0f;
     for (int k = 0; k < EF_AUX; k++) {
-        for (int i = 0; i <= m->degree; i++)
-            fin &= ef_finitef(m->ab[k][i]) & (ef_fabsf(m->ab[k][i]) <= EF_MAX_COORD);
-        fin &= ef_finitef(m->atabs[k]) & ef_finitef(m->akabs[k]) & ef_finitef(m->akjerk[k]);
-        aux_ok &= (m->atabs[k] >= 0.0f) & (m->akabs[k] >= 0.0f) & (m->akjerk[k] >= 0.0f);
+        for (int i = 0; i <= m->degree; i++) {
+            z += m->ab[k][i] * 0.0f;
+            big = ef_maxf(big, ef_fabsf(m->ab[k][i]));
+        }
+        z += (m->atabs[k] + m->akabs[k] + m->akjerk[k]) * 0.0f;
+        low = ef_minf(low, ef_minf(m->atabs[k], ef_minf(m->akabs[k], m->akjerk[k])));
         tmax = ef_maxf(tmax, m->atabs[k]);
     }
+    fin &= (z == 0.0f) & (big <= EF_MAX_COORD);
+    int aux_ok = low >= 0.0f;
     if (!fin)
         return EF_ERR_NONFINITE;
     /* an auxiliary move carries its axes' tangent bounds only */

@@ -174,6 +174,8 @@ static float sm_aux_rate(const ef_smooth_prim_t *h, int k)
  * auxiliary bounds; nothing to measure while no axis moves. */
 static int sm_aux_set_linear(const ef_smooth_t *s, ef_move_t *m, const float *a0, const float *a1)
 {
+    if (s->cfg.naux == 0)
+        return EF_OK; /* every builder starts from a zeroed move: ab and its bounds are 0 */
     int n = m->degree;
     for (int k = 0; k < EF_AUX_N; k++)
         for (int i = 0; i < 6; i++)
@@ -188,6 +190,8 @@ static int sm_aux_set_linear(const ef_smooth_t *s, ef_move_t *m, const float *a0
 static int sm_aux_span(const ef_smooth_t *s, const ef_smooth_prim_t *h, float d0, float d1,
                        ef_move_t *m)
 {
+    if (s->cfg.naux == 0)
+        return EF_OK;
     float a0[EF_AUX_N], a1[EF_AUX_N];
     for (int k = 0; k < EF_AUX_N; k++)
         a0[k] = a1[k] = 0.0f;
@@ -206,11 +210,11 @@ static int sm_aux_span(const ef_smooth_t *s, const ef_smooth_prim_t *h, float d0
 static int sm_aux_blend(ef_smooth_t *s, const ef_smooth_prim_t *h, const ef_smooth_prim_t *nx,
                         ef_move_t *m)
 {
+    if (s->cfg.naux == 0)
+        return EF_OK; /* the blend move starts zeroed */
     for (int k = 0; k < EF_AUX_N; k++)
         for (int i = 0; i < 6; i++)
             m->ab[k][i] = 0.0f;
-    if (s->cfg.naux == 0)
-        return ef_move_measure_aux(m);
     const ef_vec3_t *b = m->b;
     ef_vec3_t d10 = ef_v3_scale(ef_v3_sub(b[1], b[0]), 5.0f);
     ef_vec3_t d11 = ef_v3_scale(ef_v3_sub(b[5], b[4]), 5.0f);

@@ -416,17 +416,20 @@ static int prim_move_measure_fail(ef_move_t *m, int rc)
  * not finite. */
 static int prim_aux_moving(const ef_move_t *m)
 {
+    /* branch-free: every move of every caller comes through here (a few instructions per
+     * value); z turns NaN at a NaN or an infinity (inf x 0) */
     int mask = 0;
+    float z = 0.0f;
     for (int k = 0; k < EF_AUX; k++) {
         const float *c = m->ab[k];
-        for (int i = 0; i <= m->degree; i++) {
-            if (!prim_finite(c[i]))
-                return -1;
-            if (c[i] != c[0])
-                mask |= 1 << k;
+        int mv = 0;
+        for (int i = 0; i <= m->degree && i < 6; i++) {
+            z += c[i] * 0.0f;
+            mv |= c[i] != c[0];
         }
+        mask |= mv << k;
     }
-    return mask;
+    return z == 0.0f ? mask : -1;
 }
 
 /* A scalar Bernstein polynomial of degree n (<= 4) at t (de Casteljau). */
@@ -495,7 +498,7 @@ int ef_move_measure(ef_move_t *m)
      * degree). */
     float a1[EF_AUX_N][5], a2[EF_AUX_N][4], a3[EF_AUX_N][3];
     float aab[EF_AUX_N], aak[EF_AUX_N], aaj[EF_AUX_N];
-    for (int k = 0; k < EF_AUX; k++) {
+    for (int k = 0; k < EF_AUX && amask; k++) {
         aab[k] = aak[k] = aaj[k] = 0.0f;
         if (!(amask & (1 << k)))
             continue;
@@ -567,7 +570,7 @@ int ef_move_measure(ef_move_t *m)
         /* An auxiliary axis a(tau) follows the same parameter: by X Y Z arc length its
          * derivatives are a' / s, (a'' - s1 a' / s) / s^2 and the third as js's (the path's
          * own s1, s2); by uniform tau a^(k) / L^k. The larger of each, as above. */
-        for (int q = 0; q < EF_AUX; q++) {
+        for (int q = 0; q < EF_AUX && amask; q++) {
             if (!(amask & (1 << q)))
                 continue;
             float e1 = prim_bern(a1[q], deg - 1, t), e2 = prim_bern(a2[q], deg - 2, t);
@@ -579,7 +582,7 @@ int ef_move_measure(ef_move_t *m)
             aaj[q] = ef_maxf(aaj[q], ef_maxf(ef_fabsf(ja), ef_fabsf(e3) * ilen3));
         }
     }
-    for (int k = 0; k < EF_AUX; k++) {
+    for (int k = 0; k < EF_AUX && amask; k++) {
         aak[k] = ef_minf(aak[k], 1e30f);
         aaj[k] = ef_minf(aaj[k], 1e30f);
         if (!(prim_finite(aab[k]) & prim_finite(aak[k]) & prim_finite(aaj[k])))
@@ -598,7 +601,7 @@ int ef_move_measure(ef_move_t *m)
     m->tabs = tabs;
     m->kabs = kabs;
     m->kjerk = kjerk;
-    for (int k = 0; k < EF_AUX; k++) {
+    for (int k = 0; k < EF_AUX && amask; k++) { /* (zeros already, without amask) */
         m->atabs[k] = aab[k];
         m->akabs[k] = aak[k];
         m->akjerk[k] = aaj[k];
