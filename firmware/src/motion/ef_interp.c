@@ -119,14 +119,17 @@ static void ip_power(const ef_move_t *m, ef_vec3_t pc[6])
     }
 }
 
-/* ip_power() for the auxiliary axes (scalars): de Casteljau's derivatives at 1/2. */
-static void ip_power_aux(const ef_move_t *m, float apc[EF_AUX_N][6])
+/* ip_power() for the auxiliary axes that move (mask; the others are not evaluated:
+ * ef_interp_t::amask), as scalars: de Casteljau's derivatives at 1/2. */
+static void ip_power_aux(const ef_move_t *m, uint32_t mask, float apc[EF_AUX_N][6])
 {
     int n = m->degree;
-    for (int k = 0; k < EF_AUX_N; k++) {
+    for (int k = 0; k < EF_AUX; k++) {
+        if (!((mask >> k) & 1u))
+            continue;
         float w[6][6];
         for (int i = 0; i < 6; i++) {
-            w[0][i] = (k < EF_AUX && i <= n) ? m->ab[k][i] - m->ab[k][0] : 0.0f;
+            w[0][i] = i <= n ? m->ab[k][i] - m->ab[k][0] : 0.0f;
             apc[k][i] = 0.0f;
         }
         /* forward differences: the k-th derivative at 1/2 is n!/(n-j)! times the de
@@ -156,13 +159,25 @@ int ef_interp_push(ef_interp_t *ip, const ef_move_t *m)
     int rc = ef_interp_check(m, ip->end);
     if (rc != EF_OK)
         return rc;
+    /* the auxiliary axes in one branch-free pass (this runs in the servo interrupt's
+     * handoff): z turns NaN at a NaN or an infinity, big is the largest |value|, gap the
+     * largest join, mask the axes that move */
+    float z = 0.0f, big = 0.0f, gap = 0.0f;
+    uint32_t mask = 0;
+    int n = m->degree;
     for (int k = 0; k < EF_AUX; k++) {
-        int ok = 1;
-        for (int i = 0; i <= m->degree; i++)
-            ok &= ef_finitef(m->ab[k][i]) & (ef_fabsf(m->ab[k][i]) <= EF_MAX_COORD);
-        if (!ok || !(ef_fabsf(m->ab[k][0] - ip->aend[k]) <= EF_INTERP_JOIN_TOL))
-            return EF_ERR_ARG;
+        const float *c = m->ab[k];
+        uint32_t mv = 0;
+        for (int i = 0; i <= n; i++) {
+            z += c[i] * 0.0f;
+            big = ef_maxf(big, ef_fabsf(c[i]));
+            mv |= (uint32_t)(c[i] != c[0]);
+        }
+        gap = ef_maxf(gap, ef_fabsf(c[0] - ip->aend[k]));
+        mask |= mv << k;
     }
+    if (!(z == 0.0f) || !(big <= EF_MAX_COORD) || !(gap <= EF_INTERP_JOIN_TOL))
+        return EF_ERR_ARG;
     if (ip->count >= EF_INTERP_QUEUE)
         return EF_ERR_FULL;
     if (ip->count == 0) {
@@ -172,7 +187,9 @@ int ef_interp_push(ef_interp_t *ip, const ef_move_t *m)
     uint32_t slot = (ip->head + ip->count) % EF_INTERP_QUEUE;
     ip->q[slot] = *m;
     ip_power(m, ip->pc[slot]);
-    ip_power_aux(m, ip->apc[slot]);
+    ip->amask[slot] = (uint8_t)mask;
+    if (mask)
+        ip_power_aux(m, mask, ip->apc[slot]);
     ip->count++;
     ip->end = m->b[m->degree];
     for (int k = 0; k < EF_AUX; k++)
@@ -371,8 +388,9 @@ int ef_interp_process_rate(ef_interp_t *ip, uint32_t dt_us, float rate, uint32_t
                 break;
             ip_kahan(&ip->t, &ip->t_c, -m->duration);
             ip->pos = m->b[m->degree];
-            for (int k = 0; k < EF_AUX; k++)
-                ip->apos[k] = m->ab[k][m->degree];
+            for (uint32_t am = ip->amask[ip->head], k = 0; am >> k; k++)
+                if ((am >> k) & 1u)
+                    ip->apos[k] = m->ab[k][m->degree];
             ip->last_seq = m->seq;
             ip->last_tag = m->tag;
             ip->tau = ip->s_done = 0.0f;
@@ -383,16 +401,20 @@ int ef_interp_process_rate(ef_interp_t *ip, uint32_t dt_us, float rate, uint32_t
         if (ip->count > 0) {
             const ef_move_t *m = &ip->q[ip->head];
             ip_eval(ip, m, ip->pc[ip->head], &v);
-            /* the auxiliary axes at the parameter the step reached (either mode) */
+            /* the auxiliary axes that move on it, at the parameter the step reached (either
+             * mode); the others stay where they are */
+            uint32_t am = ip->amask[ip->head];
             float u = ip->tau - 0.5f;
-            for (int k = 0; k < EF_AUX; k++) {
+            for (int k = 0; k < EF_AUX && am; k++) {
+                if (!((am >> k) & 1u))
+                    continue;
                 const float *c = ip->apc[ip->head][k];
                 float a = c[5];
                 for (int j = 4; j >= 0; j--)
                     a = c[j] + u * a;
                 ip->apos[k] = m->ab[k][0] + a;
-                sp->aux[k] = ip->apos[k];
             }
+            __builtin_memcpy(sp->aux, ip->apos, sizeof sp->aux); /* a few word moves */
             sp->p = ip->pos;
             sp->v_plan = v;
             sp->seq = m->seq;
@@ -408,8 +430,7 @@ int ef_interp_process_rate(ef_interp_t *ip, uint32_t dt_us, float rate, uint32_t
     if (ip->v_end > 0.0f)
         rc = EF_ERR_UNDERRUN; /* ran dry while moving: hold the end position */
     sp->p = ip->pos;
-    for (int k = 0; k < EF_AUX_N; k++)
-        sp->aux[k] = k < EF_AUX ? ip->apos[k] : 0.0f;
+    __builtin_memcpy(sp->aux, ip->apos, sizeof sp->aux);
     sp->v_plan = 0.0f;
     sp->seq = ip->last_seq;
     sp->tag = ip->last_tag;

@@ -103,6 +103,8 @@ typedef struct {
     /** The auxiliary axes: power-basis coefficients of each queued move's ab relative to
      *  ab[k][0], centred on t = 1/2 as pc; last setpoint; where the last queued move ends. */
     float apc[EF_INTERP_QUEUE][EF_AUX_N][6];
+    uint8_t amask[EF_INTERP_QUEUE]; /**< bit k: auxiliary axis k moves on that move (only those
+                                         are evaluated: an X Y Z move costs a period nothing) */
     float apos[EF_AUX_N];
     float aend[EF_AUX_N];
 } ef_interp_t;
