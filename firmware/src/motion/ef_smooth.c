@@ -324,13 +324,33 @@ static void sm_stage(ef_smooth_t *s, const ef_move_t *m)
          * no next move's start covers them. Once the machine would be EF_SM_MIN_MOVE or
          * more from their end, it is driven there: a line, ending at rest as it began. */
         ef_vec3_t re = m->b[m->degree];
-        float ae[EF_AUX_N];
-        for (int k = 0; k < EF_AUX_N; k++)
+        float ae[EF_AUX_N], da2 = 0.0f;
+        for (int k = 0; k < EF_AUX_N; k++) {
             ae[k] = m->ab[k][m->degree];
-        if (!(ef_v3_norm(ef_v3_sub(re, s->out_end)) >= EF_SM_MIN_MOVE) ||
-            sm_line_move(&gap, s->out_end, re, m->feed, m->tag) != EF_OK ||
-            sm_aux_set_linear(s, &gap, s->aout_end, ae) != EF_OK)
+            float d = k < s->cfg.naux ? ae[k] - s->aout_end[k] : 0.0f;
+            da2 += d * d;
+        }
+        if (ef_v3_norm(ef_v3_sub(re, s->out_end)) >= EF_SM_MIN_MOVE) {
+            if (sm_line_move(&gap, s->out_end, re, m->feed, m->tag) != EF_OK ||
+                sm_aux_set_linear(s, &gap, s->aout_end, ae) != EF_OK)
+                return;
+        } else if (ef_sqrtf(da2) >= EF_SM_MIN_MOVE) {
+            /* X Y Z (nearly) there, the auxiliary axes not (a remnant of a tiny arc or line
+             * that turns them, fuzz_smooth): they are driven there alone, from rest */
+            ef_move_t zero = {0};
+            gap = zero;
+            gap.b[0] = gap.b[1] = s->out_end;
+            gap.degree = 1;
+            gap.kind = EF_MOVE_LINE;
+            gap.flags = EF_MOVE_AUX_ONLY;
+            gap.feed = m->feed;
+            gap.tag = m->tag;
+            if (sm_aux_set_linear(s, &gap, s->aout_end, ae) != EF_OK)
+                return;
+            s->st.aux_moves++;
+        } else {
             return;
+        }
         gap.flags |= EF_MOVE_STOP_END;
         s->st.stops++;
         m = &gap;

@@ -223,7 +223,9 @@ typedef struct {
                                 covered by the next move's start (the machine is at rest there,
                                 within EF_MIN_CHORD of the remnant's end); remnants in a row
                                 that leave it EF_MIN_CHORD or more from their end become a line
-                                to it, ending at rest (counted in stops too) */
+                                to it, ending at rest (counted in stops too); where only the
+                                auxiliary axes are that far from theirs, a move of them alone
+                                (counted in aux_moves too) */
     float dev_max;         /**< largest deviation of any emitted move from the programmed path */
     uint32_t aux_moves;    /**< auxiliary moves (X Y Z still) */
     uint32_t aux_stops;    /**< exact stops because an auxiliary axis changed its rate where
