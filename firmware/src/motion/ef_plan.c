@@ -516,6 +516,9 @@ int ef_plan_init(ef_plan_t *p, const ef_limits_t *lim)
     p->rel_n = 0;
     p->k_end = ef_v3(0.0f, 0.0f, 0.0f);
     p->have_k = 0;
+    p->have_ar = 0;
+    for (int k = 0; k < EF_AUX_N; k++)
+        p->ar_end[k] = 0.0f;
     for (uint32_t i = 0; i < EF_LOOKAHEAD; i++)
         p->v_lim[i] = 0.0f;
     return EF_OK;
@@ -672,6 +675,38 @@ static float pl_jump_cap(const ef_plan_t *p, const ef_move_t *m)
     return cap;
 }
 
+/** The auxiliary axes' rates (units per unit of X Y Z length) of move m at tau = 0 (end 0)
+ *  or 1 (end 1), from its end control points; 0 when X Y Z do not move there. */
+static int pl_aux_rates(const ef_move_t *m, int end, float r[EF_AUX_N])
+{
+    int n = m->degree;
+    ef_vec3_t d = end ? ef_v3_sub(m->b[n], m->b[n - 1]) : ef_v3_sub(m->b[1], m->b[0]);
+    float l = ef_v3_norm(d);
+    int ok = l > 0.0f && !(m->flags & EF_MOVE_AUX_ONLY);
+    float il = ok ? 1.0f / l : 0.0f;
+    for (int k = 0; k < EF_AUX; k++)
+        r[k] = (end ? m->ab[k][n] - m->ab[k][n - 1] : m->ab[k][1] - m->ab[k][0]) * il;
+    return ok;
+}
+
+/** Entry speed cap of move m after the last pushed move from the auxiliary axes' rate jumps
+ *  there (EF_PLAN_AUX_STEP_T). */
+static float pl_aux_cap(const ef_plan_t *p, const ef_move_t *m)
+{
+    float cap = 3.4e38f, r[EF_AUX_N];
+    if (!p->have_ar || !pl_aux_rates(m, 0, r))
+        return cap;
+    for (int k = 0; k < EF_AUX; k++) {
+        /* a G2 junction's rates agree to the float32 resolution of the control values
+         * (test_axes: 1e-4 of the rate): those are not capped, nor split into groups */
+        float dr = ef_fabsf(r[k] - p->ar_end[k]);
+        if (dr > 2e-3f * ef_maxf(ef_fabsf(r[k]), ef_fabsf(p->ar_end[k])) &&
+            p->lim.a_axis[3 + k] > 0.0f)
+            cap = ef_minf(cap, EF_PLAN_AUX_STEP_T * p->lim.a_axis[3 + k] / dr);
+    }
+    return cap;
+}
+
 /* A move's limits without queueing it (see ef_plan.h). */
 int ef_plan_move_limits(const ef_limits_t *lim, const ef_move_t *m, float *v_max, float *a_max,
                         float *j_max)
@@ -730,9 +765,10 @@ int ef_plan_push(ef_plan_t *p, const ef_move_t *m)
         !ef_finitef(jmax))
         return EF_ERR_FEED;
 
-    float v_in = pl_jump_cap(p, m);
+    float v_in = ef_minf(pl_jump_cap(p, m), pl_aux_cap(p, m));
     p->k_end = pl_kvec(m, 1);
     p->have_k = 1;
+    p->have_ar = pl_aux_rates(m, 1, p->ar_end);
     ef_move_t *q = &p->mv[(p->mhead + p->mcount) % EF_LOOKAHEAD];
     *q = *m;
     q->flags = (uint16_t)(m->flags & (EF_MOVE_STOP_END | EF_MOVE_CLAMPED | EF_MOVE_BLEND_CLAMPED |

@@ -120,6 +120,17 @@ extern "C" {
 #define EF_PLAN_JUMP_T 0.25e-3f
 #endif
 
+/** Junctions where an auxiliary axis's rate (units per unit of X Y Z length) jumps by dr (its
+ *  blends are G2 by arc length, so this is rounding, or a move shorter than float32 resolves
+ *  well: a tiny arc piece carrying a turn, found by fuzz_smooth) step that axis's speed by
+ *  dr v at once: the entry of the move after such a junction is capped at
+ *  v = EF_PLAN_AUX_STEP_T a_axis / dr, a step its acceleration limit makes in that time
+ *  (2 % of a 1 ms servo period: the share EF_PLAN_LIMIT_SHARE leaves). A jump within 0.2 %
+ *  of the rate is the rounding of a G2 junction and is not capped. */
+#ifndef EF_PLAN_AUX_STEP_T
+#define EF_PLAN_AUX_STEP_T 20e-6f
+#endif
+
 /** Share of each axis's acceleration limit and of the jerk limit the planner plans to. The
  *  rest covers what the plan takes from samples of the curve (tabs, kabs, kjerk at 17
  *  points, ~0.2 %, ef_path.h) and the float32 evaluation of the setpoints (about one ulp of
@@ -200,6 +211,8 @@ typedef struct {
     int open;                        /**< the newest group may still take moves */
     ef_vec3_t k_end;                 /**< curvature vector at the end of the last pushed move */
     int have_k;                      /**< k_end is set (a move was pushed) */
+    float ar_end[EF_AUX_N];          /**< auxiliary axes' rates at its end (per unit length) */
+    int have_ar;                     /**< ar_end is set (it moved X Y Z) */
     /* Release of the oldest group under way (rel_n > 0): its law and where it stands. */
     ef_move_t rel;  /**< the group's law (as a move of the group's length) */
     uint32_t rel_n; /**< members still to release */
