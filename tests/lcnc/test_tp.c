@@ -33,6 +33,10 @@ typedef struct {
     double jump;             /* largest step in one period (units) */
     long cycles, underruns;
     long first, last; /* first and last cycle whose position changed */
+    double extra_e;   /* added to the float32 margin e: for an auxiliary axis checked in X's
+                         slot, its rate (units per unit of X Y Z length) times the rounding of
+                         the X Y Z setpoints, which the arc-length step turns into parameter
+                         noise that the axis follows */
     FILE *dump;
 } chk_t;
 
@@ -68,7 +72,7 @@ static void chk_push(chk_t *c, const ef_tp_status_t *st)
     double dt = c->cfg.period_s;
     int k = c->n - 1;
     for (int i = 0; i < 3; i++) {
-        double e = 0.5 * ulp32(fmax(fabs(c->hist[k][i]), 1.0));
+        double e = 0.5 * ulp32(fmax(fabs(c->hist[k][i]), 1.0)) + c->extra_e;
         if (k >= 1) {
             double d = fabs(c->hist[k][i] - c->hist[k - 1][i]);
             c->jump = fmax(c->jump, d);
@@ -114,7 +118,9 @@ static void chk_limits(const chk_t *c, const char *what)
 typedef struct {
     ef_tp_t tp;
     chk_t chk;
-    chk_t chka; /* A, through the checker's X slot, at A's limits */
+    chk_t chka;              /* A, through the checker's X slot, at A's limits */
+    double prev[EF_TP_AXES]; /* the last accepted add's end */
+    double a_rate;           /* largest |dA| / |dXYZ| over the adds (chords: an upper bound) */
     int spindle_sync, created, aborted;
     long adds, refused, zero;
     double us_sum, us_max; /* wall time of ef_tp_cycle() (a figure, not a check) */
@@ -208,6 +214,7 @@ static int replay_file(const char *path, FILE *dump)
                 break;
             }
             (void)ef_tp_set_pos(&rp.tp, p);
+            memcpy(rp.prev, p, sizeof rp.prev);
         } else if (!strcmp(cmd, "term")) {
             int c;
             if (sscanf(rest, "%d %lf", &c, &x[0]) == 2)
@@ -261,6 +268,13 @@ static int replay_file(const char *path, FILE *dump)
                 rc = ef_tp_add_arc(&rp.tp, p, c, nn, ir, type, x[0], x[1], en, at);
             }
             rp.adds++;
+            if (rc == EF_OK) {
+                double dx = p[0] - rp.prev[0], dy = p[1] - rp.prev[1], dz = p[2] - rp.prev[2];
+                double dxyz = sqrt(dx * dx + dy * dy + dz * dz);
+                if (dxyz > 1e-9)
+                    rp.a_rate = fmax(rp.a_rate, fabs(p[3] - rp.prev[3]) / dxyz);
+                memcpy(rp.prev, p, sizeof rp.prev);
+            }
             if (rc == EF_ERR_DEGENERATE && strstr(ef_tp_msg(&rp.tp), "zero-length"))
                 rp.zero++;
             else if (rc != EF_OK)
@@ -286,6 +300,9 @@ static int replay_file(const char *path, FILE *dump)
                 ef_tp_status_t sa = st;
                 sa.pos[0] = st.pos[3];
                 sa.pos[1] = sa.pos[2] = 0.0;
+                double mx =
+                    fmax(fmax(fabs(st.pos[0]), fabs(st.pos[1])), fmax(fabs(st.pos[2]), 1.0));
+                rp.chka.extra_e = 2.0 * rp.a_rate * 0.5 * ulp32(mx);
                 chk_push(&rp.chka, &sa);
                 memcpy(rp.last_status_pos, st.pos, sizeof st.pos);
             }
