@@ -36,7 +36,7 @@ static const char usage[] =
     "  --can-opts LIST   gs_usb channel options, comma-separated: loopback, listen-only,\n"
     "                    one-shot, timestamps (required), no-timestamps, channel=N,\n"
     "                    timeout=MS (a bulk OUT's bound, default 1000; echo: twice it)\n"
-    "  --nodes A[,B[,C]] node ids 1..127 moving x, y, z (default 1,2,3)\n"
+    "  --nodes A[,B,...] node ids 1..127 moving x, y, z, then a b c u v w (default 1,2,3)\n"
     "  --mode M          segment (default): segments as PDO chunks into each drive's ring;\n"
     "                    csp: cyclic synchronous position, one target per node per SYNC\n"
     "  --cycle-us US     SYNC period (default: csp 1000, segment 10000); in csp mode the\n"
@@ -64,7 +64,8 @@ static const char usage[] =
     "Exit status 0 when every segment executed; otherwise the negated error code, with\n"
     "the drives told to stop under control.\n";
 
-/* Parse --nodes A[,B[,C]]: ids 1..127, no repeats, 1..3 of them. */
+/* Parse --nodes A[,B[,C...]]: ids 1..127, no repeats, 1..EF_CAN_STREAM_MAX_NODES of them
+ * (node k moves axis k: x, y, z, then A B C U V W). */
 static int cstrm_nodes(const char *v, ef_can_stream_cfg_t *cc)
 {
     if (!*v)
@@ -73,8 +74,8 @@ static int cstrm_nodes(const char *v, ef_can_stream_cfg_t *cc)
     uint8_t ids[EF_CAN_STREAM_MAX_NODES];
     int n = cli_split(v, ',', buf, sizeof buf, item, EF_CAN_STREAM_MAX_NODES);
     if (n > EF_CAN_STREAM_MAX_NODES)
-        return cli_error(EF_ERR_ARG, "stream: --nodes '%s': at most %d nodes (x, y, z)", v,
-                         EF_CAN_STREAM_MAX_NODES);
+        return cli_error(EF_ERR_ARG, "stream: --nodes '%s': at most %d nodes (x y z a b c u v w)",
+                         v, EF_CAN_STREAM_MAX_NODES);
     for (int k = 0; k < n; k++) {
         long long x;
         if (cli_parse_int(item[k], LLONG_MIN, LLONG_MAX, &x) != EF_OK)
@@ -334,11 +335,17 @@ int cli_cmd_stream(int argc, char **argv)
     }
     if (k < 0)
         return k;
-    if (c.pipe.naux > 0)
+    /* The axes are the drives: over CAN one node per axis (--nodes), over Modbus X Y Z. */
+    if (addr && c.pipe.naux > 0)
         return cli_error(EF_ERR_ARG,
-                         "stream: --axes %d: streaming to drives carries X Y Z only "
-                         "(a program that moves A B C U V W is refused; docs/axes.md)",
+                         "stream: --axes %d: Modbus streaming carries X Y Z only (a program "
+                         "that moves A B C U V W is refused; docs/axes.md)",
                          c.pipe.naux + 3);
+    if (iface && c.pipe.naux > 0 && c.pipe.naux + 3 != cc.n_nodes)
+        return cli_error(EF_ERR_ARG,
+                         "stream: --axes %d with %u nodes: over CAN each axis is a node (--nodes "
+                         "lists x y z a b c u v w in order)",
+                         c.pipe.naux + 3, (unsigned)cc.n_nodes);
     if (addr && iface)
         return cli_error(EF_ERR_ARG, "stream: --modbus or --can, not both");
     if ((!addr && !iface) || !path) {

@@ -267,7 +267,14 @@ static void test_decode_bad(void)
     m.degree = 2;
     EF_CHECK_EQ(ef_co_axis_encode(&m, 0, rec, &len), EF_ERR_ARG);
     m.degree = 1;
-    EF_CHECK_EQ(ef_co_axis_encode(&m, 3, rec, &len), EF_ERR_ARG);
+    EF_CHECK_EQ(ef_co_axis_encode(&m, EF_AXES, rec, &len), EF_ERR_ARG);
+    EF_CHECK_EQ(ef_co_axis_encode(&m, -1, rec, &len), EF_ERR_ARG);
+    /* an auxiliary axis's record carries ab[k], decoded as the drive's one axis */
+    m.ab[EF_AUX - 1][0] = 12.5f;
+    m.ab[EF_AUX - 1][1] = -7.25f;
+    EF_CHECK_EQ(ef_co_axis_encode(&m, EF_AXES - 1, rec, &len), EF_OK);
+    EF_CHECK_EQ(ef_co_axis_decode(rec, len, &r, &s16), EF_OK);
+    EF_CHECK(r.b[0].x == 12.5f && r.b[1].x == -7.25f && r.degree == 1);
     m.law.dt[0] = 1.0f;
     ef_co_law_encode(&m, rec, &len);
     EF_CHECK_EQ(ef_co_law_decode(rec, len + 24, &r), EF_ERR_ARG);

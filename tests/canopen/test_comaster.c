@@ -17,6 +17,10 @@
 #include "evenfeed/host/can/ef_canrig.h"
 #include "evenfeed/canopen/ef_comaster.h"
 #include "evenfeed/core/ef_err.h"
+#include "evenfeed/motion/ef_interp.h"
+#include "evenfeed/motion/ef_smooth.h"
+
+extern const ef_table_t ef_tbl_g2_default;
 
 /* ------------------------------------------------------------------ fake port + drives */
 
@@ -1146,7 +1150,7 @@ static void t_sdo_segdl_fake(void)
 
 static ef_canrig_t B;
 static ef_comaster_t M;
-static ef_codrive_t D[3];
+static ef_codrive_t D[EF_COM_MAX_NODES];
 
 /* Master and three real drives (nodes 1..3 homed at x 0, y 1, z 2) on the simulated bus. */
 static void sim_setup(const ef_com_cfg_t *c)
@@ -1825,6 +1829,172 @@ static void t_sdo_user(void)
     EF_CHECK(n == 4 && ef_co_get32(buf) == 0x00020192u);
 }
 
+/* ------------------------------------------------------------- nine axes: one drive each */
+
+#define AX_NODES 5 /* X Y Z A B */
+#define AX_MOVES 400
+static ef_move_t AM[AX_MOVES];
+static int AN;
+static float ax_end[AX_NODES];
+
+/* Master and AX_NODES real drives (x 0, y 1, z 2, A and B at 0) on the simulated bus. */
+static void ax_setup(int mode)
+{
+    ef_com_cfg_t c;
+    ef_comaster_cfg_default(&c, mode);
+    c.n_nodes = AX_NODES;
+    for (int k = 0; k < AX_NODES; k++)
+        c.nodes[k] = (uint8_t)(k + 1);
+    ef_canrig_init(&B, 0);
+    EF_CHECK_EQ(ef_canrig_add_master(&B, &M, &c), EF_OK);
+    for (int k = 0; k < AX_NODES; k++) {
+        ef_codrive_cfg_t dc;
+        ef_codrive_cfg_default(&dc, (uint8_t)(k + 1));
+        dc.home = k < 3 ? (float)k : 0.0f;
+        EF_CHECK_EQ(ef_canrig_add_drive(&B, &D[k], &dc), EF_OK);
+    }
+}
+
+/* A zigzag in x/y from the drives' home, A and B changing their rates at every corner,
+ * through the smoother (A B as its auxiliary axes, 90 deg/s and 900 deg/s^2). */
+static void ax_moves(void)
+{
+    static ef_smooth_t s;
+    ef_smooth_cfg_t c;
+    memset(&c, 0, sizeof c);
+    c.g2 = &ef_tbl_g2_default;
+    for (int i = 0; i < 3; i++) {
+        c.lim.v_axis[i] = 100.0f;
+        c.lim.a_axis[i] = 1000.0f;
+    }
+    for (int k = 0; k < 2; k++) {
+        c.lim.v_axis[3 + k] = 90.0f;
+        c.lim.a_axis[3 + k] = 900.0f;
+        c.aux_tol[k] = 0.2f;
+    }
+    c.lim.j_max = 20000.0f;
+    c.lim.a_normal_frac = 0.5f;
+    c.smooth_degree = 5;
+    c.keep_slow_blends = 1;
+    c.naux = 2;
+    EF_CHECK_EQ(ef_smooth_init(&s, &c, ef_v3(0, 1, 2)), EF_OK);
+    AN = 0;
+    for (int i = 0; i < 8; i++) {
+        ef_prim_t p;
+        memset(&p, 0, sizeof p);
+        p.kind = EF_PRIM_LINE;
+        p.end = ef_v3(5.0f * (float)(i + 1), (i & 1) ? 1.0f : 3.0f, 2.0f);
+        p.feed = 20.0f;
+        p.tol = 0.05f;
+        p.aux[0] = 15.0f * (float)((i * 7) % 5);
+        p.aux[1] = -10.0f * (float)(i % 3);
+        if (i == 8 - 1) { /* end values for the check */
+            ax_end[0] = p.end.x, ax_end[1] = p.end.y, ax_end[2] = p.end.z;
+            ax_end[3] = p.aux[0], ax_end[4] = p.aux[1];
+        }
+        int rc = ef_smooth_push(&s, &p);
+        for (int g = 0; rc == EF_ERR_FULL && g < 10000; g++) {
+            while (AN < AX_MOVES && ef_smooth_pull(&s, &AM[AN]) == EF_OK)
+                AN++;
+            rc = ef_smooth_push(&s, &p);
+        }
+        EF_CHECK_EQ(rc, EF_OK);
+    }
+    int rc = EF_ERR_FULL;
+    for (int g = 0; rc == EF_ERR_FULL && g < 100000; g++) {
+        rc = ef_smooth_finish(&s);
+        while (AN < AX_MOVES && ef_smooth_pull(&s, &AM[AN]) == EF_OK)
+            AN++;
+    }
+    EF_CHECK_EQ(rc, EF_OK);
+    EF_CHECK(ef_smooth_stats(&s).blends >= 5);
+}
+
+/* Segment mode with five drives: each gets its axis's record (A and B the moves' ab), every
+ * segment executed once on every drive, A and B within their speed limit at the drives,
+ * every axis at its programmed end. */
+static void t_seg_axes(void)
+{
+    ax_moves();
+    ax_setup(EF_COM_MODE_SEGMENT);
+    EF_CHECK_EQ(ef_canrig_run_until(&B, EF_COM_RUN, 3000000, 100), EF_COM_RUN);
+    int i = 0, s = EF_COM_RUN;
+    double vmax[AX_NODES] = {0};
+    for (uint32_t t = 0; t < 60000000u; t += 100) {
+        while (i < AN && ef_comaster_state(&M) == EF_COM_RUN && ef_comaster_space(&M) > 0) {
+            EF_CHECK_EQ(ef_comaster_push_move(&M, &AM[i]), EF_OK);
+            i++;
+        }
+        if (i == AN && ef_comaster_state(&M) == EF_COM_RUN)
+            EF_CHECK_EQ(ef_comaster_finish(&M), EF_OK);
+        ef_canrig_step(&B, 100);
+        for (int k = 0; k < AX_NODES; k++) /* the drives' own commanded speed */
+            vmax[k] = fmax(vmax[k], fabs((double)D[k].drv.cmd_vel.x));
+        s = ef_comaster_state(&M);
+        if (s == EF_COM_DONE || s == EF_COM_ERROR)
+            break;
+    }
+    EF_CHECK_EQ(s, EF_COM_DONE);
+    EF_CHECK_EQ(ef_comaster_error(&M)->code, 0);
+    for (int k = 0; k < AX_NODES; k++) {
+        EF_CHECK_NEAR(ef_codrive_position(&D[k]), ax_end[k], 2e-3);
+        EF_CHECK_EQ(D[k].drv.done_any, (uint32_t)AN);
+        EF_CHECK_EQ(D[k].seg_dups, 0);
+        EF_CHECK_EQ(D[k].seg_dropped, 0);
+    }
+    EF_CHECK(vmax[3] > 10.0 && vmax[3] <= 90.0 * 1.03);
+    EF_CHECK(vmax[4] > 5.0 && vmax[4] <= 90.0 * 1.03);
+    printf("seg_axes: %d segments to 5 drives, %llu frames, %.1f s; peak speeds x %.1f y %.1f "
+           "A %.1f B %.1f (deg/s, limit 90)\n",
+           AN, (unsigned long long)B.bus.frames, (double)B.bus.now_us * 1e-6, vmax[0], vmax[1],
+           vmax[3], vmax[4]);
+}
+
+/* CSP with five drives: the host interpolator's setpoints (A and B from ef_setpoint_t::aux)
+ * as targets; the drives follow and end at every programmed value. */
+static void t_csp_axes(void)
+{
+    ax_moves();
+    ax_setup(EF_COM_MODE_CSP);
+    EF_CHECK_EQ(ef_canrig_run_until(&B, EF_COM_RUN, 3000000, 100), EF_COM_RUN);
+    static ef_interp_t ip;
+    EF_CHECK_EQ(ef_interp_init(&ip, ef_v3(0, 1, 2), 1000, EF_STEP_CORRECTED), EF_OK);
+    int i = 0, targets = 0, idle = 0;
+    double worst = 0;
+    static float hist[64][AX_NODES];
+    for (uint32_t step = 0; step < 200000 && idle < 50; step++) {
+        while (ef_comaster_space(&M) > 0 && idle < 50) {
+            while (i < AN && ef_interp_space(&ip) > 0)
+                EF_CHECK_EQ(ef_interp_push(&ip, &AM[i++]), EF_OK);
+            ef_setpoint_t sp;
+            EF_CHECK_EQ(ef_interp_process(&ip, 1000, NULL, &sp), EF_OK);
+            float pos[EF_COM_MAX_NODES] = {sp.p.x, sp.p.y, sp.p.z, sp.aux[0], sp.aux[1]};
+            EF_CHECK_EQ(ef_comaster_push_target(&M, pos), EF_OK);
+            memcpy(hist[targets % 64], pos, sizeof hist[0]);
+            targets++;
+            idle = i == AN && !sp.moving ? idle + 1 : 0;
+        }
+        ef_canrig_step(&B, 100);
+        if (targets > 64) { /* every drive near one of the recent targets (lag + queue) */
+            double best = 1e9;
+            for (int j = 0; j < 64; j++) {
+                double e = 0;
+                for (int k = 0; k < AX_NODES; k++)
+                    e = fmax(e, fabs(ef_codrive_position(&D[k]) - hist[j][k]));
+                best = fmin(best, e);
+            }
+            worst = fmax(worst, best);
+        }
+    }
+    EF_CHECK_EQ(ef_comaster_finish(&M), EF_OK);
+    EF_CHECK_EQ(ef_canrig_run_until(&B, EF_COM_DONE, 3000000, 100), EF_COM_DONE);
+    EF_CHECK_EQ(ef_comaster_error(&M)->code, 0);
+    EF_CHECK(worst < 0.2);
+    for (int k = 0; k < AX_NODES; k++)
+        EF_CHECK_NEAR(ef_codrive_position(&D[k]), ax_end[k], 2e-3);
+    printf("csp_axes: %d targets to 5 drives, worst lag %.4f (units or deg)\n", targets, worst);
+}
+
 int main(int argc, char **argv)
 {
     static const ef_test_part_t parts[] = {
@@ -1841,6 +2011,8 @@ int main(int argc, char **argv)
         {"bus", t_bus},
         {"csp", t_csp},
         {"seg", t_seg},
+        {"seg_axes", t_seg_axes},
+        {"csp_axes", t_csp_axes},
         {"seg_hold", t_seg_hold},
         {"gobackn", t_gobackn},
         {"gobackn_pending", t_gobackn_pending},

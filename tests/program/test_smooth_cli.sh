@@ -157,7 +157,9 @@ expect 0 'end position +-20.0000 40.0000 0.0000 mm' -- smooth "$tmp/axes.ngc" --
 expect 1 'axes.ngc:2: axis A moves, the machine has X Y Z only' -- smooth "$tmp/axes.ngc" --axes 3
 expect 1 'axes.ngc:6: axis B moves, the machine has X Y Z A only' -- smooth "$tmp/axes.ngc" --axes 4
 expect 1 "--axes '10': a whole number 3..9" -- smooth "$tmp/axes.ngc" --axes 10
-expect 1 'streaming to drives carries X Y Z only' -- stream "$tmp/axes.ngc" --can vcan0 --axes 4
+expect 1 'Modbus streaming carries X Y Z only' -- stream "$tmp/axes.ngc" --modbus tcp://127.0.0.1:1502 --axes 4
+expect 1 'axes 4 with 3 nodes: over CAN each axis is a node' -- stream "$tmp/axes.ngc" --can vcan0 --axes 4
+expect 1 "nodes '1,2,3,4,5,6,7,8,9,10': at most 9 nodes" -- stream "$tmp/axes.ngc" --can vcan0 --nodes 1,2,3,4,5,6,7,8,9,10
 
 expect 9 'cannot write' -- smooth "$bracket" --svg "$tmp/no/such/dir.svg"
 expect 0 'usage: evenfeed smooth' -- smooth --help

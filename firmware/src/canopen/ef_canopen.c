@@ -226,7 +226,7 @@ int ef_co_law_encode(const ef_move_t *m, uint8_t rec[EF_CO_REC_MAX], uint32_t *l
 /* Encode the axis record of one axis. */
 int ef_co_axis_encode(const ef_move_t *m, int axis, uint8_t rec[EF_CO_REC_MAX], uint32_t *len)
 {
-    if (!m || !rec || !len || axis < 0 || axis > 2)
+    if (!m || !rec || !len || axis < 0 || axis >= EF_AXES)
         return EF_ERR_ARG;
     if (m->degree != 1 && m->degree != 3 && m->degree != 5)
         return EF_ERR_ARG;
@@ -235,7 +235,7 @@ int ef_co_axis_encode(const ef_move_t *m, int axis, uint8_t rec[EF_CO_REC_MAX], 
     rec[3] = 0;
     for (int i = 0; i <= m->degree; i++) {
         const ef_vec3_t *b = &m->b[i];
-        float v = axis == 0 ? b->x : axis == 1 ? b->y : b->z;
+        float v = axis == 0 ? b->x : axis == 1 ? b->y : axis == 2 ? b->z : m->ab[axis - 3][i];
         coc_putf(rec + 4 + 4 * i, v);
     }
     *len = 8u + 4u * m->degree;

@@ -954,8 +954,8 @@ int ef_comaster_init(ef_comaster_t *m, const ef_com_cfg_t *c, const ef_can_port_
         return EF_ERR_ARG;
     if (c->mode != EF_COM_MODE_CSP && c->mode != EF_COM_MODE_SEGMENT)
         return EF_ERR_ARG;
-    if (c->mode == EF_COM_MODE_SEGMENT && (c->n_nodes > 3 || c->seg_per_cycle == 0))
-        return EF_ERR_ARG; /* one node per axis x, y, z */
+    if (c->mode == EF_COM_MODE_SEGMENT && (c->n_nodes > EF_AXES || c->seg_per_cycle == 0))
+        return EF_ERR_ARG; /* one node per axis: x, y, z, then A B C U V W */
     if (c->cycle_us == 0 || c->hb_timeout_ms == 0 || c->boot_timeout_ms == 0 ||
         c->sdo_timeout_ms == 0 || c->enable_timeout_ms == 0 || c->stop_timeout_ms == 0)
         return EF_ERR_ARG;
@@ -1240,8 +1240,11 @@ static int com_move_ok(const ef_move_t *mv)
         for (int i = 0; i < EF_TIMELAW_COEFFS; i++)
             ok &= ef_finitef(mv->law.c[p][i]);
     }
-    for (int i = 0; i <= mv->degree; i++)
+    for (int i = 0; i <= mv->degree; i++) {
         ok &= ef_finitef(mv->b[i].x) & ef_finitef(mv->b[i].y) & ef_finitef(mv->b[i].z);
+        for (int k = 0; k < EF_AUX; k++)
+            ok &= ef_finitef(mv->ab[k][i]);
+    }
     return ok && mv->duration > 0.0f;
 }
 

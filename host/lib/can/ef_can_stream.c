@@ -90,7 +90,7 @@ typedef struct {
     float estop_pos[EF_CAN_STREAM_MAX_NODES];
     struct {
         uint32_t tag;
-        float p[CS_MPTS][3];
+        float p[CS_MPTS][EF_CAN_STREAM_MAX_NODES];
     } mring[CS_MRING];
     uint32_t mr_n;
     /* Feed hold in CSP: the setpoints (one per cycle) replayed through a time warp
@@ -114,7 +114,7 @@ void ef_can_stream_cfg_default(ef_can_stream_cfg_t *c, const ef_table_t *g2, con
     memset(c, 0, sizeof *c);
     for (int k = 0; k < EF_CAN_STREAM_MAX_NODES; k++)
         c->nodes[k] = (uint8_t)(k + 1);
-    c->n_nodes = EF_CAN_STREAM_MAX_NODES;
+    c->n_nodes = 3; /* X Y Z */
     c->mode = EF_COM_MODE_SEGMENT;
     ef_pipe_cfg_default(&c->pipe);
     c->pipe.g2 = g2;
@@ -535,6 +535,19 @@ static int cs_check_start(cs_t *S, const float *p)
                               at, dr);
 }
 
+/* Auxiliary axis k of a move at parameter t (de Casteljau on its control values). */
+static float cs_aux_at(const ef_move_t *mv, int k, float t)
+{
+    float w[6];
+    int n = mv->degree <= 5 ? mv->degree : 5;
+    for (int i = 0; i <= n; i++)
+        w[i] = mv->ab[k][i];
+    for (int r = 1; r <= n; r++)
+        for (int i = 0; i + r <= n; i++)
+            w[i] += t * (w[i + 1] - w[i]);
+    return w[0];
+}
+
 /* Segment mode: each planned move goes to the master's queue (pumping while it is full). */
 static int cs_move(void *user, const ef_move_t *mv, const ef_pipe_move_info_t *mi)
 {
@@ -551,6 +564,8 @@ static int cs_move(void *user, const ef_move_t *mv, const ef_pipe_move_info_t *m
             S->mring[k].p[j][0] = q.x;
             S->mring[k].p[j][1] = q.y;
             S->mring[k].p[j][2] = q.z;
+            for (int a = 3; a < S->c->n_nodes; a++)
+                S->mring[k].p[j][a] = cs_aux_at(mv, a - 3, (float)j / (CS_MPTS - 1));
         }
     }
     if (mv->duration > S->longest)
@@ -558,7 +573,9 @@ static int cs_move(void *user, const ef_move_t *mv, const ef_pipe_move_info_t *m
     /* The first move's start is the path's, in both modes: CSP's first setpoint is one
      * cycle into the path, a visible step away at a long cycle (0.026 mm at 20 ms). */
     if (!S->start_checked) {
-        const float p[3] = {mv->b[0].x, mv->b[0].y, mv->b[0].z};
+        float p[EF_CAN_STREAM_MAX_NODES] = {mv->b[0].x, mv->b[0].y, mv->b[0].z};
+        for (int a = 3; a < S->c->n_nodes; a++)
+            p[a] = mv->ab[a - 3][0];
         if (cs_check_start(S, p) != EF_OK)
             return S->cb_rc;
     }
@@ -584,6 +601,8 @@ static int cs_move(void *user, const ef_move_t *mv, const ef_pipe_move_info_t *m
     S->last_cmd[0] = mv->b[mv->degree].x;
     S->last_cmd[1] = mv->b[mv->degree].y;
     S->last_cmd[2] = mv->b[mv->degree].z;
+    for (int a = 3; a < S->c->n_nodes; a++)
+        S->last_cmd[a] = mv->ab[a - 3][mv->degree];
     if (S->trace)
         fprintf(S->trace, "m,%u,%u,%u\n", (unsigned)seq, (unsigned)mv->tag, (unsigned)mv->degree);
     if (S->c->verbose && S->res->segments % 200 == 0)
@@ -641,6 +660,8 @@ static int cs_setpoint(void *user, double t, const ef_setpoint_t *sp, const ef_p
     (void)mi;
     cs_t *S = user;
     float pos[EF_COM_MAX_NODES] = {sp->p.x, sp->p.y, sp->p.z};
+    for (int a = 3; a < S->c->n_nodes; a++)
+        pos[a] = sp->aux[a - 3];
     if (!S->start_checked && cs_check_start(S, pos) != EF_OK)
         return S->cb_rc;
     if (!S->hold_on)
@@ -1074,6 +1095,7 @@ int ef_can_stream(ef_gcode_t *r, const ef_can_stream_cfg_t *c, ef_can_stream_res
                     (unsigned)c->n_nodes, (double)S->t_run * 1e-6);
         S->r = r;
         S->pc = c->pipe;
+        S->pc.naux = c->n_nodes > 3 ? c->n_nodes - 3 : 0; /* one drive per axis */
         S->hold_on = c->mio && c->mio->cfg.hold >= 0 && c->mode == EF_COM_MODE_CSP;
         S->seg_hold_on = c->mio && c->mio->cfg.hold >= 0 && c->mode == EF_COM_MODE_SEGMENT;
         const float *aa = S->pc.lim.a_axis;

@@ -263,10 +263,11 @@ float ef_co_inc_to_pos(int32_t inc, uint32_t inc_per_unit);
  */
 int ef_co_law_encode(const ef_move_t *m, uint8_t rec[EF_CO_REC_MAX], uint32_t *len);
 /**
- * @brief Encode a move's axis record for axis 0 (x), 1 (y) or 2 (z).
+ * @brief Encode a move's axis record for axis 0 (x), 1 (y), 2 (z) or an auxiliary axis
+ * 3 + k (A B C U V W: the move's ab[k]); a drive decodes any of them alike (its one axis).
  * @param len out: record bytes (8 + 4 degree)
  * @retval EF_OK
- * @retval EF_ERR_ARG NULL, axis not 0..2, degree not 1/3/5
+ * @retval EF_ERR_ARG NULL, axis not 0..EF_AXES-1, degree not 1/3/5
  */
 int ef_co_axis_encode(const ef_move_t *m, int axis, uint8_t rec[EF_CO_REC_MAX], uint32_t *len);
 /** @brief Chunks of a record of len bytes: ceil(len / 7). */

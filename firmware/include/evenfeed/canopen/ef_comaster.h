@@ -5,7 +5,8 @@
  * or evenfeed segment mode, supervision and controlled stops. Freestanding: runs on a
  * controller as well as on the host (over SocketCAN).
  *
- * One object drives up to ::EF_COM_MAX_NODES drives, node k moving axis k (x, y, z).
+ * One object drives up to ::EF_COM_MAX_NODES drives, node k moving axis k (x, y, z, then
+ * A B C U V W: ef_move_t::ab in segment mode, the caller's positions in CSP).
  *
  * ## Life cycle (ef_comaster_state())
  *     BOOT:    wait for every node's boot-up message or heartbeat (NMT reset communication
@@ -139,9 +140,9 @@
 extern "C" {
 #endif
 
-/** Most drives per master. */
+/** Most drives per master: one per axis, X Y Z A B C U V W. */
 #ifndef EF_COM_MAX_NODES
-#define EF_COM_MAX_NODES 8
+#define EF_COM_MAX_NODES 9
 #endif
 /** CSP target queue (cycles). */
 #ifndef EF_COM_TARGETQ
@@ -238,7 +239,7 @@ typedef struct {
 /** Master configuration. */
 typedef struct {
     uint8_t nodes[EF_COM_MAX_NODES]; /**< node ids, node k moves axis k */
-    uint8_t n_nodes;                 /**< 1..EF_COM_MAX_NODES (at most 3 for paths) */
+    uint8_t n_nodes;                 /**< 1..EF_COM_MAX_NODES (segment mode: at most EF_AXES) */
     uint8_t mode;                    /**< ::ef_com_mode_t */
     uint8_t reset_comm;              /**< send NMT reset communication first (default 1) */
     uint8_t fault_reset;             /**< reset a faulted drive at enable (default 0: refuse) */

@@ -29,16 +29,19 @@
 extern "C" {
 #endif
 
-/** Axes (and so drives) a part program can move. */
-#define EF_CAN_STREAM_MAX_NODES 3
+/** Axes (and so drives) a part program can move: X Y Z, then A B C U V W (EF_AXES). */
+#define EF_CAN_STREAM_MAX_NODES EF_AXES
 /** Longest device name (0x1008) kept per node, with its terminating NUL. */
 #define EF_CAN_NAME_LEN 64
 
 /** What `evenfeed stream --can` does, as a library call. */
 typedef struct {
     const char *iface;                      /**< CAN interface, e.g. "vcan0" (required) */
-    uint8_t nodes[EF_CAN_STREAM_MAX_NODES]; /**< node ids; node k moves axis k (x, y, z) */
-    uint8_t n_nodes;                        /**< 1..3 (default 3: nodes 1, 2, 3) */
+    uint8_t nodes[EF_CAN_STREAM_MAX_NODES]; /**< node ids; node k moves axis k (x, y, z, then
+                                                 A B C U V W: docs/axes.md) */
+    uint8_t n_nodes;                        /**< 1..EF_CAN_STREAM_MAX_NODES (default 3: nodes
+                                                 1, 2, 3); above 3 the smoother's naux is
+                                                 n_nodes - 3 (pipe.naux is replaced) */
     uint8_t mode;                           /**< ::ef_com_mode_t (default segment) */
     uint8_t fault_reset;                    /**< reset faulted drives at enable (default 0) */
     uint8_t verbose;                        /**< progress on stderr */

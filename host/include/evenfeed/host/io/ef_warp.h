@@ -25,6 +25,7 @@
 #define EF_WARP_H
 
 #include <stdint.h>
+#include "evenfeed/core/ef_config.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -33,7 +34,7 @@ extern "C" {
 /** Samples kept (a power of two, > 2: the two around w and the newest). */
 #define EF_WARP_RING 8u
 /** Axes a sample has at most. */
-#define EF_WARP_AXES 3
+#define EF_WARP_AXES EF_AXES
 /** Shortest hold or resume ramp (s): a slow path still gets a gentle one. */
 #define EF_WARP_RAMP_MIN_S 0.05
 
