@@ -70,7 +70,7 @@ if(NOT EF_SANITIZE AND TARGET ef_tables_default)
   # hil_can_*: streaming and faults; hil_io_*: the machine I/O (docs/io.md) on a gpio-sim
   # chip the guest script makes; hil_gsusb_*: the same drives through a USB-CAN adapter
   # (gs_usb over libusb) that the part simulates on the guest's USB bus (dummy_hcd).
-  foreach(part csp segment drop emcy heartbeat busoff boot start masterdeath
+  foreach(part csp segment axes drop emcy heartbeat busoff boot start masterdeath
                io_estop io_start io_alarm io_pump io_hold io_hold_seg io_outputs io_modbus
                io_modbus_hold io_modbus_hold_direct io_gpioerr io_sto io_modbus_sto
                gsusb_csp gsusb_segment gsusb_unplug gsusb_bitrate gsusb_claimed gsusb_faults)
