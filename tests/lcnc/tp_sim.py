@@ -214,8 +214,9 @@ def main():
             prog_name, actions, ini_set = CASES[name]
             prog = os.path.join(HERE, "programs", prog_name)
             if name == "xyza":
-                # evenfeed's reader takes X Y Z only: the path without the A-only lines
-                # (each kept as a comment, so line numbers stay)
+                # the X Y Z path the setpoints are measured against, without the lines that
+                # turn A alone (each kept as a comment, so line numbers stay); the mixed case
+                # reads its program as it is (the reader takes A B C U V W, docs/gcode.md)
                 xyz = os.path.join(args.work, "tp_xyza_path.ngc")
                 with open(prog) as f, open(xyz, "w") as o:
                     for ln in f:
