@@ -746,6 +746,36 @@ static void test_mixed(void)
            together, tps.st.blends + tps.sm.st.blends, (double)adev);
 }
 
+/* A move refused after it turned A (a bad arc) leaves A where the last queued move took it:
+ * the next X Y Z move does not turn A to the refused value. */
+static void test_aux_refused(void)
+{
+    s_init(1.0);
+    double a[EF_TP_AXES] = {10, 0, 0, 30};
+    EF_CHECK_EQ(ef_tp_add_line(&tps, a, EF_TP_MOTION_FEED, 40, 100, 1000, 0, 0), EF_OK);
+    /* an arc off its circle (radius 5 at the start, 9 at the end), refused by the
+     * firmware's check after its A was read */
+    double b[EF_TP_AXES] = {15, 9, 0, 90}, c[3] = {15, 0, 0}, n[3] = {0, 0, 1};
+    EF_CHECK(ef_tp_add_arc(&tps, b, c, n, 0, EF_TP_MOTION_ARC, 40, 100, 0, 0) < 0);
+    /* A alone with no acceleration: refused likewise */
+    double z[EF_TP_AXES] = {10, 0, 0, 120};
+    EF_CHECK_EQ(ef_tp_add_line(&tps, z, EF_TP_MOTION_FEED, 40, 100, NAN, 0, 0), EF_ERR_FEED);
+    double d[EF_TP_AXES] = {20, 5, 0, 30};
+    EF_CHECK_EQ(ef_tp_add_line(&tps, d, EF_TP_MOTION_FEED, 40, 100, 1000, 0, 0), EF_OK);
+    ef_tp_status_t st;
+    double amax = 0;
+    for (long k = 0; k < 20000; k++) {
+        s_cycle(1.0, &st);
+        amax = fmax(amax, st.pos[3]);
+        if (st.done)
+            break;
+    }
+    EF_CHECK(st.done);
+    EF_CHECK_NEAR(st.pos[3], 30.0, 1e-4);
+    EF_CHECK(amax <= 30.0 + 1e-4);
+    EF_CHECK_NEAR(st.pos[1], 5.0, 1e-4);
+}
+
 static void test_vlimit(void)
 {
     /* [TRAJ]MAX_LINEAR_VELOCITY caps the path speed of X Y Z moves, not of an A move */
@@ -865,17 +895,10 @@ int main(int argc, char **argv)
         return replay_file(argv[2], stdout) == 0 ? EXIT_SUCCESS : EXIT_FAILURE;
     }
     static const ef_test_part_t parts[] = {
-        {"override", test_override},
-        {"pause", test_pause},
-        {"abort", test_abort},
-        {"stream", test_stream},
-        {"dio", test_dio},
-        {"arc", test_arc},
-        {"aux", test_aux},
-        {"mixed", test_mixed},
-        {"vlimit", test_vlimit},
-        {"bad", test_bad},
-        {"replay TRACE...", test_replay},
+        {"override", test_override}, {"pause", test_pause}, {"abort", test_abort},
+        {"stream", test_stream},     {"dio", test_dio},     {"arc", test_arc},
+        {"aux", test_aux},           {"mixed", test_mixed}, {"auxrefused", test_aux_refused},
+        {"vlimit", test_vlimit},     {"bad", test_bad},     {"replay TRACE...", test_replay},
     };
     return EF_TEST_RUN(argc, argv, 1, parts);
 }

@@ -371,13 +371,20 @@ static int lt_aux_moves(const ef_tp_t *tp, const double end[EF_TP_AXES], int *xy
 
 /* A B C U V W of a primitive: where the move takes them when it moves them (aux), else
  * exactly those of the one before, so the smoother sees them still. */
-static void lt_prim_aux(ef_tp_t *tp, ef_prim_t *pr, const double end[EF_TP_AXES], int aux)
+static void lt_prim_aux(const ef_tp_t *tp, ef_prim_t *pr, const double end[EF_TP_AXES], int aux)
 {
-    for (int k = 0; k < EF_TP_AXES - 3; k++) {
-        if (aux)
-            tp->aux_f[k] = (float)end[3 + k];
-        pr->aux[k] = tp->aux_f[k];
-    }
+    for (int k = 0; k < EF_TP_AXES - 3; k++)
+        pr->aux[k] = aux ? (float)end[3 + k] : tp->aux_f[k];
+}
+
+/* A primitive was queued (rc EF_OK): its A B C U V W are where the next one starts; a
+ * refused one leaves them (the next starts where the last queued one ended). */
+static int lt_aux_taken(ef_tp_t *tp, const ef_prim_t *pr, int rc)
+{
+    if (rc == EF_OK)
+        for (int k = 0; k < EF_TP_AXES - 3; k++)
+            tp->aux_f[k] = pr->aux[k];
+    return rc;
 }
 
 int ef_tp_add_line(ef_tp_t *tp, const double end[EF_TP_AXES], int motion_type, double vel,
@@ -406,9 +413,9 @@ int ef_tp_add_line(ef_tp_t *tp, const double end[EF_TP_AXES], int motion_type, d
         }
         if (!(d2 > 0.0))
             return lt_fail(tp, EF_ERR_DEGENERATE, "evenfeed: zero-length move");
-        return lt_add_aux(tp, end, motion_type, enables, v, acc);
+        return lt_aux_taken(tp, &pr, lt_add_aux(tp, end, motion_type, enables, v, acc));
     }
-    return lt_add_end(tp, &pr, end, motion_type, enables, atspeed);
+    return lt_aux_taken(tp, &pr, lt_add_end(tp, &pr, end, motion_type, enables, atspeed));
 }
 
 int ef_tp_add_arc(ef_tp_t *tp, const double end[EF_TP_AXES], const double centre[3],
@@ -467,7 +474,7 @@ int ef_tp_add_arc(ef_tp_t *tp, const double end[EF_TP_AXES], const double centre
     pr.centre = lt_v3(c);
     pr.axis = lt_v3(n);
     pr.sweep = (float)sweep;
-    return lt_add_end(tp, &pr, end, motion_type, enables, atspeed);
+    return lt_aux_taken(tp, &pr, lt_add_end(tp, &pr, end, motion_type, enables, atspeed));
 }
 
 /* Drop everything queued and planned; at rest at the pose reached. */
