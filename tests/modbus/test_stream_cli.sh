@@ -21,7 +21,7 @@ expect 1 "unknown option '--bogus'" -- stream --bogus --modbus tcp://127.0.0.1:1
 expect 9 "no such network interface" -- stream --can nosuch0 "$prog"
 expect 1 "node 1 given twice" -- stream --can vcan0 --nodes 1,1 "$prog"
 expect 1 "node id 0 not 1..127" -- stream --can vcan0 --nodes 0 "$prog"
-expect 1 "at most 3 nodes" -- stream --can vcan0 --nodes 1,2,3,4 "$prog"
+expect 1 "at most 9 nodes" -- stream --can vcan0 --nodes 1,2,3,4,5,6,7,8,9,10 "$prog"
 expect 1 "not a CAN mode" -- stream --can vcan0 --mode direct "$prog"
 expect 1 "is a Modbus option" -- stream --can vcan0 --slave 2 "$prog"
 expect 1 "is a CAN option" -- stream --modbus tcp://127.0.0.1:1 --nodes 1 "$prog"
