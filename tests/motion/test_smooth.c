@@ -407,6 +407,105 @@ static void test_micro_circle(int degree)
            degree == 5 ? "G2 quintic" : "G1 cubic", NM, ri.dev_over, jump);
 }
 
+/* Planned time of the last run (the moves' durations). */
+static double run_time(void)
+{
+    double t = 0;
+    for (int i = 0; i < NM; i++)
+        t += M[i].duration;
+    return t;
+}
+
+static double pts_to_moves(ef_vec3_t start);
+
+/* Distance of (x, y) from the segment a-b, in the plane. */
+static double dist2_seg(double x, double y, const double *a, const double *b)
+{
+    double p[3] = {x, y, 0}, a3[3] = {a[0], a[1], 0}, b3[3] = {b[0], b[1], 0};
+    return dist_line(p, a3, b3);
+}
+
+/* Chords merged upstream (cfg.chord_shift, the LinuxCNC module): a CAM circle of radius 10
+ * from 0.016 mm chords, coordinates rounded to 0.001 mm (the corpus's circle_q001mm),
+ * merged as LinuxCNC's interpreter does before its planner sees it: each merged line is
+ * extended while every point it drops stays within Q = P of it. The merged chords' middles
+ * lie up to P inside the circle. Through the vertices, the sections would leave the chords'
+ * middles by that whole bulge: vertices fail as smooth, become corners, and the sections
+ * next to their blends are jerk-bound (J 20 000). Shifted, every inner vertex is smooth,
+ * the path stays within P of the chords and closer than that to the program's own points
+ * (independent measures), the vertices within EF_SMOOTH_CHORD_SHIFT P of the path, the
+ * feed is held and the circle is done sooner. */
+static void test_chord_shift(void)
+{
+    enum { NPT = 3927, NMAX = 200 };
+    static double pt[NPT + 1][2];
+    static ef_prim_t pr[NMAX];
+    const double r = 10, tol = 0.02;
+    for (int k = 0; k <= NPT; k++) {
+        double a = 2 * M_PI * k / NPT;
+        pt[k][0] = round(r * cos(a) * 1e3) / 1e3;
+        pt[k][1] = round(r * sin(a) * 1e3) / 1e3;
+    }
+    int n = 0;
+    for (int i = 0; i < NPT && n < NMAX;) {
+        int j = i + 1;
+        for (; j < NPT; j++) { /* can the line i -> j + 1 drop i + 1 .. j? */
+            int ok = 1;
+            for (int k = i + 1; k <= j && ok; k++)
+                ok = dist2_seg(pt[k][0], pt[k][1], pt[i], pt[j + 1]) <= tol;
+            if (!ok)
+                break;
+        }
+        pr[n++] = line_to((float)pt[j][0], (float)pt[j][1], 0, 50, (float)tol);
+        i = j;
+    }
+    EF_CHECK(n > 40 && n < NMAX);
+    double t[2] = {0, 0}, on[2] = {0, 0};
+    uint32_t smooth[2] = {0, 0};
+    for (int shift = 0; shift <= 1; shift++) {
+        ef_smooth_cfg_t c = cfg_default();
+        c.keep_slow_blends = 0;
+        c.micro_len = 2.0f;
+        c.lim.j_max = 20000.0f;
+        c.chord_shift = (uint8_t)shift;
+        EF_CHECK_EQ(run_prims(&c, ef_v3(10, 0, 0), pr, n), 0);
+        runinfo_t ri = check_run(ef_v3(10, 0, 0), pr[n - 1].end, tol, &c.lim);
+        EF_CHECK(ri.dev_over <= 1.0); /* from the merged chords */
+        smooth[shift] = ef_smooth_stats(&S).smooth;
+        t[shift] = run_time();
+        on[shift] = pts_to_moves(ef_v3(10, 0, 0));
+        if (!shift)
+            continue;
+        EF_CHECK_EQ(smooth[1], (uint32_t)n - 1);
+        double prog = 0; /* the program's own points from the path: within the shift */
+        int at = 0;
+        for (int k = 0; k <= NPT; k++) {
+            double best = 1e300;
+            for (int i = at; i < NM && i < at + 3; i++)
+                for (int q = 0; q < 64; q++) {
+                    ef_vec3_t u, v;
+                    ef_bezier_eval(M[i].b, M[i].degree, (float)q / 64.0f, 0, &u);
+                    ef_bezier_eval(M[i].b, M[i].degree, (float)(q + 1) / 64.0f, 0, &v);
+                    double a[2] = {u.x, u.y}, b[2] = {v.x, v.y};
+                    double d = dist2_seg(pt[k][0], pt[k][1], a, b);
+                    if (d < best) {
+                        best = d;
+                        at = i;
+                    }
+                }
+            prog = fmax(prog, best);
+        }
+        EF_CHECK(prog <= EF_SMOOTH_CHORD_SHIFT * tol + 1e-3);
+        EF_CHECK(on[1] <= EF_SMOOTH_CHORD_SHIFT * tol + 1e-4);
+        EF_CHECK_NEAR(M[NM / 2].v_entry, 50, 1e-2);
+        printf("chord shift: %d merged chords, %u of %d vertices smooth (%u through the "
+               "vertices), %.3f s (%.3f s), path within %.3f P of the chords and %.3f P of "
+               "the program's points, vertices within %.3f P of it\n",
+               n, smooth[1], n - 1, smooth[0], t[1], t[0], ri.dev_over, prog / tol, on[1] / tol);
+    }
+    EF_CHECK(t[1] < t[0]);
+}
+
 /* Largest distance of an input point (every accepted primitive's end, and the start) from
  * the moves of the last run, sampled 64 times each; points and moves both run along the
  * path, so the search is a window of moves around the last nearest one. */
@@ -948,6 +1047,7 @@ int main(int argc, char **argv)
         {"full", test_full},
         {"interp", test_with_interp},
         {"band", test_band},
+        {"chordshift", test_chord_shift},
         {"zigzag", test_zigzag},
         {"work", test_work},
         {"random [RUNS]", test_random_runs},

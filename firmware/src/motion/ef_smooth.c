@@ -659,13 +659,14 @@ static void sm_legendre(float x, float *p, float *d1, float *d2)
  * the vertex moves onto the fitted curve, b + y(0) n, when that is within
  * EF_SMOOTH_FIT_SHIFT tol (the sections on both sides start and end at the frame; a chord
  * driven instead of a section too). Fewer than EF_SMOOTH_FIT_MIN points, or a fit that
- * turns the frame by more than the circle's own turn, keep the circle's frame. */
-static void sm_frame_fit(const ef_smooth_t *s, const ef_smooth_prim_t *pa,
-                         const ef_smooth_prim_t *pb, float tol, ef_frame_t *f)
+ * turns the frame by more than the circle's own turn, keep the circle's frame (returns 0;
+ * 1 when the frame is the fit's). */
+static int sm_frame_fit(const ef_smooth_t *s, const ef_smooth_prim_t *pa,
+                        const ef_smooth_prim_t *pb, float tol, ef_frame_t *f)
 {
     uint32_t na = pa->nmerged + 1u, nb = pb->nmerged + 1u; /* vertices before b, after b */
     if (na + nb + 1u < EF_SMOOTH_FIT_MIN)
-        return;
+        return 0;
     const ef_vec3_t *ra = s->runs[pa->id % EF_SMOOTH_RUNS];
     const ef_vec3_t *rb = s->runs[pb->id % EF_SMOOTH_RUNS];
     /* x range of the points along t (for the Legendre variable) */
@@ -673,7 +674,7 @@ static void sm_frame_fit(const ef_smooth_t *s, const ef_smooth_prim_t *pa,
     float xhi = ef_v3_dot(ef_v3_sub(pb->pr.end, f->p), f->t);
     float mid = 0.5f * (xlo + xhi), half = 0.5f * (xhi - xlo);
     if (!(half > EF_MIN_CHORD))
-        return;
+        return 0;
     float G[5][6];
     for (int i = 0; i < 5; i++)
         for (int j = 0; j < 6; j++)
@@ -697,7 +698,7 @@ static void sm_frame_fit(const ef_smooth_t *s, const ef_smooth_prim_t *pa,
             if (ef_fabsf(G[r][c]) > ef_fabsf(G[piv][c]))
                 piv = r;
         if (!(ef_fabsf(G[piv][c]) > 1e-20f))
-            return;
+            return 0;
         for (int j = 0; j < 6; j++) {
             float t = G[c][j];
             G[c][j] = G[piv][j];
@@ -733,7 +734,7 @@ static void sm_frame_fit(const ef_smooth_t *s, const ef_smooth_prim_t *pa,
     if (!ef_finitef(kappa) || !ef_finitef(y0) ||
         !(ef_fabsf(y1) <= 0.5f * ef_fabsf(f->kappa) * half + 1e-3f) || !(kappa > 0.0f) ||
         !(kappa < 2.0f * f->kappa + 1e-6f) || !(ef_fabsf(y0) <= EF_SMOOTH_FIT_SHIFT * tol))
-        return;
+        return 0;
     f->p = ef_v3_axpy(f->p, y0, f->n);
     ef_vec3_t t = ef_v3_add(f->t, ef_v3_scale(f->n, y1));
     t = ef_v3_scale(t, 1.0f / ef_v3_norm(t));
@@ -742,6 +743,7 @@ static void sm_frame_fit(const ef_smooth_t *s, const ef_smooth_prim_t *pa,
     f->t = t;
     f->n = n;
     f->kappa = kappa;
+    return 1;
 }
 
 /* Smooth-vertex test between held lines pa (a->b) and pb (b->c), decimated chords (the
@@ -772,7 +774,9 @@ static int sm_smooth_gate(const ef_smooth_t *s, const ef_smooth_prim_t *pa,
      * the rest of the tolerance is kept for the curvature varying along the section (which
      * is measured against the input points before the vertex is taken as smooth). */
     float lm = ef_maxf(l1, l2);
-    if (kappa * lm * lm * 0.125f > EF_SMOOTH_GATE_SHARE * tol)
+    float bulge = kappa * lm * lm * 0.125f;
+    float shift = s->cfg.chord_shift ? ef_minf(0.5f * bulge, EF_SMOOTH_CHORD_SHIFT * tol) : 0.0f;
+    if (bulge - shift > EF_SMOOTH_GATE_SHARE * tol)
         return 0;
     /* Tangent of the circle at b: u1 turned towards u2 by the half-angle of chord ab,
      * sin(d1) = l1 kappa / 2. In the plane of u1, u2 with e = u1 and f perpendicular. */
@@ -787,7 +791,8 @@ static int sm_smooth_gate(const ef_smooth_t *s, const ef_smooth_prim_t *pa,
     f->t = t;
     f->n = n;
     f->kappa = kappa;
-    sm_frame_fit(s, pa, pb, tol, f);
+    if (!sm_frame_fit(s, pa, pb, tol, f) && shift > 0.0f)
+        f->p = ef_v3_axpy(b, shift, n); /* merged chords: halfway between them and the curve */
     return 1;
 }
 

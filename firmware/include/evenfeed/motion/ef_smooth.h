@@ -87,7 +87,13 @@
  *    vertex is decided: if it is not within tol of the input points the vertex is a corner
  *    instead (never an exact stop: noise in the points costs at most a blend). A section
  *    from or to an exact stop (speed 0, tangent free) continues the arc of its smooth end
- *    rather than turning into the chord's direction.
+ *    rather than turning into the chord's direction. Chords merged upstream (cfg.chord_shift:
+ *    LinuxCNC's interpreter has dropped the points between them, within G64 Q) have their
+ *    vertices on the curve and their middles up to Q inside it, so the circle through a
+ *    vertex bulges from them by about Q, which may be all of tol: there the vertex moves
+ *    towards the circle's centre by half the bulge (at most ::EF_SMOOTH_CHORD_SHIFT x tol) and
+ *    the gate takes bulge - shift, so the section leaves chords and vertices by about half
+ *    the bulge each instead of leaving the chords' middles by all of it.
  * 4. Otherwise a **corner**: a G2 blend within tol (ef_blend_prims()). Each primitive gives
  *    at most half its length to the blend at either end, so blends never overlap.
  * Arcs between vertices become equal G2 quintic pieces of at most ::EF_ARC_PIECE_SWEEP,
@@ -159,6 +165,13 @@ extern "C" {
 #ifndef EF_SMOOTH_FIT_SHIFT
 #define EF_SMOOTH_FIT_SHIFT 0.25f
 #endif
+/** Farthest a smooth vertex between chords merged upstream moves towards its circle's
+ *  centre, as a share of tol (rule 3, cfg.chord_shift): with the gate's bulge - shift <= tol
+ *  the vertices may then leave the path by half the tolerance, the chords' middles by all
+ *  of it (both measured after). */
+#ifndef EF_SMOOTH_CHORD_SHIFT
+#define EF_SMOOTH_CHORD_SHIFT 0.5f
+#endif
 /** Smooth-vertex gate (rule 3): the circle through the vertex and its neighbours may bulge
  *  from the longer chord by at most this share of tol (the section is measured after). */
 #ifndef EF_SMOOTH_GATE_SHARE
@@ -194,6 +207,11 @@ typedef struct {
     uint8_t smooth_degree;    /**< 5: G2 quintic smooth sections; 3: G1 cubic */
     uint8_t keep_slow_blends; /**< nonzero: blend every corner that fits, also where an exact
                                    stop is faster (rule 1; for tests of the blend geometry) */
+    uint8_t chord_shift;      /**< nonzero: the chords come merged already (LinuxCNC's
+                                   interpreter, G64 Q): a smooth vertex whose frame is not
+                                   fitted to dropped points moves towards its circle's centre
+                                   by half the circle's bulge from the longer chord (at most
+                                   EF_SMOOTH_CHORD_SHIFT tol), rule 3 */
     uint8_t naux;             /**< auxiliary axes in use, 0..EF_AUX (A, then B, ...): the
                                    first naux of ef_prim_t::aux are read ("Auxiliary axes");
                                    0 reads none (an X Y Z machine) */
