@@ -127,6 +127,9 @@ static int lt_restart(ef_tp_t *tp)
     s->micro_len = (float)c->micro_len;
     s->micro_turn = 0.35f;
     s->smooth_degree = 5;
+    /* LinuxCNC's interpreter has merged CAM micro-segments within G64 Q before they get
+     * here: the chords' middles lie up to Q inside the curve their vertices sample */
+    s->chord_shift = 1;
     ef_vec3_t p = lt_v3(tp->pos);
     tp->st.blends += tp->sm.st.blends; /* the smoother's counters restart with it */
     tp->st.smooth += tp->sm.st.smooth;
