@@ -477,6 +477,43 @@ static void test_pause(void)
     chk_limits(&chks, "pause, resume");
 }
 
+/* A program queued under LinuxCNC's feed inhibit (scale 0), then released: at rest where a
+ * move starts from rest, its own jerk-limited law starts the motion, so the rate steps
+ * there. Nothing moves while inhibited (before, the rate set at 1 ramped down to 0 while the
+ * first move began: the machine crept), the rate is 1 at the first motion after the release,
+ * and the program takes as many periods from its first motion as one never inhibited, within
+ * the limits. A pause mid-move still resumes along the ramp (test_pause). */
+static void test_inhibit(void)
+{
+    long periods[2];
+    for (int inhibit = 0; inhibit <= 1; inhibit++) {
+        s_init(1.0);
+        s_zigzag(20, 0.0);
+        ef_tp_status_t st;
+        for (int k = 0; inhibit && k < 300; k++) {
+            s_cycle(0.0, &st);
+            EF_CHECK_NEAR(st.pos[0], 0.0, 0.0);
+        }
+        long first = -1, k = 0;
+        for (; k < 100000; k++) {
+            s_cycle(1.0, &st);
+            if (first < 0 && st.pos[0] != 0.0) {
+                first = k;
+                EF_CHECK_NEAR(st.rate, 1.0, 0.0);
+            }
+            if (st.done)
+                break;
+        }
+        EF_CHECK(st.done && first >= 0);
+        EF_CHECK_NEAR(st.pos[0], 80.0, 1e-4);
+        periods[inhibit] = k - first;
+        chk_limits(&chks, inhibit ? "released after the inhibit" : "never inhibited");
+    }
+    EF_CHECK_EQ(periods[1], periods[0]);
+    printf("inhibit: %ld periods from the first motion, %ld without the inhibit\n", periods[1],
+           periods[0]);
+}
+
 static void test_abort(void)
 {
     s_init(1.0);
@@ -895,10 +932,19 @@ int main(int argc, char **argv)
         return replay_file(argv[2], stdout) == 0 ? EXIT_SUCCESS : EXIT_FAILURE;
     }
     static const ef_test_part_t parts[] = {
-        {"override", test_override}, {"pause", test_pause}, {"abort", test_abort},
-        {"stream", test_stream},     {"dio", test_dio},     {"arc", test_arc},
-        {"aux", test_aux},           {"mixed", test_mixed}, {"auxrefused", test_aux_refused},
-        {"vlimit", test_vlimit},     {"bad", test_bad},     {"replay TRACE...", test_replay},
+        {"override", test_override},
+        {"pause", test_pause},
+        {"abort", test_abort},
+        {"stream", test_stream},
+        {"dio", test_dio},
+        {"arc", test_arc},
+        {"aux", test_aux},
+        {"mixed", test_mixed},
+        {"inhibit", test_inhibit},
+        {"auxrefused", test_aux_refused},
+        {"vlimit", test_vlimit},
+        {"bad", test_bad},
+        {"replay TRACE...", test_replay},
     };
     return EF_TEST_RUN(argc, argv, 1, parts);
 }

@@ -753,6 +753,10 @@ static void lt_rate_bounds(const ef_tp_t *tp, double r, double *r1, double *r2)
     uint32_t n = EF_INTERP_QUEUE - ef_interp_space(&tp->ip);
     if (n == 0)
         return; /* nothing executing: the rate moves nothing */
+    if (tp->ip.t == 0.0f && tp->ip.q[tp->ip.head].v_entry == 0.0f)
+        return; /* at rest where a move starts from rest (a program's start after LinuxCNC's
+                 * feed inhibit): its time law starts with zero speed and acceleration and
+                 * ramps within the limits at any rate up to 1, so the rate may step */
     double an[EF_TP_AXES] = {0}, jn[EF_TP_AXES] = {0}, tv[EF_TP_AXES] = {0}, known = 0.0;
     for (uint32_t q = 0; q < n + tp->mn && known < TP_HORIZON; q++) {
         const ef_move_t *m = q < n ? &tp->ip.q[(tp->ip.head + q) % EF_INTERP_QUEUE]
