@@ -425,6 +425,27 @@ static double dist2_seg(double x, double y, const double *a, const double *b)
     return dist_line(p, a3, b3);
 }
 
+/* Lines through points pt[0..npt] merged as LinuxCNC's interpreter merges a CAM program's
+ * (G64 Q): each line extended while every point it drops stays within q of it. Writes at
+ * most nmax lines from pt[0] into pr; returns their count. */
+static int lcnc_merge(double (*pt)[2], int npt, double q, float feed, ef_prim_t *pr, int nmax)
+{
+    int n = 0;
+    for (int i = 0; i < npt && n < nmax;) {
+        int j = i + 1;
+        for (; j < npt; j++) { /* can the line i -> j + 1 drop i + 1 .. j? */
+            int ok = 1;
+            for (int k = i + 1; k <= j && ok; k++)
+                ok = dist2_seg(pt[k][0], pt[k][1], pt[i], pt[j + 1]) <= q;
+            if (!ok)
+                break;
+        }
+        pr[n++] = line_to((float)pt[j][0], (float)pt[j][1], 0, feed, (float)q);
+        i = j;
+    }
+    return n;
+}
+
 /* Chords merged upstream (cfg.chord_shift, the LinuxCNC module): a CAM circle of radius 10
  * from 0.016 mm chords, coordinates rounded to 0.001 mm (the corpus's circle_q001mm),
  * merged as LinuxCNC's interpreter does before its planner sees it: each merged line is
@@ -446,19 +467,7 @@ static void test_chord_shift(void)
         pt[k][0] = round(r * cos(a) * 1e3) / 1e3;
         pt[k][1] = round(r * sin(a) * 1e3) / 1e3;
     }
-    int n = 0;
-    for (int i = 0; i < NPT && n < NMAX;) {
-        int j = i + 1;
-        for (; j < NPT; j++) { /* can the line i -> j + 1 drop i + 1 .. j? */
-            int ok = 1;
-            for (int k = i + 1; k <= j && ok; k++)
-                ok = dist2_seg(pt[k][0], pt[k][1], pt[i], pt[j + 1]) <= tol;
-            if (!ok)
-                break;
-        }
-        pr[n++] = line_to((float)pt[j][0], (float)pt[j][1], 0, 50, (float)tol);
-        i = j;
-    }
+    int n = lcnc_merge(pt, NPT, tol, 50, pr, NMAX);
     EF_CHECK(n > 40 && n < NMAX);
     double t[2] = {0, 0}, on[2] = {0, 0};
     uint32_t smooth[2] = {0, 0};
@@ -504,6 +513,70 @@ static void test_chord_shift(void)
                n, smooth[1], n - 1, smooth[0], t[1], t[0], ri.dev_over, prog / tol, on[1] / tol);
     }
     EF_CHECK(t[1] < t[0]);
+}
+
+/* Smooth-vertex frames where the curvature changes along the run (rule 3, the five-point
+ * fit): a sine of amplitude 6.35 and wavelength 25.4 from 0.0254 mm CAM chords rounded to
+ * 0.00254, merged as LinuxCNC merges it within Q = P = 0.0254 (chords of 0.7 to 2.6 mm, no
+ * dropped points left). The circle through three vertices errs in its tangent by about
+ * 0.015 rad there, and the sections then swung their curvature by 40 % about the sine's.
+ * Fitted through five vertices, the curvature of every section between two smooth vertices
+ * stays within 10 % of the sine's largest of the sine's own at the same x, the sections are
+ * within P of the chords and the crests run at 0.85 of the centripetal speed limit. */
+static void test_sine_frames(void)
+{
+    enum { NPT = 2400, NMAX = 300 };
+    static double pt[NPT + 1][2];
+    static ef_prim_t pr[NMAX];
+    const double amp = 6.35, lam = 25.4, tol = 0.0254, w = 2 * M_PI / lam;
+    double x = 0;
+    for (int k = 0; k <= NPT; k++) {
+        if (k > 0) /* 0.0254 mm along the curve */
+            x += 0.0254 / hypot(1.0, amp * w * cos(w * x));
+        pt[k][0] = round(x / 0.00254) * 0.00254;
+        pt[k][1] = round(amp * sin(w * x) / 0.00254) * 0.00254;
+    }
+    int n = lcnc_merge(pt, NPT, tol, 60, pr, NMAX);
+    ef_smooth_cfg_t c = cfg_default();
+    c.keep_slow_blends = 0;
+    c.micro_len = 10.0f;
+    c.lim.j_max = 20000.0f;
+    c.chord_shift = 1;
+    EF_CHECK_EQ(run_prims(&c, ef_v3(0, 0, 0), pr, n), 0);
+    runinfo_t ri = check_run(ef_v3(0, 0, 0), pr[n - 1].end, tol, &c.lim);
+    EF_CHECK(ri.dev_over <= 1.0);
+    double kmax = amp * w * w, err = 0, vcrest = 0;
+    int nsec = 0, ninner = 0;
+    for (int i = 0; i < NM; i++) {
+        if (M[i].kind != EF_MOVE_SMOOTH)
+            continue;
+        nsec++;
+        /* between two smooth vertices (next to a blend or a straight vertex the section
+         * turns into the line's zero curvature) */
+        if (i == 0 || i + 1 == NM || M[i - 1].kind != EF_MOVE_SMOOTH ||
+            M[i + 1].kind != EF_MOVE_SMOOTH)
+            continue;
+        ninner++;
+        for (int k = 0; k <= 32; k++) {
+            ef_vec3_t q, kv = curv(&M[i], (float)k / 32.0f), d[2];
+            ef_bezier_eval(M[i].b, M[i].degree, (float)k / 32.0f, 1, d);
+            q = d[0];
+            double y1 = amp * w * cos(w * q.x), y2 = -amp * w * w * sin(w * q.x);
+            double ktrue = y2 / pow(1 + y1 * y1, 1.5);
+            double ksec = (d[1].x * kv.y - d[1].y * kv.x) >= 0 ? ef_v3_norm(kv) : -ef_v3_norm(kv);
+            err = fmax(err, fabs(ksec - ktrue));
+        }
+        if (fabs(sin(w * M[i].b[0].x)) > 0.99) /* at a crest */
+            vcrest = fmax(vcrest, M[i].v_max);
+    }
+    double vlim = sqrt(c.lim.a_normal_frac * c.lim.a_axis[0] / kmax);
+    EF_CHECK(nsec >= n - 6 && ninner >= n / 2);
+    EF_CHECK(err <= 0.1 * kmax);
+    EF_CHECK(vcrest >= 0.85 * vlim);
+    printf("sine frames: %d merged chords, %d smooth sections, %d between smooth vertices: "
+           "their curvature within %.3f of the sine's largest of its own, crest speed %.1f "
+           "(centripetal limit %.1f)\n",
+           n, nsec, ninner, err / kmax, vcrest, vlim);
 }
 
 /* Largest distance of an input point (every accepted primitive's end, and the start) from
@@ -1048,6 +1121,7 @@ int main(int argc, char **argv)
         {"interp", test_with_interp},
         {"band", test_band},
         {"chordshift", test_chord_shift},
+        {"sineframes", test_sine_frames},
         {"zigzag", test_zigzag},
         {"work", test_work},
         {"random [RUNS]", test_random_runs},

@@ -658,20 +658,31 @@ static void sm_legendre(float x, float *p, float *d1, float *d2)
  * are taken from the fit: t along (1, y'(0)), kappa = y''(0) / (1 + y'(0)^2)^(3/2), and
  * the vertex moves onto the fitted curve, b + y(0) n, when that is within
  * EF_SMOOTH_FIT_SHIFT tol (the sections on both sides start and end at the frame; a chord
- * driven instead of a section too). Fewer than EF_SMOOTH_FIT_MIN points, or a fit that
- * turns the frame by more than the circle's own turn, keep the circle's frame (returns 0;
- * 1 when the frame is the fit's). */
+ * driven instead of a section too). Chords with no dropped points (three points, a, b, c)
+ * whose neighbouring chords (ending at a, starting at c) continue the run are fitted through
+ * five: the one's start zs, a, b, c, the other's end ce (the quartic interpolates them,
+ * so b stays; returns 2). The circle's tangent errs by about kappa' L^2 / 6 where the
+ * curvature changes along the run (0.015 rad on a sine's 1 mm chords, which the section
+ * then corrects by a curvature swinging 40 % about the curve's), the five points' by
+ * O(L^4) (0.0007 rad there). Fewer points, or a fit that turns the frame by more than the
+ * circle's own turn, keep the circle's frame (returns 0; 1 when the frame is a fit to the
+ * dropped points). zs and ce: the two outer points, NULL where the run does not go on. */
 static int sm_frame_fit(const ef_smooth_t *s, const ef_smooth_prim_t *pa,
-                        const ef_smooth_prim_t *pb, float tol, ef_frame_t *f)
+                        const ef_smooth_prim_t *pb, const ef_vec3_t *zs, const ef_vec3_t *ce,
+                        float tol, ef_frame_t *f)
 {
     uint32_t na = pa->nmerged + 1u, nb = pb->nmerged + 1u; /* vertices before b, after b */
-    if (na + nb + 1u < EF_SMOOTH_FIT_MIN)
-        return 0;
+    uint32_t ends = 0;                                     /* zs and ce too */
+    if (na + nb + 1u < EF_SMOOTH_FIT_MIN) {
+        if (na + nb + 1u != 3u || !zs || !ce)
+            return 0;
+        ends = 1;
+    }
     const ef_vec3_t *ra = s->runs[pa->id % EF_SMOOTH_RUNS];
     const ef_vec3_t *rb = s->runs[pb->id % EF_SMOOTH_RUNS];
     /* x range of the points along t (for the Legendre variable) */
-    float xlo = ef_v3_dot(ef_v3_sub(pa->start, f->p), f->t);
-    float xhi = ef_v3_dot(ef_v3_sub(pb->pr.end, f->p), f->t);
+    float xlo = ef_v3_dot(ef_v3_sub(ends ? *zs : pa->start, f->p), f->t);
+    float xhi = ef_v3_dot(ef_v3_sub(ends ? *ce : pb->pr.end, f->p), f->t);
     float mid = 0.5f * (xlo + xhi), half = 0.5f * (xhi - xlo);
     if (!(half > EF_MIN_CHORD))
         return 0;
@@ -679,8 +690,12 @@ static int sm_frame_fit(const ef_smooth_t *s, const ef_smooth_prim_t *pa,
     for (int i = 0; i < 5; i++)
         for (int j = 0; j < 6; j++)
             G[i][j] = 0.0f;
-    for (uint32_t k = 0; k < na + nb + 1u; k++) {
-        ef_vec3_t q = k < na ? sm_vertex(pa, ra, k) : sm_vertex(pb, rb, k - na); /* b once */
+    for (uint32_t jp = 0; jp < na + nb + 1u + 2u * ends; jp++) {
+        uint32_t k = jp - ends; /* wraps below 0 for zs; ce is k = na + nb + 1 */
+        ef_vec3_t q = ends && jp == 0             ? *zs
+                      : ends && k == na + nb + 1u ? *ce
+                      : k < na                    ? sm_vertex(pa, ra, k)
+                                                  : sm_vertex(pb, rb, k - na); /* b once */
         ef_vec3_t d = ef_v3_sub(q, f->p);
         float xi = (ef_v3_dot(d, f->t) - mid) / half, y = ef_v3_dot(d, f->n);
         float P[5], D1[5], D2[5];
@@ -743,14 +758,16 @@ static int sm_frame_fit(const ef_smooth_t *s, const ef_smooth_prim_t *pa,
     f->t = t;
     f->n = n;
     f->kappa = kappa;
-    return 1;
+    return ends ? 2 : 1;
 }
 
 /* Smooth-vertex test between held lines pa (a->b) and pb (b->c), decimated chords (the
- * tolerance-gated rule, ef_smooth.h); on success *f is the frame of the circle through
- * a, b, c at b. */
+ * tolerance-gated rule, ef_smooth.h); on success *f is the frame at b: the circle through
+ * a, b, c, or a fit (sm_frame_fit()) to more input points, zs and ce the start of the line
+ * before pa and the end of the line after pb where they continue the run (NULL otherwise). */
 static int sm_smooth_gate(const ef_smooth_t *s, const ef_smooth_prim_t *pa,
-                          const ef_smooth_prim_t *pb, float tol, ef_frame_t *f)
+                          const ef_smooth_prim_t *pb, const ef_vec3_t *zs, const ef_vec3_t *ce,
+                          float tol, ef_frame_t *f)
 {
     float ml = s->cfg.micro_len;
     if (!(ml > 0.0f))
@@ -791,8 +808,8 @@ static int sm_smooth_gate(const ef_smooth_t *s, const ef_smooth_prim_t *pa,
     f->t = t;
     f->n = n;
     f->kappa = kappa;
-    if (!sm_frame_fit(s, pa, pb, tol, f) && shift > 0.0f)
-        f->p = ef_v3_axpy(b, shift, n); /* merged chords: halfway between them and the curve */
+    if (sm_frame_fit(s, pa, pb, zs, ce, tol, f) != 1 && shift > 0.0f)
+        f->p = ef_v3_axpy(b, shift, f->n); /* merged chords: halfway between them and the curve */
     return 1;
 }
 
@@ -948,6 +965,41 @@ static void sm_job_unarc(ef_smooth_t *s, ef_smooth_prim_t *a)
     a->fs = s->jkeep;
 }
 
+/* Whether a line of length l2 along u2 continues the run of micro-segments of a line of
+ * length l1 along u1 that it follows or precedes (rule 3's length ratio and turn), for the
+ * frame fit of the vertex next to it (sm_frame_fit()). */
+static int sm_continues(const ef_smooth_t *s, ef_vec3_t u1, float l1, ef_vec3_t u2, float l2)
+{
+    if (!(l2 > EF_MIN_CHORD) || l1 > EF_SMOOTH_LEN_RATIO * l2 || l2 > EF_SMOOTH_LEN_RATIO * l1)
+        return 0;
+    return ef_atan2f(ef_v3_norm(ef_v3_cross(u1, u2)), ef_v3_dot(u1, u2)) <= s->cfg.micro_turn;
+}
+
+/* The start of the line before held line a, where it continues a's run, else NULL. */
+static const ef_vec3_t *sm_run_before(const ef_smooth_t *s, const ef_smooth_prim_t *a)
+{
+    if (!a->zline)
+        return (const ef_vec3_t *)0;
+    ef_vec3_t d = ef_v3_sub(a->start, a->zstart);
+    float l = ef_v3_norm(d);
+    if (!(l > EF_MIN_CHORD) || !sm_continues(s, sm_dir(a), a->len, ef_v3_scale(d, 1.0f / l), l))
+        return (const ef_vec3_t *)0;
+    return &a->zstart;
+}
+
+/* The end of the held line after held line b, where it continues b's run, else NULL. */
+static const ef_vec3_t *sm_run_after(ef_smooth_t *s, const ef_smooth_prim_t *b)
+{
+    uint32_t i = ((uint32_t)(b - s->pq) + EF_SMOOTH_PRIMS - s->ph) % EF_SMOOTH_PRIMS;
+    if (i + 1u >= s->pn)
+        return (const ef_vec3_t *)0;
+    const ef_smooth_prim_t *c = sm_held(s, i + 1u);
+    if (c->pr.kind != EF_PRIM_LINE || c->amove || c->aux_only || c->piece_max > s->cfg.micro_len ||
+        !sm_continues(s, sm_dir(b), b->len, sm_dir(c), c->len))
+        return (const ef_vec3_t *)0;
+    return &c->pr.end;
+}
+
 /* One step of the oldest open vertex's decision (ef_smooth_work(), the phases in
  * ef_smooth.h): held primitive a ends there, b (NULL only when a ends at a finish) starts
  * there. Each phase is one bounded work unit. */
@@ -964,7 +1016,7 @@ static void sm_job_step(ef_smooth_t *s, ef_smooth_prim_t *a, ef_smooth_prim_t *b
         /* The section ending here is final once this vertex is: built and measured now, so
          * a section that does not fit makes this vertex a corner, not an exact stop. */
         if (a->pr.kind == EF_PRIM_LINE && b->pr.kind == EF_PRIM_LINE && !a->amove && !b->amove &&
-            sm_smooth_gate(s, a, b, b->pr.tol, &s->jf))
+            sm_smooth_gate(s, a, b, sm_run_before(s, a), sm_run_after(s, b), b->pr.tol, &s->jf))
             s->job = !a->start_smooth && a->start_stop ? EF_J_SMOOTH_ARC : EF_J_SMOOTH;
         else
             s->job = EF_J_BLEND;
@@ -1572,6 +1624,9 @@ int ef_smooth_push(ef_smooth_t *s, const ef_prim_t *pr)
      * decided later sets it in sm_job_decided(). */
     const ef_smooth_prim_t *prev = s->pn ? sm_held(s, s->pn - 1) : (const ef_smooth_prim_t *)0;
     h->start_stop = !prev || prev->end_kind == EF_V_STOP || prev->fin_stop;
+    h->zline = prev && prev->pr.kind == EF_PRIM_LINE && !prev->amove && !prev->aux_only &&
+               prev->piece_max <= s->cfg.micro_len;
+    h->zstart = prev ? prev->start : h->start;
     h->nmerged = 0;
     h->merge_dev = 0.0f;
     h->piece_max = len;

@@ -288,6 +288,10 @@ typedef struct {
     float astart[EF_AUX_N]; /**< the auxiliary axes where it starts */
     uint8_t amove;          /**< an auxiliary axis moves along it */
     uint8_t aux_only;       /**< an auxiliary move: X Y Z still, len the axes' distance */
+    ef_vec3_t zstart;       /**< where the primitive before it started (rule 3's fit takes
+                                 it as one more point of the run, when zline) */
+    uint8_t zline;          /**< the primitive before it is a line of X Y Z alone whose input
+                                 pieces are micro-segments (micro_len) */
     float sec_len;          /**< its measured length (ef_move_measure()) */
     float sec_kmax;         /**< its curvature bound (likewise) */
     ef_vec3_t sec_tabs;     /**< its axis tangent bounds (likewise) */
