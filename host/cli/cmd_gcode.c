@@ -10,15 +10,39 @@ static const char usage[] =
     "\n"
     "Reads FILE (LinuxCNC's dialect, docs/gcode.md) and prints one line per item: rapid,\n"
     "line, arc, zero (zero-length move), event, ignored, tolerance, note, end. Positions\n"
-    "are machine coordinates in mm, feeds in mm/min. --json prints one JSON object per\n"
-    "line instead. --params and --tool-table start from a machine's LinuxCNC parameter\n"
-    "file (work offsets, G28/G30 positions) and tool table (lengths in mm).\n";
+    "are machine coordinates in mm, feeds in mm/min; A B C (degrees) and U V W (mm) follow\n"
+    "'|' on moves that have any of them away from 0. --json prints one JSON object per\n"
+    "line instead (abcuvw_start, abcuvw_end on such moves). --params and --tool-table\n"
+    "start from a machine's LinuxCNC parameter file (work offsets, G28/G30 positions) and\n"
+    "tool table (lengths in mm).\n";
 
 /* Print a 3-vector as a JSON array. */
 static void cgc_json_vec(FILE *f, const char *key, const double *v)
 {
     fprintf(f, ", \"%s\": [", key);
     for (int k = 0; k < 3; k++) {
+        if (k)
+            fputs(", ", f);
+        cli_json_num(f, v[k]);
+    }
+    fputc(']', f);
+}
+
+/* Whether a move item has any of A B C U V W away from 0 (then they are printed; a
+ * program of X Y Z alone prints as before). */
+static int cgc_aux_any(const ef_gcode_item_t *it)
+{
+    for (int k = 0; k < EF_GCODE_AUX; k++)
+        if (it->astart[k] != 0.0 || it->aend[k] != 0.0)
+            return 1;
+    return 0;
+}
+
+/* A B C U V W of a move as a JSON array. */
+static void cgc_json_aux(FILE *f, const char *key, const double *v)
+{
+    fprintf(f, ", \"%s\": [", key);
+    for (int k = 0; k < EF_GCODE_AUX; k++) {
         if (k)
             fputs(", ", f);
         cli_json_num(f, v[k]);
@@ -67,6 +91,12 @@ static void cgc_print_json(const ef_gcode_item_t *it)
     default:
         break;
     }
+    if ((it->kind == EF_GC_RAPID || it->kind == EF_GC_LINE || it->kind == EF_GC_ZERO_MOVE ||
+         it->kind == EF_GC_ARC) &&
+        cgc_aux_any(it)) {
+        cgc_json_aux(stdout, "abcuvw_start", it->astart);
+        cgc_json_aux(stdout, "abcuvw_end", it->aend);
+    }
     if (it->text[0]) {
         fputs(", \"text\": ", stdout);
         cli_json_str(stdout, it->text);
@@ -105,6 +135,17 @@ static void cgc_print_text(const ef_gcode_item_t *it)
         break;
     default:
         break;
+    }
+    if ((it->kind == EF_GC_RAPID || it->kind == EF_GC_LINE || it->kind == EF_GC_ZERO_MOVE ||
+         it->kind == EF_GC_ARC) &&
+        cgc_aux_any(it)) {
+        static const char names[EF_GCODE_AUX] = {'A', 'B', 'C', 'U', 'V', 'W'};
+        fputs(" |", stdout);
+        for (int k = 0; k < EF_GCODE_AUX; k++)
+            if (it->astart[k] != it->aend[k])
+                printf(" %c %.4f -> %.4f", names[k], it->astart[k], it->aend[k]);
+            else if (it->aend[k] != 0.0)
+                printf(" %c %.4f", names[k], it->aend[k]);
     }
     if (it->text[0])
         printf(" %s", it->text);

@@ -34,6 +34,14 @@ add_test(NAME smooth_cli_machine
                  --params ${EF_MACHINE_DIR}/mill.var --tool-table ${EF_MACHINE_DIR}/mill.tbl)
 set_tests_properties(smooth_cli_machine PROPERTIES PASS_REGULAR_EXPRESSION
                      "end position +175.0000 90.0000 -55.0000 mm")
+# A B C U V W on the moves that carry them (text after '|', JSON abcuvw_start/_end).
+add_test(NAME gcode_cli_axes COMMAND evenfeed gcode ${PROJECT_SOURCE_DIR}/tests/data/axes_moves.ngc)
+set_tests_properties(gcode_cli_axes PROPERTIES PASS_REGULAR_EXPRESSION
+                     "F600 \\| A 0.0000 -> 90.0000\n.*F600 \\| A 90.0000\n.*rapid .* \\| A 90.0000 B 0.0000 -> -45.0000 U 0.0000 -> 3.0000\n")
+add_test(NAME gcode_cli_axes_json
+         COMMAND evenfeed gcode ${PROJECT_SOURCE_DIR}/tests/data/axes_moves.ngc --json)
+set_tests_properties(gcode_cli_axes_json PROPERTIES PASS_REGULAR_EXPRESSION
+                     "\"abcuvw_start\": \\[90, 0, 0, 0, 0, 0\\], \"abcuvw_end\": \\[90, -45, 0, 3, 0, 0\\]")
 add_test(NAME gcode_cli_missing COMMAND evenfeed gcode ${CMAKE_CURRENT_BINARY_DIR}/no-such.ngc)
 set_tests_properties(gcode_cli_missing PROPERTIES WILL_FAIL TRUE)
 # A bad program: the message names file, line and column; exit status 11 (EF_ERR_GCODE).
