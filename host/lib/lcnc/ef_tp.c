@@ -44,7 +44,7 @@ void ef_tp_cfg_default(ef_tp_cfg_t *cfg)
     cfg->start_wait_s = 0.02;
     cfg->guard_s = 0.01;
     cfg->units_per_cycle = 32;
-    cfg->micro_len = 2.0;
+    cfg->micro_len = 3.0;
 }
 
 static int lt_fail(ef_tp_t *tp, int rc, const char *what)
