@@ -10,16 +10,18 @@ static const char usage[] =
     "usage: evenfeed sim-drive modbus (--tcp HOST:PORT | --rtu DEVICE[,BAUD[,8N1]]) [options]\n"
     "       evenfeed sim-drive can --iface IFACE --node N [options]\n"
     "\n"
-    "A simulated evenfeed Modbus drive (3 axes, docs/modbus.md): executes streamed\n"
+    "A simulated evenfeed Modbus drive (3 axes, or one: docs/modbus.md): executes streamed\n"
     "segments through a servo model. Prints 'ready tcp HOST:PORT' (the port actually bound;\n"
     "give port 0 for any free one) or 'ready rtu DEVICE' once it accepts requests, and runs\n"
     "until SIGTERM or SIGINT.\n"
     "\n"
+    "  --axes 1|3           axes per segment slot: 3 an X Y Z drive (default), 1 a\n"
+    "                       single-axis drive (its axis is the trace's x)\n"
     "  --slave N            unit id / slave address (default 1)\n"
     "  --trace FILE         CSV of every servo period while enabled, plus '#' lines for\n"
     "                       accepted segments and injected faults\n"
     "  --time-scale K       drive time runs K times faster than wall time (default 1)\n"
-    "  --home X,Y,Z         position at power-up (default 0,0,0)\n"
+    "  --home X,Y,Z         position at power-up (default 0,0,0; --axes 1: --home X)\n"
     "  --ferr-limit MM      following error that faults (default 1)\n"
     "  --wire-baud B        RTU: hold each reply for its frames' time on a B baud line\n"
     "fault injection (each once):\n"
@@ -116,7 +118,8 @@ enum {
     O_DISCONNECT_AT,
     O_SYNC_TIMEOUT,
     O_STO,
-    O_ALARM_OUT
+    O_ALARM_OUT,
+    O_AXES
 };
 
 /* `evenfeed sim-drive can`: one simulated CANopen drive. */
@@ -220,15 +223,17 @@ static int csd_can(int argc, char **argv)
     return EF_OK;
 }
 
-/* Parse --home X,Y,Z. */
+/* Parse --home X,Y,Z, or --home X (a single-axis drive's; y and z 0). */
 static int csd_home3(const char *v, float home[3])
 {
     char buf[256], *item[3];
-    double h[3];
-    if (cli_split(v, ',', buf, sizeof buf, item, 3) != 3 ||
-        cli_parse_double(item[0], &h[0]) != EF_OK || cli_parse_double(item[1], &h[1]) != EF_OK ||
-        cli_parse_double(item[2], &h[2]) != EF_OK)
-        return cli_error(EF_ERR_ARG, "sim-drive: --home X,Y,Z");
+    double h[3] = {0.0, 0.0, 0.0};
+    int n = cli_split(v, ',', buf, sizeof buf, item, 3);
+    if (n != 1 && n != 3)
+        return cli_error(EF_ERR_ARG, "sim-drive: --home X,Y,Z (or X for --axes 1)");
+    for (int i = 0; i < n; i++)
+        if (cli_parse_double(item[i], &h[i]) != EF_OK || !(h[i] >= -1e6 && h[i] <= 1e6))
+            return cli_error(EF_ERR_ARG, "sim-drive: --home X,Y,Z: positions within +-1e6");
     for (int i = 0; i < 3; i++)
         home[i] = (float)h[i];
     return EF_OK;
@@ -266,6 +271,7 @@ static int csd_modbus(int argc, char **argv)
         {"fault-at", required_argument, NULL, O_FAULT_AT},
         {"sto", required_argument, NULL, O_STO},
         {"alarm-out", required_argument, NULL, O_ALARM_OUT},
+        {"axes", required_argument, NULL, O_AXES},
         CLI_OPT_HELP,
         CLI_OPT_END};
     ef_mb_server_cfg_t c;
@@ -293,6 +299,11 @@ static int csd_modbus(int argc, char **argv)
         case O_SLAVE:
             if ((rc = cli_opt_int(&g, 1, 247, &x)) == EF_OK)
                 c.mb.slave = (int)x;
+            break;
+        case O_AXES:
+            if (strcmp(g.val, "1") && strcmp(g.val, "3"))
+                return cli_error(EF_ERR_ARG, "sim-drive: --axes '%s': 1 or 3", g.val);
+            c.axes = g.val[0] - '0';
             break;
         case O_TRACE:
             c.trace = g.val;
@@ -346,6 +357,8 @@ static int csd_modbus(int argc, char **argv)
         return k;
     if (!have_addr)
         return cli_error(EF_ERR_ARG, "sim-drive: give --tcp HOST:PORT or --rtu DEVICE");
+    if (c.axes == 1 && (c.home[1] != 0.0f || c.home[2] != 0.0f))
+        return cli_error(EF_ERR_ARG, "sim-drive: --axes 1: --home X (one axis; y and z 0)");
     csd_signals();
     signal(SIGPIPE, SIG_IGN); /* a client that vanishes must not kill the drive */
     c.stop = &csd_stop;
@@ -356,7 +369,7 @@ static int csd_modbus(int argc, char **argv)
 }
 
 static const cli_cmd_t csd_buses[] = {
-    {"modbus", csd_modbus, "a Modbus drive (3 axes) on TCP or RTU"},
+    {"modbus", csd_modbus, "a Modbus drive (3 axes, or one) on TCP or RTU"},
     {"can", csd_can, "a CANopen CiA 402 drive (one axis) on a SocketCAN interface"},
     {NULL, NULL, NULL}};
 

@@ -10,19 +10,23 @@
 #include "evenfeed/host/io/ef_mio.h"
 
 static const char usage[] =
-    "usage: evenfeed stream --modbus ADDRESS [options] PROGRAM.ngc\n"
+    "usage: evenfeed stream --modbus ADDRESS[=AXES[@UNIT]] [--modbus ...] [options] "
+    "PROGRAM.ngc\n"
     "       evenfeed stream --can IFACE [options] PROGRAM.ngc\n"
     "       evenfeed stream --can gsusb[:SERIAL][@BITRATE] [options] PROGRAM.ngc\n"
     "\n"
-    "Smooth PROGRAM and stream it to evenfeed drives: one Modbus drive (docs/modbus.md)\n"
-    "or up to three CANopen CiA 402 drives on a SocketCAN interface or a USB-CAN adapter\n"
+    "Smooth PROGRAM and stream it to evenfeed drives: Modbus drives (docs/modbus.md)\n"
+    "or up to nine CANopen CiA 402 drives on a SocketCAN interface or a USB-CAN adapter\n"
     "speaking gs_usb, driven through libusb (docs/can.md).\n"
     "ADDRESS is tcp://HOST:PORT or rtu:DEVICE[,BAUD[,8N1]] (default 115200,8N1).\n"
     "\n"
     "Modbus:\n"
+    "  --modbus A[=AXES[@UNIT]]  up to nine drives, AXES xyz (3-axis drive) or one of\n"
+    "                    x y z a b c u v w; e.g. tcp://h:1502=xyz, tcp://h:1503=a\n"
+    "  --skew-ms MS      stop all drives when their executed times differ by more (20)\n"
     "  --slave N         unit id / slave address, 1..247 (default 1)\n"
     "  --mode M          segment (default): whole Bezier segments into the drive's ring;\n"
-    "                    direct: sampled target positions, one write each\n"
+    "                    direct: sampled target positions, one write each (one drive)\n"
     "  --direct-hz HZ    direct mode: targets per second (default 50)\n"
     "  --timeout MS      response timeout per transaction (default 200)\n"
     "  --retries N       further attempts per transaction (default 3)\n"
@@ -90,6 +94,98 @@ static int cstrm_nodes(const char *v, ef_can_stream_cfg_t *cc)
     memcpy(cc->nodes, ids, sizeof ids);
     cc->n_nodes = (uint8_t)n;
     return EF_OK;
+}
+
+/* Several Modbus drives: ADDRESS=AXES[@UNIT] each; a lone ADDRESS is the X Y Z drive. */
+typedef struct {
+    const char *arg[EF_MB_MAX_DRIVES]; /* the --modbus values as given */
+    int n;
+} cstrm_drives_t;
+
+/* Parse the --modbus values into the stream's drive list (unit ids default to --slave). */
+static int cstrm_mb_drives(const cstrm_drives_t *dl, ef_mb_stream_cfg_t *c)
+{
+    for (int k = 0; k < dl->n; k++) {
+        char url[512];
+        ef_mb_cfg_t d = c->mb; /* timeouts, retries, watchdog, --slave as parsed */
+        ef_msg_t m = {{0}};
+        snprintf(url, sizeof url, "%s", dl->arg[k]);
+        char *eq = strrchr(url, '=');
+        if (eq) {
+            *eq = '\0';
+            char *at = strchr(eq + 1, '@');
+            if (at) {
+                long long u;
+                *at = '\0';
+                if (cli_parse_int(at + 1, 1, 247, &u) != EF_OK)
+                    return cli_error(EF_ERR_ARG, "stream: --modbus '%s': unit id '%s' not 1..247",
+                                     dl->arg[k], at + 1);
+                d.slave = (int)u;
+            }
+            if (ef_mb_axis_parse(eq + 1, &d.axis) != EF_OK)
+                return cli_error(EF_ERR_ARG,
+                                 "stream: --modbus '%s': axis '%s' unknown (xyz, or one of x y z "
+                                 "a b c u v w)",
+                                 dl->arg[k], eq + 1);
+        } else if (dl->n > 1) {
+            return cli_error(EF_ERR_ARG,
+                             "stream: --modbus '%s': with several drives each says what it "
+                             "carries (ADDRESS=xyz, ADDRESS=a ...)",
+                             dl->arg[k]);
+        }
+        if (ef_mb_url_parse(url, &d, &m) != EF_OK)
+            return cli_error(EF_ERR_ARG, "stream: --modbus: %s", m.text);
+        c->drives[k] = d;
+    }
+    c->n_drives = dl->n;
+    if (dl->n == 1)
+        c->mb = c->drives[0];
+    return EF_OK;
+}
+
+/* The auxiliary axes the Modbus drives carry (the count from A on; gaps and repeats are
+ * the stream's refusals, with the drives named). */
+static int cstrm_mb_naux(const ef_mb_stream_cfg_t *c)
+{
+    int n = 0;
+    for (int k = 0; k < c->n_drives; k++)
+        n += c->drives[k].axis > 3;
+    return n;
+}
+
+/* Several Modbus drives: what each executed, and how far apart their clocks ran. */
+static void cstrm_mb_report(const ef_mb_stream_cfg_t *c, const ef_mb_stream_result_t *res,
+                            int machine)
+{
+    const ef_mb_stats_t *io = &res->io;
+    double span = io->t_last - io->t_first;
+    printf("stream: %u segments to %d drives: path time %.3f s, wall time %.3f s, %.0f "
+           "segments/s while writing\n",
+           res->moves, c->n_drives, res->path_time, res->wall_time,
+           span > 0.0 ? (io->slot_writes - 1) / span : 0.0);
+    for (int k = 0; k < c->n_drives && k < (int)res->n_drives; k++) {
+        const ef_mb_cfg_t *d = &c->drives[k];
+        const ef_mb_status_t *st = &res->drive[k];
+        const ef_mb_stats_t *di = &res->drive_io[k];
+        char where[300];
+        if (d->rtu)
+            snprintf(where, sizeof where, "rtu:%s slave %d", d->device, d->slave);
+        else
+            snprintf(where, sizeof where, "tcp://%s:%d", d->host, d->port);
+        printf("drive %d %s %s: state %u, fault %u, %u segments executed, following error max "
+               "%.4f, %llu transactions, %llu retries, %u duplicate writes acknowledged, %u "
+               "writes refused\n",
+               k + 1, where, ef_mb_axis_name(d->axis), st->state, st->fault, st->done_count,
+               (double)st->ferr_max, (unsigned long long)di->transactions,
+               (unsigned long long)di->retries, st->duplicates, st->rejected);
+    }
+    printf("skew: executed times apart by at most %.0f ms over %u status rounds (bound %.0f "
+           "ms)\n",
+           res->skew_max_s * 1e3, res->skew_checks, c->skew_max_s * 1e3);
+    if (machine)
+        printf("machine: %u outputs switched (M62-M65); %u feed holds, %.3f s held\n",
+               (unsigned)res->outputs, (unsigned)res->holds, res->held_s);
+    fflush(stdout);
 }
 
 /* Stream over CAN with the parsed options; print the summary. */
@@ -178,7 +274,8 @@ enum {
     O_SDO,
     O_CAN_OPTS,
     O_BRINGUP,
-    O_ENABLE_TO
+    O_ENABLE_TO,
+    O_SKEW
 };
 
 /* Entry point of `evenfeed stream`. */
@@ -203,6 +300,7 @@ int cli_cmd_stream(int argc, char **argv)
                                          {"can-opts", required_argument, NULL, O_CAN_OPTS},
                                          {"bringup-ms", required_argument, NULL, O_BRINGUP},
                                          {"enable-timeout", required_argument, NULL, O_ENABLE_TO},
+                                         {"skew-ms", required_argument, NULL, O_SKEW},
                                          CLI_PIPE_OPTIONS,
                                          CLI_MACHINE_OPTIONS,
                                          CLI_OPT_HELP,
@@ -213,6 +311,7 @@ int cli_cmd_stream(int argc, char **argv)
     ef_can_stream_cfg_t cc;
     ef_can_stream_cfg_default(&cc, c.pipe.g2, c.pipe.g1);
     const char *path = NULL, *addr = NULL, *iface = NULL, *mode = NULL, *machine = NULL;
+    cstrm_drives_t dl = {{NULL}, 0}; /* the --modbus values, parsed once all options are */
     const char *can_opts = NULL;
     int gsusb = 0;
     char mb_only[48] = "", can_only[48] = ""; /* an option of one transport, given */
@@ -228,9 +327,15 @@ int cli_cmd_stream(int argc, char **argv)
         case CLI_HELP:
             return EF_OK;
         case O_MODBUS:
-            if (ef_mb_url_parse(g.val, &c.mb, &m) != EF_OK)
-                return cli_error(EF_ERR_ARG, "stream: --modbus: %s", m.text);
+            if (dl.n == EF_MB_MAX_DRIVES)
+                return cli_error(EF_ERR_ARG, "stream: --modbus: at most %d drives",
+                                 EF_MB_MAX_DRIVES);
+            dl.arg[dl.n++] = g.val;
             addr = g.val;
+            break;
+        case O_SKEW:
+            if ((rc = cli_opt_int(&g, 1, 10000, &x)) == EF_OK)
+                c.skew_max_s = (double)x * 1e-3;
             break;
         case O_CAN:
             if (!*g.val || *g.val == '-')
@@ -330,17 +435,30 @@ int cli_cmd_stream(int argc, char **argv)
             k == O_CAN_OPTS || k == O_BRINGUP || k == O_ENABLE_TO)
             snprintf(can_only, sizeof can_only, "%s", g.opt);
         else if (k == O_SLAVE || k == O_DIRECT_HZ || k == O_TIMEOUT || k == O_RETRIES ||
-                 k == O_WATCHDOG)
+                 k == O_WATCHDOG || k == O_SKEW)
             snprintf(mb_only, sizeof mb_only, "%s", g.opt);
     }
     if (k < 0)
         return k;
-    /* The axes are the drives: over CAN one node per axis (--nodes), over Modbus X Y Z. */
-    if (addr && c.pipe.naux > 0)
+    /* The axes are the drives: over CAN one node per axis (--nodes), over Modbus what the
+     * listed drives carry (docs/modbus.md). */
+    if (addr) {
+        int rc = cstrm_mb_drives(&dl, &c);
+        if (rc != EF_OK)
+            return rc;
+    }
+    int mb_naux = addr ? cstrm_mb_naux(&c) : 0;
+    if (addr && c.pipe.naux > 0 && mb_naux == 0)
         return cli_error(EF_ERR_ARG,
-                         "stream: --axes %d: Modbus streaming carries X Y Z only (a program "
-                         "that moves A B C U V W is refused; docs/axes.md)",
+                         "stream: --axes %d: Modbus streaming carries X Y Z only with these "
+                         "drives (a program that moves A B C U V W is refused; list a drive per "
+                         "auxiliary axis, --modbus ADDRESS=a, docs/modbus.md)",
                          c.pipe.naux + 3);
+    if (addr && c.pipe.naux > 0 && c.pipe.naux != mb_naux)
+        return cli_error(EF_ERR_ARG,
+                         "stream: --axes %d with Modbus drives carrying %d axes: each axis is "
+                         "one drive's (or the X Y Z drive's)",
+                         c.pipe.naux + 3, mb_naux + 3);
     if (iface && c.pipe.naux > 0 && c.pipe.naux + 3 != cc.n_nodes)
         return cli_error(EF_ERR_ARG,
                          "stream: --axes %d with %u nodes: over CAN each axis is a node (--nodes "
@@ -405,9 +523,17 @@ int cli_cmd_stream(int argc, char **argv)
     int rc = cli_gcode_open(&r, path, &mc);
     if (rc != EF_OK)
         return rc;
-    ef_mb_stream_result_t res;
+    static ef_mb_stream_result_t res; /* per-drive statuses: not on the stack */
     rc = ef_mb_stream(&r, &c, &res, &m);
     ef_gcode_free(&r);
+    if (c.n_drives > 1) {
+        cstrm_mb_report(&c, &res, machine != NULL);
+        if (machine)
+            ef_mio_close(&mio);
+        if (rc != EF_OK)
+            return cli_error(rc, "stream: %s", m.text);
+        return EF_OK;
+    }
     const ef_mb_stats_t *io = &res.io;
     double span = io->t_last - io->t_first;
     if (c.mode == EF_MB_MODE_SEGMENT)

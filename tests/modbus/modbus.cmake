@@ -6,7 +6,7 @@ if(TARGET ef_tables_default)
   add_executable(test_modbus ${CMAKE_CURRENT_SOURCE_DIR}/modbus/test_modbus.c)
   target_include_directories(test_modbus PRIVATE ${CMAKE_CURRENT_SOURCE_DIR})
   target_link_libraries(test_modbus PRIVATE ef_host ef_tables_default m)
-  foreach(part bad tcp rtu faults direct)
+  foreach(part bad tcp rtu faults direct codec axes axesfault axesbad axesrtu)
     add_test(NAME modbus_${part}
              COMMAND test_modbus $<TARGET_FILE:evenfeed> ${PROJECT_SOURCE_DIR}
                      ${CMAKE_CURRENT_BINARY_DIR} ${part})

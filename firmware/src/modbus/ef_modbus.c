@@ -90,8 +90,9 @@ float ef_mb_get_f32(const uint16_t *w)
     return p.f;
 }
 
-/* Whether every number a slot carries for this move is finite. */
-static int mbd_move_finite(const ef_move_t *m)
+/* Whether every number a slot of axes axes carries for this move is finite (a single-axis
+ * slot carries no y or z). */
+static int mbd_move_finite(const ef_move_t *m, uint32_t axes)
 {
     int ok = ef_finitef(m->duration) & ef_finitef(m->length) & ef_finitef(m->v_exit);
     for (int k = 0; k < EF_TIMELAW_PHASES; k++) {
@@ -100,20 +101,30 @@ static int mbd_move_finite(const ef_move_t *m)
             ok &= ef_finitef(m->law.c[k][i]);
     }
     for (int i = 0; i <= m->degree && i < EF_MB_POINTS; i++)
-        ok &= ef_finitef(m->b[i].x) & ef_finitef(m->b[i].y) & ef_finitef(m->b[i].z);
+        ok &= ef_finitef(m->b[i].x) &
+              (axes != EF_MB_AXES || (ef_finitef(m->b[i].y) & ef_finitef(m->b[i].z)));
     return ok;
 }
 
-/* Serialise a move with its CRC: the only way a master makes a valid slot (ef_modbus.h). */
-int ef_mb_slot_encode(const ef_move_t *m, uint16_t w[EF_MB_SLOT_WORDS])
+/* Registers per slot by the axes it carries (ef_modbus.h). */
+uint32_t ef_mb_slot_words(uint32_t axes)
 {
-    if (!m || !w || (m->degree != 1 && m->degree != 3 && m->degree != 5))
+    return axes == EF_MB_AXES ? EF_MB_SLOT_WORDS : axes == EF_MB_AXES1 ? EF_MB_SLOT1_WORDS : 0u;
+}
+
+/* Serialise a move with its CRC: the only way a master makes a valid slot (ef_modbus.h).
+ * The words before the control points are the same for both layouts, so a single-axis
+ * drive decodes the time law exactly as the X Y Z drive does. */
+int ef_mb_slot_encode_axes(const ef_move_t *m, uint32_t axes, uint16_t *w)
+{
+    uint32_t words = ef_mb_slot_words(axes);
+    if (!m || !w || words == 0u || (m->degree != 1 && m->degree != 3 && m->degree != 5))
         return EF_ERR_ARG;
-    if (!mbd_move_finite(m))
+    if (!mbd_move_finite(m, axes))
         return EF_ERR_NONFINITE;
     if (!(m->duration > 0.0f))
         return EF_ERR_ARG;
-    for (int i = 0; i < EF_MB_SLOT_WORDS; i++)
+    for (uint32_t i = 0; i < words; i++)
         w[i] = 0u;
     ef_mb_put_u32(&w[EF_MB_SLOT_SEQ], m->seq);
     uint16_t flags = (m->flags & EF_MOVE_STOP_END) ? EF_MB_SLOT_FLAG_STOP : 0u;
@@ -127,21 +138,30 @@ int ef_mb_slot_encode(const ef_move_t *m, uint16_t w[EF_MB_SLOT_WORDS])
             ef_mb_put_f32(&w[EF_MB_SLOT_LAW_C + 2 * (EF_MB_LAW_COEFFS * k + i)], m->law.c[k][i]);
     }
     for (int i = 0; i <= m->degree; i++) {
-        uint16_t *p = &w[EF_MB_SLOT_POINTS + 6 * i];
+        uint16_t *p = &w[EF_MB_SLOT_POINTS + 2 * (int)axes * i];
         ef_mb_put_f32(&p[0], m->b[i].x);
-        ef_mb_put_f32(&p[2], m->b[i].y);
-        ef_mb_put_f32(&p[4], m->b[i].z);
+        if (axes == EF_MB_AXES) {
+            ef_mb_put_f32(&p[2], m->b[i].y);
+            ef_mb_put_f32(&p[4], m->b[i].z);
+        }
     }
-    w[EF_MB_SLOT_CRC] = ef_mb_crc_words(w, EF_MB_SLOT_CRC);
+    w[words - 1u] = ef_mb_crc_words(w, words - 1u);
     return EF_OK;
 }
 
-/* Check and deserialise a received slot, CRC first (ef_modbus.h). */
-int ef_mb_slot_decode(const uint16_t w[EF_MB_SLOT_WORDS], ef_move_t *m)
+/* The X Y Z drive's slot (ef_modbus.h). */
+int ef_mb_slot_encode(const ef_move_t *m, uint16_t w[EF_MB_SLOT_WORDS])
 {
-    if (!w || !m)
+    return ef_mb_slot_encode_axes(m, EF_MB_AXES, w);
+}
+
+/* Check and deserialise a received slot, CRC first (ef_modbus.h). */
+int ef_mb_slot_decode_axes(const uint16_t *w, uint32_t axes, ef_move_t *m)
+{
+    uint32_t words = ef_mb_slot_words(axes);
+    if (!w || !m || words == 0u)
         return EF_ERR_ARG;
-    if (ef_mb_crc_words(w, EF_MB_SLOT_CRC) != w[EF_MB_SLOT_CRC])
+    if (ef_mb_crc_words(w, words - 1u) != w[words - 1u])
         return EF_ERR_CRC;
     uint16_t fmt = w[EF_MB_SLOT_FORMAT];
     uint8_t degree = (uint8_t)(fmt & 0xFFu);
@@ -162,10 +182,13 @@ int ef_mb_slot_decode(const uint16_t w[EF_MB_SLOT_WORDS], ef_move_t *m)
             r.law.c[k][i] = ef_mb_get_f32(&w[EF_MB_SLOT_LAW_C + 2 * (EF_MB_LAW_COEFFS * k + i)]);
     }
     for (int i = 0; i <= degree; i++) {
-        const uint16_t *p = &w[EF_MB_SLOT_POINTS + 6 * i];
-        r.b[i] = ef_v3(ef_mb_get_f32(&p[0]), ef_mb_get_f32(&p[2]), ef_mb_get_f32(&p[4]));
+        const uint16_t *p = &w[EF_MB_SLOT_POINTS + 2 * (int)axes * i];
+        if (axes == EF_MB_AXES)
+            r.b[i] = ef_v3(ef_mb_get_f32(&p[0]), ef_mb_get_f32(&p[2]), ef_mb_get_f32(&p[4]));
+        else /* the single axis is the drive's x: its model runs unchanged, y and z at 0 */
+            r.b[i] = ef_v3(ef_mb_get_f32(&p[0]), 0.0f, 0.0f);
     }
-    if (!mbd_move_finite(&r))
+    if (!mbd_move_finite(&r, axes))
         return EF_ERR_NONFINITE;
     if (!(r.duration > 0.0f))
         return EF_ERR_ARG;
@@ -173,15 +196,25 @@ int ef_mb_slot_decode(const uint16_t w[EF_MB_SLOT_WORDS], ef_move_t *m)
     return EF_OK;
 }
 
-/* Set up the device and its drive (ef_modbus.h). */
-int ef_mbdev_init(ef_mbdev_t *dev, const ef_servo_cfg_t *cfg, ef_vec3_t home, uint32_t period_us,
-                  uint16_t session)
+/* The X Y Z drive's slot (ef_modbus.h). */
+int ef_mb_slot_decode(const uint16_t w[EF_MB_SLOT_WORDS], ef_move_t *m)
 {
-    if (!dev || session == 0u)
+    return ef_mb_slot_decode_axes(w, EF_MB_AXES, m);
+}
+
+/* Set up the device and its drive (ef_modbus.h). */
+int ef_mbdev_init_axes(ef_mbdev_t *dev, const ef_servo_cfg_t *cfg, ef_vec3_t home,
+                       uint32_t period_us, uint16_t session, uint32_t axes)
+{
+    if (!dev || session == 0u || ef_mb_slot_words(axes) == 0u)
         return EF_ERR_ARG;
+    if (axes == EF_MB_AXES1 && (home.y != 0.0f || home.z != 0.0f))
+        return ef_finitef(home.y) && ef_finitef(home.z) ? EF_ERR_ARG : EF_ERR_NONFINITE;
     int rc = ef_drive_init(&dev->drv, cfg, home, period_us);
     if (rc != EF_OK)
         return rc;
+    dev->axes = (uint16_t)axes;
+    dev->slot_words = (uint16_t)ef_mb_slot_words(axes);
     dev->session = session;
     dev->control = 0u;
     dev->mode = EF_MB_MODE_SEGMENT;
@@ -195,6 +228,19 @@ int ef_mbdev_init(ef_mbdev_t *dev, const ef_servo_cfg_t *cfg, ef_vec3_t home, ui
         for (uint32_t i = 0; i < EF_MB_SLOT_WORDS; i++)
             dev->slot[k][i] = 0u;
     return EF_OK;
+}
+
+/* The X Y Z drive, as before single-axis drives existed (ef_modbus.h). */
+int ef_mbdev_init(ef_mbdev_t *dev, const ef_servo_cfg_t *cfg, ef_vec3_t home, uint32_t period_us,
+                  uint16_t session)
+{
+    return ef_mbdev_init_axes(dev, cfg, home, period_us, session, EF_MB_AXES);
+}
+
+/* End of the map: the ring's size follows from the slot size (ef_modbus.h). */
+uint32_t ef_mbdev_regs(const ef_mbdev_t *dev)
+{
+    return dev ? (uint32_t)EF_MB_REG_SLOT0 + (uint32_t)EF_DRIVE_SLOTS * dev->slot_words : 0u;
 }
 
 /* Three floats into six registers. */
@@ -227,9 +273,9 @@ static void mbd_snapshot(const ef_mbdev_t *dev, uint16_t blk[EF_MB_FIXED_WORDS])
         blk[i] = 0u;
     blk[EF_MB_REG_MAGIC] = EF_MB_MAGIC;
     blk[EF_MB_REG_VERSION] = EF_MB_MAP_VERSION;
-    blk[EF_MB_REG_AXES] = EF_MB_AXES;
+    blk[EF_MB_REG_AXES] = dev->axes;
     blk[EF_MB_REG_SLOTS] = EF_DRIVE_SLOTS;
-    blk[EF_MB_REG_SLOT_WORDS] = EF_MB_SLOT_WORDS;
+    blk[EF_MB_REG_SLOT_WORDS] = dev->slot_words;
     blk[EF_MB_REG_SESSION] = dev->session;
     ef_mb_put_u32(&blk[EF_MB_REG_PERIOD_US], d->period_us);
     blk[EF_MB_REG_CONTROL] = dev->control;
@@ -278,7 +324,7 @@ int ef_mbdev_read(ef_mbdev_t *dev, uint16_t addr, uint16_t n, uint16_t *out, uin
         return EF_ERR_ARG;
     }
     dev->quiet_us = 0u;
-    if (n == 0u || n > EF_MB_READ_MAX || (uint32_t)addr + n > (uint32_t)EF_MB_REGS) {
+    if (n == 0u || n > EF_MB_READ_MAX || (uint32_t)addr + n > ef_mbdev_regs(dev)) {
         *exc = EF_MB_EX_ILLEGAL_ADDRESS;
         return EF_ERR_ARG;
     }
@@ -291,7 +337,7 @@ int ef_mbdev_read(ef_mbdev_t *dev, uint16_t addr, uint16_t n, uint16_t *out, uin
             out[i] = blk[a];
         } else if (a >= EF_MB_REG_SLOT0) {
             uint32_t o = a - EF_MB_REG_SLOT0;
-            out[i] = dev->slot[o / EF_MB_SLOT_WORDS][o % EF_MB_SLOT_WORDS];
+            out[i] = dev->slot[o / dev->slot_words][o % dev->slot_words];
         } else {
             out[i] = 0u;
         }
@@ -374,11 +420,14 @@ static int mbd_write_control(ef_mbdev_t *dev, uint16_t addr, uint16_t n, const u
     return EF_OK;
 }
 
-/* The whole target block: three finite floats, accepted in direct mode only. */
+/* The whole target block: three finite floats, accepted in direct mode only; a single-axis
+ * drive has no y or z to move (they must be 0). */
 static int mbd_write_target(ef_mbdev_t *dev, const uint16_t *v)
 {
     ef_vec3_t p = ef_v3(ef_mb_get_f32(&v[0]), ef_mb_get_f32(&v[2]), ef_mb_get_f32(&v[4]));
     if (!ef_finitef(p.x) || !ef_finitef(p.y) || !ef_finitef(p.z))
+        return EF_ERR_ARG;
+    if (dev->axes == EF_MB_AXES1 && (p.y != 0.0f || p.z != 0.0f))
         return EF_ERR_ARG;
     int rc = ef_drive_set_target(&dev->drv, p);
     if (rc == EF_ERR_NONFINITE)
@@ -394,7 +443,7 @@ static int mbd_write_target(ef_mbdev_t *dev, const uint16_t *v)
 static int mbd_write_slot(ef_mbdev_t *dev, uint32_t k, const uint16_t *v)
 {
     ef_move_t m;
-    int rc = ef_mb_slot_decode(v, &m);
+    int rc = ef_mb_slot_decode_axes(v, dev->axes, &m);
     if (rc == EF_ERR_NONFINITE)
         return EF_ERR_ARG;
     if (rc != EF_OK)
@@ -408,7 +457,7 @@ static int mbd_write_slot(ef_mbdev_t *dev, uint32_t k, const uint16_t *v)
     }
     if (rc != EF_OK)
         return rc;
-    for (uint32_t i = 0; i < EF_MB_SLOT_WORDS; i++)
+    for (uint32_t i = 0; i < dev->slot_words; i++)
         dev->slot[k][i] = v[i];
     return EF_OK;
 }
@@ -425,15 +474,15 @@ int ef_mbdev_write(ef_mbdev_t *dev, uint16_t addr, uint16_t n, const uint16_t *v
     uint32_t a = addr, end = (uint32_t)addr + n;
     int rc = EF_ERR_ARG;
     int range_ok = 1;
-    if (n == 0u || n > EF_MB_WRITE_MAX || end > (uint32_t)EF_MB_REGS) {
+    if (n == 0u || n > EF_MB_WRITE_MAX || end > ef_mbdev_regs(dev)) {
         range_ok = 0;
     } else if (a >= EF_MB_REG_CONTROL && end <= EF_MB_CONTROL_END) {
         rc = mbd_write_control(dev, addr, n, v);
     } else if (a == EF_MB_REG_TARGET && n == EF_MB_TARGET_WORDS) {
         rc = mbd_write_target(dev, v);
-    } else if (a >= EF_MB_REG_SLOT0 && (a - EF_MB_REG_SLOT0) % EF_MB_SLOT_WORDS == 0u &&
-               n == EF_MB_SLOT_WORDS) {
-        rc = mbd_write_slot(dev, (a - EF_MB_REG_SLOT0) / EF_MB_SLOT_WORDS, v);
+    } else if (a >= EF_MB_REG_SLOT0 && (a - EF_MB_REG_SLOT0) % dev->slot_words == 0u &&
+               n == dev->slot_words) {
+        rc = mbd_write_slot(dev, (a - EF_MB_REG_SLOT0) / dev->slot_words, v);
     } else {
         range_ok = 0; /* read-only, a hole, a partial block or across blocks */
     }

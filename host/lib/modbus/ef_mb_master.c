@@ -16,14 +16,42 @@ struct ef_mb_master {
     uint16_t session, slots;
     ef_mb_status_t st;
     ef_mb_stats_t io;
-    uint32_t next_seq; /* sequence number of the next slot to send */
-    uint32_t credits;  /* slots known to be free */
+    uint16_t axes, words; /* axes per slot (3 or 1) and registers per slot, from the drive */
+    uint32_t next_seq;    /* sequence number of the next slot to send */
+    uint32_t credits;     /* slots known to be free */
     int begun, started, mode;
-    int hold; /* feed hold requested: every enabling control word carries it */
-    int lost; /* the drive restarted: nothing more is sent to it (its state is unknown) */
+    int hold;         /* feed hold requested: every enabling control word carries it */
+    int manual_start; /* START only through ef_mb_start() (several drives start together) */
+    int lost;         /* the drive restarted: nothing more is sent to it (its state is unknown) */
     double last_poll, last_full; /* any status read; the last whole-block read */
     float pos[3];                /* the drive's command at begin */
 };
+
+/* Axis letters by ef_mb_cfg_t::axis (1..9); 0 is the X Y Z drive. */
+static const char mbm_axis_letters[] = "xyzabcuvw";
+
+/* Name of what a drive carries ("xyz", or its one axis). */
+const char *ef_mb_axis_name(int axis)
+{
+    static const char *const names[] = {"xyz", "x", "y", "z", "a", "b", "c", "u", "v", "w"};
+    return axis >= 0 && axis <= EF_MB_AXIS_MAX ? names[axis] : "?";
+}
+
+/* Parse an axis list item: xyz, or one of x y z a b c u v w (either case). */
+int ef_mb_axis_parse(const char *s, int *axis)
+{
+    if (!s || !axis)
+        return EF_ERR_ARG;
+    if (!strcmp(s, "xyz") || !strcmp(s, "XYZ")) {
+        *axis = EF_MB_AXIS_XYZ;
+        return EF_OK;
+    }
+    const char *p = s[0] && !s[1] ? strchr(mbm_axis_letters, s[0] | 0x20) : NULL;
+    if (!p || !*p)
+        return EF_ERR_ARG;
+    *axis = (int)(p - mbm_axis_letters) + 1;
+    return EF_OK;
+}
 
 /* Monotonic seconds. */
 double ef_mb_now(void)
@@ -56,6 +84,7 @@ void ef_mb_cfg_default(ef_mb_cfg_t *c)
     c->retries = 3;
     c->reconnect_s = 2.0;
     c->watchdog_ms = 1000;
+    c->axis = EF_MB_AXIS_XYZ;
 }
 
 /* Parse tcp://HOST:PORT or rtu:DEVICE[,BAUD[,8N1]]. */
@@ -366,6 +395,9 @@ int ef_mb_open(const ef_mb_cfg_t *c, ef_mb_master_t **out, ef_msg_t *m)
     if (c->slave < 1 || c->slave > 247 || !(c->timeout_s > 0.0) || c->timeout_s > 60.0 ||
         c->retries < 0 || c->retries > 100)
         return ef_fail(m, EF_ERR_ARG, "slave 1..247, timeout 0..60 s, retries 0..100");
+    if (c->axis < 0 || c->axis > EF_MB_AXIS_MAX || (c->axis > 3 && c->axis - 3 > EF_AUX))
+        return ef_fail(m, EF_ERR_ARG, "axis %d: this build carries X Y Z and %d more (EF_AXES)",
+                       c->axis, EF_AUX);
     ef_mb_master_t *ms = calloc(1, sizeof *ms);
     if (!ms)
         return ef_fail(m, EF_ERR_NOMEM, "out of memory");
@@ -389,19 +421,30 @@ int ef_mb_open(const ef_mb_cfg_t *c, ef_mb_master_t **out, ef_msg_t *m)
         rc = ef_fail(m, EF_ERR_PROTO,
                      "not an evenfeed drive: magic 0x%04x version %u (want 0x%04x version %u)",
                      id[EF_MB_REG_MAGIC], id[EF_MB_REG_VERSION], EF_MB_MAGIC, EF_MB_MAP_VERSION);
-    if (rc == EF_OK &&
-        (id[EF_MB_REG_SLOT_WORDS] != EF_MB_SLOT_WORDS || id[EF_MB_REG_AXES] != EF_MB_AXES ||
-         id[EF_MB_REG_SLOTS] < 2 || id[EF_MB_REG_SESSION] == 0))
+    if (rc == EF_OK && (ef_mb_slot_words(id[EF_MB_REG_AXES]) == 0u ||
+                        id[EF_MB_REG_SLOT_WORDS] != ef_mb_slot_words(id[EF_MB_REG_AXES]) ||
+                        id[EF_MB_REG_SLOTS] < 2 || id[EF_MB_REG_SESSION] == 0))
         rc = ef_fail(m, EF_ERR_PROTO,
                      "drive's map does not match: %u axes, %u slots of %u words, session %u",
                      id[EF_MB_REG_AXES], id[EF_MB_REG_SLOTS], id[EF_MB_REG_SLOT_WORDS],
                      id[EF_MB_REG_SESSION]);
+    /* What the drive carries must be what it was listed for: a slot of the wrong size
+     * would be refused, but a 1-axis drive listed as X Y Z would be a wrong machine. */
+    int want = c->axis == EF_MB_AXIS_XYZ ? EF_MB_AXES : (int)EF_MB_AXES1;
+    if (rc == EF_OK && id[EF_MB_REG_AXES] != want)
+        rc = ef_fail(m, EF_ERR_PROTO,
+                     "the drive carries %u ax%s per slot but is listed for %s: a %s drive is "
+                     "needed (sim-drive modbus --axes %d)",
+                     id[EF_MB_REG_AXES], id[EF_MB_REG_AXES] == 1 ? "is" : "es",
+                     ef_mb_axis_name(c->axis), want == EF_MB_AXES ? "3-axis" : "single-axis", want);
     if (rc != EF_OK) {
         ef_mb_close(ms);
         return rc;
     }
     ms->session = id[EF_MB_REG_SESSION];
     ms->slots = id[EF_MB_REG_SLOTS];
+    ms->axes = id[EF_MB_REG_AXES];
+    ms->words = id[EF_MB_REG_SLOT_WORDS];
     *out = ms;
     return EF_OK;
 }
@@ -477,6 +520,63 @@ static int mbm_start(ef_mb_master_t *ms, ef_msg_t *m)
     return rc;
 }
 
+/* The move as a single-axis drive carries it: its axis's control values in b[i].x, y and z
+ * 0; the time law, length and the rest as the move has them (one law for all axes). */
+static void mbm_axis_move(const ef_move_t *mv, int axis, ef_move_t *out)
+{
+    *out = *mv;
+    for (int i = 0; i < 6; i++) {
+        float v = axis == 1   ? mv->b[i].x
+                  : axis == 2 ? mv->b[i].y
+                  : axis == 3 ? mv->b[i].z
+                              : mv->ab[axis - 4][i]; /* axis - 3 <= EF_AUX (ef_mb_open) */
+        out->b[i] = ef_v3(v, 0.0f, 0.0f);
+    }
+}
+
+/* Several drives start together (ef_mb.h). */
+int ef_mb_set_manual_start(ef_mb_master_t *ms, int on)
+{
+    if (!ms)
+        return EF_ERR_ARG;
+    ms->manual_start = on != 0;
+    return EF_OK;
+}
+
+/* START unless started (ef_mb.h). */
+int ef_mb_start(ef_mb_master_t *ms, ef_msg_t *m)
+{
+    if (!ms || !ms->begun || ms->mode != EF_MB_MODE_SEGMENT)
+        return ef_fail(m, EF_ERR_STATE, "drive not prepared for segments");
+    return ms->started ? EF_OK : mbm_start(ms, m);
+}
+
+/* A checked status read (ef_mb.h). */
+int ef_mb_poll(ef_mb_master_t *ms, ef_msg_t *m)
+{
+    if (!ms)
+        return ef_fail(m, EF_ERR_ARG, "no master");
+    return mbm_poll_checked(ms, m);
+}
+
+/* Whether the drive was started (ef_mb.h). */
+int ef_mb_started(const ef_mb_master_t *ms)
+{
+    return ms && ms->started;
+}
+
+/* Segments sent (ef_mb.h). */
+uint32_t ef_mb_sent(const ef_mb_master_t *ms)
+{
+    return ms ? ms->next_seq : 0u;
+}
+
+/* Ring size (ef_mb.h). */
+uint32_t ef_mb_slots(const ef_mb_master_t *ms)
+{
+    return ms ? ms->slots : 0u;
+}
+
 /* Wait for free slots: poll, and while none is free, give the drive a moment. */
 static int mbm_wait_credit(ef_mb_master_t *ms, ef_msg_t *m)
 {
@@ -488,6 +588,8 @@ static int mbm_wait_credit(ef_mb_master_t *ms, ef_msg_t *m)
         if (ms->credits > 0)
             return EF_OK;
         ms->io.busy++;
+        if (!ms->started && ms->manual_start)
+            return ef_fail(m, EF_ERR_STATE, "the ring is full before the start");
         if (!ms->started) {
             rc = mbm_start(ms, m);
             if (rc != EF_OK)
@@ -505,12 +607,21 @@ int ef_mb_send(ef_mb_master_t *ms, const ef_move_t *mv, ef_msg_t *m)
         return ef_fail(m, EF_ERR_ARG, "no master or segment");
     if (!ms->begun || ms->mode != EF_MB_MODE_SEGMENT)
         return ef_fail(m, EF_ERR_STATE, "drive not prepared for segments");
+    ef_move_t cp = *mv;
+    if (ms->c.axis != EF_MB_AXIS_XYZ)
+        mbm_axis_move(mv, ms->c.axis, &cp);
     if (ms->next_seq == 0) {
         float d = 0.0f;
-        const float b0[3] = {mv->b[0].x, mv->b[0].y, mv->b[0].z};
+        const float b0[3] = {cp.b[0].x, cp.b[0].y, cp.b[0].z};
         for (int i = 0; i < 3; i++)
             d += (b0[i] - ms->pos[i]) * (b0[i] - ms->pos[i]);
         d = sqrtf(d); /* the drive's own continuity check is this distance */
+        if (!(d <= EF_INTERP_JOIN_TOL) && ms->c.axis != EF_MB_AXIS_XYZ)
+            return ef_fail(m, EF_ERR_ARG,
+                           "the path starts at %c = %.4f but the drive is at %.4f: move it "
+                           "there first",
+                           mbm_axis_letters[ms->c.axis - 1] - 0x20, (double)b0[0],
+                           (double)ms->pos[0]);
         if (!(d <= EF_INTERP_JOIN_TOL))
             return ef_fail(m, EF_ERR_ARG,
                            "the path starts at (%.4f %.4f %.4f) but the drive is at "
@@ -518,17 +629,16 @@ int ef_mb_send(ef_mb_master_t *ms, const ef_move_t *mv, ef_msg_t *m)
                            (double)b0[0], (double)b0[1], (double)b0[2], (double)ms->pos[0],
                            (double)ms->pos[1], (double)ms->pos[2]);
     }
-    ef_move_t cp = *mv;
     cp.seq = ms->next_seq;
     uint16_t w[EF_MB_SLOT_WORDS];
-    int rc = ef_mb_slot_encode(&cp, w);
+    int rc = ef_mb_slot_encode_axes(&cp, ms->axes, w);
     if (rc != EF_OK)
         return ef_fail(m, EF_ERR_ARG, "segment %u (source line %u) cannot be encoded: %s", cp.seq,
                        mv->tag, ef_err_str(rc));
     char what[96];
     snprintf(what, sizeof what, "write slot %u (segment %u, source line %u)",
              (unsigned)(cp.seq % ms->slots), cp.seq, mv->tag);
-    uint16_t addr = (uint16_t)(EF_MB_REG_SLOT0 + (cp.seq % ms->slots) * EF_MB_SLOT_WORDS);
+    uint16_t addr = (uint16_t)(EF_MB_REG_SLOT0 + (cp.seq % ms->slots) * ms->words);
     for (;;) {
         /* Look at the drive now and then even with credit left, so a fault stops the
          * stream promptly rather than when the ring fills. */
@@ -538,7 +648,7 @@ int ef_mb_send(ef_mb_master_t *ms, const ef_move_t *mv, ef_msg_t *m)
                 return rc;
         }
         int exc;
-        rc = mbm_xfer(ms, 1, addr, EF_MB_SLOT_WORDS, w, what, &exc, m);
+        rc = mbm_xfer(ms, 1, addr, ms->words, w, what, &exc, m);
         if (rc == EF_OK)
             break;
         if (exc == EF_MB_EX_BUSY) {
@@ -561,7 +671,7 @@ int ef_mb_send(ef_mb_master_t *ms, const ef_move_t *mv, ef_msg_t *m)
     ms->io.slot_writes++;
     ms->next_seq++;
     ms->credits--;
-    if (!ms->started && (ms->credits == 0 || ms->next_seq >= ms->slots))
+    if (!ms->started && !ms->manual_start && (ms->credits == 0 || ms->next_seq >= ms->slots))
         return mbm_start(ms, m);
     return EF_OK;
 }

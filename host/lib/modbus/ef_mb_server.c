@@ -69,6 +69,7 @@ void ef_mb_server_cfg_default(ef_mb_server_cfg_t *c)
     c->drop_reply_seq = -1;
     c->disconnect_seq = -1;
     c->fault_at_s = -1.0;
+    c->axes = EF_MB_AXES;
 }
 
 /* One trace row per drive period: what a scope on the drive would record. */
@@ -196,7 +197,7 @@ static int srv_request(srv_t *s, const uint8_t *q, int len)
         modbus_reply_exception(s->ctx, q, EF_MB_EX_ILLEGAL_FUNCTION);
         return 0;
     }
-    int is_slot = addr >= EF_MB_REG_SLOT0 && n == EF_MB_SLOT_WORDS;
+    int is_slot = addr >= EF_MB_REG_SLOT0 && n == s->dev->slot_words;
     if (is_slot)
         seq = (long)ef_mb_get_u32(regs + EF_MB_SLOT_SEQ);
     if (is_slot && !s->exception_done && seq == s->c->exception_seq) {
@@ -291,7 +292,9 @@ int ef_mb_serve(const ef_mb_server_cfg_t *c, ef_msg_t *m)
     uint16_t session = (uint16_t)(((unsigned)getpid() * 2654435761u) ^ (unsigned)time(NULL));
     if (session == 0)
         session = 1;
-    int rc = ef_mbdev_init(&dev, &c->servo, home, c->period_us, session);
+    int rc = ef_mbdev_init_axes(&dev, &c->servo, home, c->period_us, session, (uint32_t)c->axes);
+    if (rc == EF_ERR_ARG && c->axes == 1 && (home.y != 0.0f || home.z != 0.0f))
+        return ef_fail(m, rc, "a single-axis drive's home is X only (y and z 0)");
     if (rc != EF_OK)
         return ef_fail(m, rc, "drive model: %s", ef_err_str(rc));
     s.map = modbus_mapping_new(0, 0, EF_MB_REGS, 0);

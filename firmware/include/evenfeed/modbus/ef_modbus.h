@@ -29,7 +29,7 @@ extern "C" {
 /**@{*/
 #define EF_MB_REG_MAGIC      0x0000 /**< 0x4546 ("EF") */
 #define EF_MB_REG_VERSION    0x0001 /**< register map version, ::EF_MB_MAP_VERSION */
-#define EF_MB_REG_AXES       0x0002 /**< axes per slot (3: x, y, z) */
+#define EF_MB_REG_AXES       0x0002 /**< axes per slot: 3 (x, y, z) or 1 (a single-axis drive) */
 #define EF_MB_REG_SLOTS      0x0003 /**< slots in the ring, ::EF_DRIVE_SLOTS */
 #define EF_MB_REG_SLOT_WORDS 0x0004 /**< registers per slot, ::EF_MB_SLOT_WORDS */
 #define EF_MB_REG_SESSION                                                                          \
@@ -95,7 +95,7 @@ extern "C" {
 /** @name Segment ring: slot k at EF_MB_REG_SLOT0 + k * EF_MB_SLOT_WORDS, written whole */
 /**@{*/
 #define EF_MB_REG_SLOT0 0x0100
-#define EF_MB_AXES      3
+#define EF_MB_AXES      3 /**< axes of the X Y Z drive's slot (register 0x0002 reads 3) */
 /* Word offsets inside a slot. */
 #define EF_MB_SLOT_SEQ 0 /**< u32 sequence number; the slot index is seq % slots */
 #define EF_MB_SLOT_FORMAT                                                                          \
@@ -113,7 +113,17 @@ extern "C" {
 #define EF_MB_SLOT_FLAG_STOP 0x01u
 /**@}*/
 
-/** Registers in the map (reads at or above this are ILLEGAL DATA ADDRESS). */
+/** @name The single-axis drive's slot (register 0x0002 reads 1)
+ * Words 0..79 as the X Y Z slot (sequence, format, duration, the X Y Z arc length, v_exit,
+ * the time law), then the axis's control values b[0..5] as one float each, then the CRC. */
+/**@{*/
+#define EF_MB_AXES1       1u /**< axes of the single-axis drive's slot */
+#define EF_MB_SLOT1_CRC   92 /**< CRC-16/MODBUS of words 0..91 */
+#define EF_MB_SLOT1_WORDS 93 /**< registers per slot of a single-axis drive */
+/**@}*/
+
+/** Registers in the X Y Z drive's map (reads at or above this are ILLEGAL DATA ADDRESS); the
+ *  largest map of any drive (a single-axis drive's ends at ef_mbdev_regs()). */
 #define EF_MB_REGS (EF_MB_REG_SLOT0 + EF_DRIVE_SLOTS * EF_MB_SLOT_WORDS)
 
 /** @name Modbus exception codes the device answers with */
@@ -144,6 +154,30 @@ uint16_t ef_mb_crc_words(const uint16_t *w, uint32_t n);
 int ef_mb_slot_encode(const ef_move_t *m, uint16_t w[EF_MB_SLOT_WORDS]);
 
 /**
+ * @brief Registers per slot of a drive carrying axes axes per slot.
+ * @return ::EF_MB_SLOT_WORDS for 3, ::EF_MB_SLOT1_WORDS for 1, 0 for any other count
+ */
+uint32_t ef_mb_slot_words(uint32_t axes);
+
+/**
+ * @brief Encode a move into the slot of a drive carrying axes axes (3: b[i].x, y, z; 1:
+ * b[i].x only, the single-axis drive's layout), CRC included. axes 3 is ef_mb_slot_encode().
+ * @param w ef_mb_slot_words(axes) registers
+ * @retval EF_OK
+ * @retval EF_ERR_ARG       NULL, axes not 1 or 3, degree not 1/3/5, duration not > 0
+ * @retval EF_ERR_NONFINITE a non-finite number in the fields used
+ */
+int ef_mb_slot_encode_axes(const ef_move_t *m, uint32_t axes, uint16_t *w);
+
+/**
+ * @brief Decode and check the slot of a drive carrying axes axes (1: the control values go
+ * to b[i].x, b[i].y = b[i].z = 0). axes 3 is ef_mb_slot_decode().
+ * @param w ef_mb_slot_words(axes) registers
+ * @retval as ef_mb_slot_decode(); EF_ERR_ARG also for axes not 1 or 3
+ */
+int ef_mb_slot_decode_axes(const uint16_t *w, uint32_t axes, ef_move_t *m);
+
+/**
  * @brief Decode and check a slot. Fields not carried are zero.
  * @retval EF_OK
  * @retval EF_ERR_ARG       NULL, degree not 1/3/5, flags or reserved word not as
@@ -163,6 +197,8 @@ float ef_mb_get_f32(const uint16_t *w);
 /** The drive-side register device (public for static allocation; treat as private). */
 typedef struct {
     ef_drive_t drv;
+    uint16_t axes;       /**< axes per slot: 3 (x, y, z) or 1 (the axis in x; y = z = 0) */
+    uint16_t slot_words; /**< ef_mb_slot_words(axes) */
     uint16_t session;
     uint16_t control;     /**< last written command word */
     uint16_t mode;        /**< EF_MB_MODE_* */
@@ -170,7 +206,8 @@ typedef struct {
     uint32_t quiet_us;    /**< time since the last request (saturates) */
     uint16_t rejected, duplicates;
     uint16_t target[EF_MB_TARGET_WORDS];
-    uint16_t slot[EF_DRIVE_SLOTS][EF_MB_SLOT_WORDS]; /**< last accepted content (read back) */
+    uint16_t slot[EF_DRIVE_SLOTS][EF_MB_SLOT_WORDS]; /**< last accepted content (read back;
+                                                          the first slot_words of each) */
 } ef_mbdev_t;
 
 /**
@@ -182,6 +219,25 @@ typedef struct {
  */
 int ef_mbdev_init(ef_mbdev_t *dev, const ef_servo_cfg_t *cfg, ef_vec3_t home, uint32_t period_us,
                   uint16_t session);
+
+/**
+ * @brief ef_mbdev_init() for a drive of axes axes per slot: 3 (the X Y Z drive, what
+ * ef_mbdev_init() makes) or 1 (a single-axis drive: its axis is the drive's x; home.y and
+ * home.z must be 0, and y and z stay 0).
+ * @retval EF_OK
+ * @retval EF_ERR_ARG axes not 1 or 3, home.y or home.z not 0 on a single-axis drive, or as
+ *                    ef_mbdev_init()
+ * @retval EF_ERR_NONFINITE home not finite
+ */
+int ef_mbdev_init_axes(ef_mbdev_t *dev, const ef_servo_cfg_t *cfg, ef_vec3_t home,
+                       uint32_t period_us, uint16_t session, uint32_t axes);
+
+/**
+ * @brief Registers in the device's map: ::EF_MB_REG_SLOT0 + slots x its slot size (::EF_MB_REGS
+ * for the X Y Z drive).
+ * @return the count, 0 for NULL
+ */
+uint32_t ef_mbdev_regs(const ef_mbdev_t *dev);
 
 /**
  * @brief A read request of n registers from addr (FC3). Fills out[0..n-1] from the live
@@ -196,7 +252,7 @@ int ef_mbdev_read(ef_mbdev_t *dev, uint16_t addr, uint16_t n, uint16_t *out, uin
  * @brief A write request of n registers at addr (FC6: n == 1, FC16). Validated whole
  * before anything changes; counts as traffic for the watchdog.
  * Writable: the control block (any part of 0x10..0x12), the target block (all 6) and a
- * slot (all ::EF_MB_SLOT_WORDS, seq % slots == its index). A duplicate slot (sequence
+ * slot (all of its slot_words, seq % slots == its index). A duplicate slot (sequence
  * number already accepted) is acknowledged without queueing (EF_OK, counted).
  * @param exc out: the Modbus exception to answer with, ::EF_MB_EX_NONE on success
  * @retval EF_OK

@@ -29,6 +29,13 @@
 extern "C" {
 #endif
 
+/** ef_mb_cfg_t::axis of an X Y Z drive (3 axes per slot). */
+#define EF_MB_AXIS_XYZ 0
+/** Largest ef_mb_cfg_t::axis: 1..9 are x y z a b c u v w. */
+#define EF_MB_AXIS_MAX 9
+/** Most drives one stream takes (nine single-axis drives). */
+#define EF_MB_MAX_DRIVES 9
+
 /** Where a drive is and how to talk to it. */
 typedef struct {
     int rtu;              /**< 0: Modbus TCP, 1: Modbus RTU */
@@ -44,6 +51,10 @@ typedef struct {
     int retries;          /**< further attempts after a failed transaction */
     double reconnect_s;   /**< how long to keep trying to reconnect (s) */
     uint16_t watchdog_ms; /**< the drive's watchdog while streaming (0: off) */
+    /** What the drive carries: ::EF_MB_AXIS_XYZ (0, default) a 3-axis drive (register
+     *  0x0002 reads 3), 1..9 one axis of x y z a b c u v w on a single-axis drive (0x0002
+     *  reads 1). ef_mb_open() refuses a drive that reports the other kind. */
+    int axis;
     /** Optional, called before every status poll (also in the master's waits for free
      *  slots and for the drain), from the caller's thread: nonzero stops what the master was
      *  doing with that code (the message in m). The machine I/O's e-stop check. */
@@ -52,7 +63,7 @@ typedef struct {
 } ef_mb_cfg_t;
 
 /** Defaults: slave 1, timeout 0.2 s, 3 retries, reconnect 2 s, watchdog 1000 ms, RTU
- *  115200 8N1. */
+ *  115200 8N1, an X Y Z drive. */
 void ef_mb_cfg_default(ef_mb_cfg_t *c);
 
 /**
@@ -61,6 +72,16 @@ void ef_mb_cfg_default(ef_mb_cfg_t *c);
  * @retval EF_ERR_ARG malformed (message says which part)
  */
 int ef_mb_url_parse(const char *url, ef_mb_cfg_t *c, ef_msg_t *m);
+
+/**
+ * @brief Parse what a drive carries: "xyz", or one letter of x y z a b c u v w (either case).
+ * @retval EF_OK      *axis set (::EF_MB_AXIS_XYZ, or 1..9)
+ * @retval EF_ERR_ARG anything else
+ */
+int ef_mb_axis_parse(const char *s, int *axis);
+
+/** @brief "xyz", "x" .. "w" for ef_mb_cfg_t::axis ("?" out of range). */
+const char *ef_mb_axis_name(int axis);
 
 /** A drive's status block as the master last read it. */
 typedef struct {
@@ -160,6 +181,41 @@ int ef_mb_fault_reset(ef_mb_master_t *ms, ef_msg_t *m);
  */
 int ef_mb_hold(ef_mb_master_t *ms, int on, ef_msg_t *m);
 
+/**
+ * @brief Several drives: ef_mb_send() never writes START itself (on != 0); the caller fills
+ * every drive's ring, then starts them back to back with ef_mb_start(). A send that finds
+ * the ring full before the start fails (::EF_ERR_STATE) rather than wait.
+ * @retval EF_OK
+ * @retval EF_ERR_ARG NULL
+ */
+int ef_mb_set_manual_start(ef_mb_master_t *ms, int on);
+
+/**
+ * @brief Segment mode: write START unless the drive was started.
+ * @retval EF_OK
+ * @retval EF_ERR_STATE not begun in segment mode
+ * @retval others as the control write
+ */
+int ef_mb_start(ef_mb_master_t *ms, ef_msg_t *m);
+
+/**
+ * @brief A status read with the checks of the stream (a fault, a restart, a drive that
+ * left ENABLED before the start or RUNNING after it); ef_mb_cfg_t::on_poll runs first.
+ * @retval EF_OK
+ * @retval EF_ERR_DRIVE the drive faulted, restarted or left its state (message says)
+ * @retval others as ef_mb_read_status(), or on_poll's code
+ */
+int ef_mb_poll(ef_mb_master_t *ms, ef_msg_t *m);
+
+/** @brief Whether START was written (0 for NULL). */
+int ef_mb_started(const ef_mb_master_t *ms);
+
+/** @brief Segments acknowledged since the begin (0 for NULL). */
+uint32_t ef_mb_sent(const ef_mb_master_t *ms);
+
+/** @brief Slots in the drive's ring, from its identification (0 for NULL). */
+uint32_t ef_mb_slots(const ef_mb_master_t *ms);
+
 /** @brief Best effort controlled stop (quick stop command); the drive's answer is ignored
  *  beyond being logged in m. */
 int ef_mb_quick_stop(ef_mb_master_t *ms, ef_msg_t *m);
@@ -187,6 +243,17 @@ typedef struct {
     /** Called with every move before it is sent (may be NULL; nonzero stops). */
     int (*on_move)(void *user, const ef_move_t *mv);
     void *user;
+    /** Several drives, one per axis (or one X Y Z drive and single-axis ones): 0 or 1
+     *  streams to the one drive in mb, as before; 2..::EF_MB_MAX_DRIVES to drives[0..n-1]
+     *  (mb is then not used). Each drive's ef_mb_cfg_t::axis says what it carries; X Y Z
+     *  must be carried once each, and the auxiliary axes from A on without a gap (the
+     *  pipeline's naux is their count). Segment mode only. */
+    int n_drives;
+    ef_mb_cfg_t drives[EF_MB_MAX_DRIVES];
+    /** Several drives: largest difference of their executed times (register 0x002C) at a
+     *  status poll before every drive is stopped (s; default 0.02). Modbus has no SYNC:
+     *  each drive runs on its own clock from its START. */
+    double skew_max_s;
     /** Machine I/O (ef_mio.h), open and SAFE; NULL: none. Armed before the drive is
      *  contacted (an active e-stop, latch or alarm refuses the stream: nothing is written),
      *  read at every poll and setpoint; a trip stops the drive under control (the disable
@@ -198,29 +265,41 @@ typedef struct {
 } ef_mb_stream_cfg_t;
 
 /** Defaults: ef_mb_cfg_default(), ef_pipe_cfg_default() with the tables g2 and g1, segment
- *  mode, 50 targets/s in direct mode, no callback. */
+ *  mode, 50 targets/s in direct mode, no callback, one drive, skew bound 20 ms. */
 void ef_mb_stream_cfg_default(ef_mb_stream_cfg_t *c, const ef_table_t *g2, const ef_table_t *g1);
 
 /** Result of a stream. */
 typedef struct {
-    uint32_t moves;   /**< segments sent */
-    uint32_t targets; /**< direct targets sent */
-    double path_time; /**< sum of the durations (s) */
-    double wall_time; /**< from the start of smoothing to the drained end (s) */
-    ef_mb_stats_t io;
-    ef_mb_status_t last; /**< the drive's status at the end */
-    uint32_t outputs;    /**< M62-M65 outputs switched (machine I/O) */
-    uint32_t estop_line; /**< after an e-stop: the program line being executed (0: none) */
-    uint32_t holds;      /**< feed holds begun (machine I/O) */
-    double held_s;       /**< time held (s): segment mode, the drive reporting it stands;
-                              direct mode, the targets given at rate 0 */
+    uint32_t moves;      /**< segments sent */
+    uint32_t targets;    /**< direct targets sent */
+    double path_time;    /**< sum of the durations (s) */
+    double wall_time;    /**< from the start of smoothing to the drained end (s) */
+    ef_mb_stats_t io;    /**< the (first) drive's master's counters */
+    ef_mb_status_t last; /**< the (first) drive's status at the end */
+    uint32_t n_drives;   /**< drives streamed to (1 for the one drive in mb) */
+    ef_mb_status_t drive[EF_MB_MAX_DRIVES];   /**< each drive's status at the end */
+    ef_mb_stats_t drive_io[EF_MB_MAX_DRIVES]; /**< each drive's master's counters */
+    double skew_max_s;    /**< several drives: largest executed-time difference seen (s) */
+    uint32_t skew_checks; /**< several drives: status rounds whose skew was measured */
+    int failed_drive;     /**< index of the drive an error came from, -1: none or not one */
+    uint32_t outputs;     /**< M62-M65 outputs switched (machine I/O) */
+    uint32_t estop_line;  /**< after an e-stop: the program line being executed (0: none) */
+    uint32_t holds;       /**< feed holds begun (machine I/O) */
+    double held_s;        /**< time held (s): segment mode, the drive reporting it stands;
+                               direct mode, the targets given at rate 0 */
     ef_pipe_stats_t pipe;
 } ef_mb_stream_result_t;
 
 /**
  * @brief Smooth a program and stream it: open, begin, send every move (or targets), drain,
  * disable. On any error after the drive was enabled it asks for a quick stop.
+ * Several drives (ef_mb_stream_cfg_t::n_drives): each gets every move (its axis's values),
+ * same sequence numbers and time law; every ring is filled, then every drive started back
+ * to back; any drive's fault, restart or silence, or executed times apart by more than
+ * skew_max_s, quick-stops every drive, and the message names the drive.
  * @retval EF_OK or the first error (message says what and where)
+ * @retval EF_ERR_ARG a bad drive list (an axis carried twice, X Y Z not all carried, a gap
+ *                    in the auxiliary axes, direct mode), before any drive is contacted
  */
 int ef_mb_stream(ef_gcode_t *r, const ef_mb_stream_cfg_t *c, ef_mb_stream_result_t *res,
                  ef_msg_t *m);
@@ -228,6 +307,8 @@ int ef_mb_stream(ef_gcode_t *r, const ef_mb_stream_cfg_t *c, ef_mb_stream_result
 /** Simulated drive server configuration. */
 typedef struct {
     ef_mb_cfg_t mb; /**< where to listen (TCP host:port, or the RTU device) */
+    int axes;       /**< axes per slot: 3 (an X Y Z drive, the default) or 1 (a single-axis
+                         drive: its axis is x, home[1] and home[2] must be 0) */
     ef_servo_cfg_t servo;
     float home[3];
     uint32_t period_us;
@@ -249,7 +330,8 @@ typedef struct {
     volatile sig_atomic_t *stop; /**< set by a signal handler to end the server */
 } ef_mb_server_cfg_t;
 
-/** Defaults: TCP 127.0.0.1:1502, servo defaults, home 0, 1000 us, real time, no faults. */
+/** Defaults: TCP 127.0.0.1:1502, 3 axes, servo defaults, home 0, 1000 us, real time, no
+ *  faults. */
 void ef_mb_server_cfg_default(ef_mb_server_cfg_t *c);
 
 /**
