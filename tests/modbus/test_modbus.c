@@ -512,6 +512,21 @@ static void test_faults(void)
     free(T.row);
 }
 
+/* A line from 0 to x1 along X, 0.1 s at 10 units/s, ending at rest (a slot's content). */
+static ef_move_t tm_line_move(float x1)
+{
+    ef_move_t m;
+    memset(&m, 0, sizeof m);
+    m.degree = 1;
+    m.b[1].x = x1;
+    m.length = 1.0f;
+    m.duration = 0.1f;
+    m.law.dt[0] = 0.1f;
+    m.law.c[0][1] = 10.0f;
+    m.flags = EF_MOVE_STOP_END;
+    return m;
+}
+
 /* Bad requests from a raw client get exceptions, never a crash; the drive still answers. */
 static void test_bad(void)
 {
@@ -540,15 +555,7 @@ static void test_bad(void)
     /* Enable, then a partial slot, a corrupt slot, a slot in the wrong place. */
     EF_CHECK_EQ(modbus_write_register(ctx, EF_MB_REG_CONTROL, EF_MB_CTL_CLEAR | EF_MB_CTL_ENABLE),
                 1);
-    ef_move_t mv;
-    memset(&mv, 0, sizeof mv);
-    mv.degree = 1;
-    mv.b[1].x = 1.0f;
-    mv.length = 1.0f;
-    mv.duration = 0.1f;
-    mv.law.dt[0] = 0.1f;
-    mv.law.c[0][1] = 10.0f;
-    mv.flags = EF_MOVE_STOP_END;
+    ef_move_t mv = tm_line_move(1.0f);
     EF_CHECK_EQ(ef_mb_slot_encode(&mv, r), EF_OK);
     EF_CHECK_EQ(modbus_write_registers(ctx, EF_MB_REG_SLOT0, 10, r), -1);
     EF_CHECK_EQ(errno, EMBXILADD);
@@ -735,15 +742,7 @@ static void test_codec(void)
     EF_CHECK_EQ(exc, EF_MB_EX_ILLEGAL_ADDRESS);
     uint16_t cw = EF_MB_CTL_CLEAR | EF_MB_CTL_ENABLE;
     EF_CHECK_EQ(ef_mbdev_write(&dev, EF_MB_REG_CONTROL, 1, &cw, &exc), EF_OK);
-    ef_move_t ln;
-    memset(&ln, 0, sizeof ln);
-    ln.degree = 1;
-    ln.b[1].x = 2.0f;
-    ln.length = 1.0f;
-    ln.duration = 0.1f;
-    ln.law.dt[0] = 0.1f;
-    ln.law.c[0][1] = 10.0f;
-    ln.flags = EF_MOVE_STOP_END;
+    ef_move_t ln = tm_line_move(2.0f);
     ln.seq = 1; /* into slot 0: the wrong slot */
     EF_CHECK_EQ(ef_mb_slot_encode_axes(&ln, 1, w1), EF_OK);
     EF_CHECK_EQ(ef_mbdev_write(&dev, EF_MB_REG_SLOT0, EF_MB_SLOT1_WORDS, w1, &exc), EF_ERR_SEQ);
@@ -856,16 +855,25 @@ static int tm_cli_stream(const tm_trio_t *T, const char *args, const char *prog,
     return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
 }
 
+/* Write the X Y Z A B test program into the work directory; its path into prog. */
+static void tm_axes_prog_write(char *prog, size_t n)
+{
+    snprintf(prog, n, "%s/modbus-axes.ngc", work_dir);
+    FILE *f = fopen(prog, "w");
+    EF_CHECK(f != NULL);
+    if (!f)
+        return;
+    fputs(tm_axes_prog, f);
+    fclose(f);
+}
+
 /* One XYZ drive and single-axis A and B drives (three sim-drive processes): the program
  * streamed with `evenfeed stream`; every drive executes every segment in order and ends at
  * its axis's programmed end, within its following-error limit. */
 static void test_axes(void)
 {
     char prog[512], out[8192];
-    snprintf(prog, sizeof prog, "%s/modbus-axes.ngc", work_dir);
-    FILE *f = fopen(prog, "w");
-    fputs(tm_axes_prog, f);
-    fclose(f);
+    tm_axes_prog_write(prog, sizeof prog);
     tm_trio_t T;
     if (tm_trio_start(&T, "axes", NULL) != 0)
         return;
@@ -1033,10 +1041,7 @@ static void test_axesfault(void)
 static void test_axesbad(void)
 {
     char prog[512], out[8192];
-    snprintf(prog, sizeof prog, "%s/modbus-axes.ngc", work_dir);
-    FILE *f = fopen(prog, "w");
-    fputs(tm_axes_prog, f);
-    fclose(f);
+    tm_axes_prog_write(prog, sizeof prog);
     tm_trio_t T;
     if (tm_trio_start(&T, "axesbad", NULL) != 0)
         return;
