@@ -432,18 +432,6 @@ static int prim_aux_moving(const ef_move_t *m)
     return z == 0.0f ? mask : -1;
 }
 
-/* A scalar Bernstein polynomial of degree n (<= 4) at t (de Casteljau). */
-static float prim_bern(const float *c, int n, float t)
-{
-    float w[5];
-    for (int i = 0; i <= n; i++)
-        w[i] = c[i];
-    for (int r = 1; r <= n; r++)
-        for (int i = 0; i + r <= n; i++)
-            w[i] += t * (w[i + 1] - w[i]);
-    return w[0];
-}
-
 /* Measure a move's length, curvature bound and tangent bounds (contract in ef_path.h). */
 int ef_move_measure(ef_move_t *m)
 {
@@ -494,8 +482,8 @@ int ef_move_measure(ef_move_t *m)
         return EF_OK;
     }
 
-    /* The moving auxiliary axes' hodographs (scalars, not elevated: prim_bern() takes any
-     * degree). */
+    /* The moving auxiliary axes' hodographs (scalars, not elevated: ef_bezier_eval_scalar() takes
+     * any degree). */
     float a1[EF_AUX_N][5], a2[EF_AUX_N][4], a3[EF_AUX_N][3];
     float aab[EF_AUX_N], aak[EF_AUX_N], aaj[EF_AUX_N];
     for (int k = 0; k < EF_AUX && amask; k++) {
@@ -573,8 +561,9 @@ int ef_move_measure(ef_move_t *m)
         for (int q = 0; q < EF_AUX && amask; q++) {
             if (!(amask & (1 << q)))
                 continue;
-            float e1 = prim_bern(a1[q], deg - 1, t), e2 = prim_bern(a2[q], deg - 2, t);
-            float e3 = prim_bern(a3[q], deg - 3, t);
+            float e1 = ef_bezier_eval_scalar(a1[q], deg - 1, t),
+                  e2 = ef_bezier_eval_scalar(a2[q], deg - 2, t);
+            float e3 = ef_bezier_eval_scalar(a3[q], deg - 3, t);
             float ka = (e2 - s1 * e1 * isp) * isp * isp;
             float ja = e3 * i3 - 3.0f * s1 * i4 * e2 + (3.0f * s1 * s1 * i4 * isp - s2 * i4) * e1;
             aab[q] = ef_maxf(aab[q], ef_fabsf(e1) * w);

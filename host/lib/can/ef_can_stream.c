@@ -535,19 +535,6 @@ static int cs_check_start(cs_t *S, const float *p)
                               at, dr);
 }
 
-/* Auxiliary axis k of a move at parameter t (de Casteljau on its control values). */
-static float cs_aux_at(const ef_move_t *mv, int k, float t)
-{
-    float w[6];
-    int n = mv->degree <= 5 ? mv->degree : 5;
-    for (int i = 0; i <= n; i++)
-        w[i] = mv->ab[k][i];
-    for (int r = 1; r <= n; r++)
-        for (int i = 0; i + r <= n; i++)
-            w[i] += t * (w[i + 1] - w[i]);
-    return w[0];
-}
-
 /* Segment mode: each planned move goes to the master's queue (pumping while it is full). */
 static int cs_move(void *user, const ef_move_t *mv, const ef_pipe_move_info_t *mi)
 {
@@ -565,7 +552,8 @@ static int cs_move(void *user, const ef_move_t *mv, const ef_pipe_move_info_t *m
             S->mring[k].p[j][1] = q.y;
             S->mring[k].p[j][2] = q.z;
             for (int a = 3; a < S->c->n_nodes; a++)
-                S->mring[k].p[j][a] = cs_aux_at(mv, a - 3, (float)j / (CS_MPTS - 1));
+                S->mring[k].p[j][a] =
+                    ef_bezier_eval_scalar(mv->ab[a - 3], mv->degree, (float)j / (CS_MPTS - 1));
         }
     }
     if (mv->duration > S->longest)

@@ -51,6 +51,24 @@ int ef_bezier_elevate(const ef_vec3_t *b, int degree, ef_vec3_t *out);
 int ef_bezier_functional(const ef_vec3_t *b, int degree, float *out);
 
 /**
+ * @brief A scalar Bezier polynomial at t by de Casteljau's algorithm: one axis's control
+ * values (an auxiliary axis's ef_move_t::ab, or their differences for its derivatives).
+ * @param c      degree+1 control values
+ * @param degree 0..EF_BEZIER_MAX_DEGREE (clamped to that range)
+ */
+static inline float ef_bezier_eval_scalar(const float *c, int degree, float t)
+{
+    float w[EF_BEZIER_MAX_DEGREE + 1];
+    int n = degree < 0 ? 0 : (degree > EF_BEZIER_MAX_DEGREE ? EF_BEZIER_MAX_DEGREE : degree);
+    for (int i = 0; i <= n; i++)
+        w[i] = c[i];
+    for (int r = 1; r <= n; r++)
+        for (int i = 0; i + r <= n; i++)
+            w[i] += t * (w[i + 1] - w[i]);
+    return w[0];
+}
+
+/**
  * @brief Point of a degree-4 Bezier curve (a quintic's hodograph) at t: the control points
  * weighted by the Bernstein polynomials (all positive, so no cancellation: as accurate as de
  * Casteljau's algorithm, at a fraction of its instructions).
