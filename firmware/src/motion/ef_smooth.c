@@ -253,6 +253,70 @@ static int sm_aux_blend(ef_smooth_t *s, const ef_smooth_prim_t *h, const ef_smoo
     return ef_move_measure_aux(m);
 }
 
+/* The auxiliary axes of smooth section m on held line h, from h's arc length trim_start
+ * to d1: per axis the quintic from the value and rate (units per unit of X Y Z length)
+ * where it starts (at a smooth vertex the rate both sides share there, h->ar_s; else h's
+ * own) to those where it ends (ar_e, NULL: h's own), with zero second derivative by arc
+ * length at both ends, built as a blend's (sm_aux_blend()), so consecutive sections join G2
+ * on every axis. 1 when every axis stays within its tolerance of h's programmed value
+ * (linear along the chord, at the point's place along it) at the move's samples and its
+ * bounds are measured, else 0 (the vertex is then a corner). Only quintic sections carry
+ * a moving axis (the gate). */
+static int sm_aux_section(ef_smooth_t *s, const ef_smooth_prim_t *h, const float *ar_e, float d1,
+                          ef_move_t *m)
+{
+    if (s->cfg.naux == 0)
+        return 1;
+    for (int k = 0; k < EF_AUX_N; k++)
+        for (int i = 0; i < 6; i++)
+            m->ab[k][i] = 0.0f;
+    if (!h->amove) { /* constant, as sm_aux_span() makes it */
+        for (int k = 0; k < s->cfg.naux; k++)
+            for (int i = 0; i <= m->degree; i++)
+                m->ab[k][i] = h->astart[k];
+        return ef_move_measure_aux(m) == EF_OK;
+    }
+    if (m->degree != 5)
+        return 0;
+    const ef_vec3_t *b = m->b;
+    ef_vec3_t d10 = ef_v3_scale(ef_v3_sub(b[1], b[0]), 5.0f);
+    ef_vec3_t d11 = ef_v3_scale(ef_v3_sub(b[5], b[4]), 5.0f);
+    ef_vec3_t d20 = ef_v3_scale(ef_v3_add(ef_v3_sub(b[2], ef_v3_scale(b[1], 2.0f)), b[0]), 20.0f);
+    ef_vec3_t d21 = ef_v3_scale(ef_v3_add(ef_v3_sub(b[5], ef_v3_scale(b[4], 2.0f)), b[3]), 20.0f);
+    float sp0 = ef_v3_norm(d10), sp1 = ef_v3_norm(d11);
+    float s10 = ef_v3_dot(d10, d20) / ef_maxf(sp0, 1e-30f);
+    float s11 = ef_v3_dot(d11, d21) / ef_maxf(sp1, 1e-30f);
+    int smooth_start = h->start_smooth && !h->start_stop;
+    ef_vec3_t dir = sm_dir(h);
+    for (int k = 0; k < s->cfg.naux; k++) {
+        float own = sm_aux_rate(h, k);
+        float p0 = sm_aux_at(h, k, h->trim_start), p1 = sm_aux_at(h, k, d1);
+        float k0 = smooth_start ? h->ar_s[k] : own, k1 = ar_e ? ar_e[k] : own;
+        float v0 = k0 * sp0, v1 = k1 * sp1, w0 = k0 * s10, w1 = k1 * s11;
+        float *c = m->ab[k];
+        c[0] = p0;
+        c[1] = p0 + v0 * 0.2f;
+        c[2] = p0 + v0 * 0.4f + w0 * 0.05f;
+        c[3] = p1 - v1 * 0.4f + w1 * 0.05f;
+        c[4] = p1 - v1 * 0.2f;
+        c[5] = p1;
+        /* float32 rounding of the values themselves is not a deviation */
+        float slack = 1e-6f * (ef_fabsf(p0) + ef_fabsf(p1)) + 1e-9f;
+        float dev = 0.0f;
+        for (int i = 1; i < EF_MOVE_SAMPLES; i++) {
+            float t = (float)i / (float)EF_MOVE_SAMPLES;
+            ef_vec3_t q;
+            (void)ef_bezier_eval(b, 5, t, 0, &q);
+            float u = ef_minf(ef_maxf(ef_v3_dot(ef_v3_sub(q, h->start), dir), 0.0f), h->len);
+            dev = ef_maxf(dev, ef_fabsf(ef_bezier_eval_scalar(c, 5, t) - sm_aux_at(h, k, u)));
+        }
+        if (!(dev <= s->cfg.aux_tol[k] + slack))
+            return 0;
+        s->st.aux_dev_max = ef_maxf(s->st.aux_dev_max, dev);
+    }
+    return ef_move_measure_aux(m) == EF_OK;
+}
+
 /* h's feed, capped by what its auxiliary axes' speed limits leave the path (the speed the
  * lines around a corner run at, which a blend is weighed against). */
 static float sm_aux_vmax(const ef_smooth_t *s, const ef_smooth_prim_t *h)
@@ -621,10 +685,14 @@ static int sm_section_curve(ef_smooth_t *s, const ef_smooth_prim_t *h, const ef_
 }
 
 /* The second unit: that curve measured against h's input points pts (NULL: from the chord
- * only). 1 when the section is a move within h's tolerance, else 0. */
-static int sm_section_fits(const ef_smooth_prim_t *h, const ef_vec3_t *pts, ef_move_t *m)
+ * only), its auxiliary axes built and measured (sm_aux_section(): rates ar_e where it ends
+ * at h's arc length d1, NULL for h's own). 1 when the section is a move within h's
+ * tolerances, else 0. */
+static int sm_section_fits(ef_smooth_t *s, const ef_smooth_prim_t *h, const ef_vec3_t *pts,
+                           const float *ar_e, float d1, ef_move_t *m)
 {
-    return sm_smooth_measure(m, h, pts) == EF_OK && sm_move_ok(m) && m->dev <= h->pr.tol;
+    return sm_smooth_measure(m, h, pts) == EF_OK && sm_move_ok(m) && m->dev <= h->pr.tol &&
+           sm_aux_section(s, h, ar_e, d1, m);
 }
 
 /* Legendre polynomials P0..P4 and their first two derivatives at x. */
@@ -857,6 +925,13 @@ static void sm_section_keep(ef_smooth_prim_t *h, const ef_move_t *m)
     h->sec_tabs = m->tabs;
     h->sec_kabs = m->kabs;
     h->sec_kjerk = m->kjerk;
+    for (int k = 0; k < EF_AUX_N; k++) {
+        for (int i = 0; i < 6; i++)
+            h->sec_ab[k][i] = m->ab[k][i];
+        h->sec_atabs[k] = m->atabs[k];
+        h->sec_akabs[k] = m->akabs[k];
+        h->sec_akjerk[k] = m->akjerk[k];
+    }
 }
 
 /* The move of held line h's kept section (sec == 1), as sm_section_build() made it. */
@@ -877,6 +952,13 @@ static void sm_section_emit(const ef_smooth_prim_t *h, ef_move_t *m)
     m->kabs = h->sec_kabs;
     m->kjerk = h->sec_kjerk;
     m->dev = h->sec_dev; /* measured against the input points when it was fitted */
+    for (int k = 0; k < EF_AUX_N; k++) {
+        for (int i = 0; i < 6; i++)
+            m->ab[k][i] = h->sec_ab[k][i];
+        m->atabs[k] = h->sec_atabs[k];
+        m->akabs[k] = h->sec_akabs[k];
+        m->akjerk[k] = h->sec_akjerk[k];
+    }
 }
 
 /* Time a ramp between speed v and v_hi (> v) loses against covering its distance at v_hi:
@@ -946,6 +1028,8 @@ static void sm_job_smooth(ef_smooth_t *s, ef_smooth_prim_t *a, ef_smooth_prim_t 
     a->fe = s->jf;
     b->start_smooth = 1;
     b->fs = s->jf;
+    for (int k = 0; k < EF_AUX_N; k++)
+        a->ar_e[k] = b->ar_s[k] = s->jar[k];
     s->st.smooth++;
     sm_job_decided(s, a, b);
 }
@@ -994,7 +1078,7 @@ static const ef_vec3_t *sm_run_after(ef_smooth_t *s, const ef_smooth_prim_t *b)
     if (i + 1u >= s->pn)
         return (const ef_vec3_t *)0;
     const ef_smooth_prim_t *c = sm_held(s, i + 1u);
-    if (c->pr.kind != EF_PRIM_LINE || c->amove || c->aux_only || c->piece_max > s->cfg.micro_len ||
+    if (c->pr.kind != EF_PRIM_LINE || c->aux_only || c->piece_max > s->cfg.micro_len ||
         !sm_continues(s, sm_dir(b), b->len, sm_dir(c), c->len))
         return (const ef_vec3_t *)0;
     return &c->pr.end;
@@ -1015,10 +1099,18 @@ static void sm_job_step(ef_smooth_t *s, ef_smooth_prim_t *a, ef_smooth_prim_t *b
         }
         /* The section ending here is final once this vertex is: built and measured now, so
          * a section that does not fit makes this vertex a corner, not an exact stop. */
-        if (a->pr.kind == EF_PRIM_LINE && b->pr.kind == EF_PRIM_LINE && !a->amove && !b->amove &&
-            sm_smooth_gate(s, a, b, sm_run_before(s, a), sm_run_after(s, b), b->pr.tol, &s->jf))
+        if (a->pr.kind == EF_PRIM_LINE && b->pr.kind == EF_PRIM_LINE &&
+            (s->cfg.smooth_degree == 5 || (!a->amove && !b->amove)) &&
+            sm_smooth_gate(s, a, b, sm_run_before(s, a), sm_run_after(s, b), b->pr.tol, &s->jf)) {
+            /* the auxiliary axes' rates at the vertex: the three-point slope through it,
+             * (ra lb + rb la) / (la + lb), which both sections meet */
+            for (int k = 0; k < EF_AUX_N; k++)
+                s->jar[k] = k < s->cfg.naux
+                                ? (sm_aux_rate(a, k) * b->len + sm_aux_rate(b, k) * a->len) /
+                                      (a->len + b->len)
+                                : 0.0f;
             s->job = !a->start_smooth && a->start_stop ? EF_J_SMOOTH_ARC : EF_J_SMOOTH;
-        else
+        } else
             s->job = EF_J_BLEND;
         return;
     case EF_J_SMOOTH_ARC:
@@ -1036,7 +1128,7 @@ static void sm_job_step(ef_smooth_t *s, ef_smooth_prim_t *a, ef_smooth_prim_t *b
         }
         return;
     case EF_J_SMOOTH_ARC_M:
-        if (sm_section_fits(a, pts, &s->jtrial)) {
+        if (sm_section_fits(s, a, pts, s->jar, a->len, &s->jtrial)) {
             sm_job_smooth(s, a, b);
             return;
         }
@@ -1048,7 +1140,7 @@ static void sm_job_step(ef_smooth_t *s, ef_smooth_prim_t *a, ef_smooth_prim_t *b
             sm_section_curve(s, a, &s->jf, 0.0f, &s->jtrial) == EF_OK ? EF_J_SMOOTH_M : EF_J_BLEND;
         return;
     case EF_J_SMOOTH_M:
-        if (sm_section_fits(a, pts, &s->jtrial))
+        if (sm_section_fits(s, a, pts, s->jar, a->len, &s->jtrial))
             sm_job_smooth(s, a, b);
         else
             s->job = EF_J_BLEND;
@@ -1136,7 +1228,7 @@ static void sm_job_step(ef_smooth_t *s, ef_smooth_prim_t *a, ef_smooth_prim_t *b
                                                                            : EF_J_CLOSE;
         return;
     case EF_J_CLOSE_ARC_M:
-        if (sm_section_fits(a, pts, &s->jtrial)) {
+        if (sm_section_fits(s, a, pts, (const float *)0, a->len, &s->jtrial)) {
             a->fe = s->jf;
             a->end_smooth = 1;
             sm_section_keep(a, &s->jtrial);
@@ -1157,7 +1249,9 @@ static void sm_job_step(ef_smooth_t *s, ef_smooth_prim_t *a, ef_smooth_prim_t *b
         s->job = EF_J_VERTEX;
         return;
     default: /* EF_J_CLOSE_M */
-        if (sm_section_fits(a, pts, &s->jtrial))
+        if (sm_section_fits(
+                s, a, pts, a->end_smooth && a->end_kind == EF_V_SMOOTH ? a->ar_e : (const float *)0,
+                a->end_smooth ? a->len : a->len - a->trim_end, &s->jtrial))
             sm_section_keep(a, &s->jtrial);
         else
             a->sec = 2u;
@@ -1244,7 +1338,7 @@ static int sm_next_move(ef_smooth_t *s, ef_move_t *m)
         return 1;
     }
     if (s->emitting == EF_E_BODY) {
-        int rc;
+        int rc, kept = 0;
         if (h->pr.kind == EF_PRIM_ARC) {
             if (h->len - h->trim_start - h->trim_end < EF_MIN_CHORD) {
                 /* Both blends took the whole arc: nothing of it is left between them. */
@@ -1323,7 +1417,8 @@ static int sm_next_move(ef_smooth_t *s, ef_move_t *m)
             if (h->start_smooth || h->end_smooth) {
                 rc = EF_OK;
                 if (h->sec == 1) {
-                    sm_section_emit(h, m);
+                    sm_section_emit(h, m); /* its auxiliary axes built with it */
+                    kept = 1;
                 } else {
                     /* Not representable within the tolerance: the chord itself, with exact
                      * stops at both ends (tangents differ there). */
@@ -1351,7 +1446,7 @@ static int sm_next_move(ef_smooth_t *s, ef_move_t *m)
                 rc = sm_line_move(m, a, b, h->pr.feed, h->pr.tag);
                 m->dev = h->merge_dev; /* the chord, off the input points by that much */
             }
-            if (rc == EF_OK)
+            if (rc == EF_OK && !kept)
                 rc = sm_aux_span(s, h, h->trim_start, h->len - h->trim_end, m);
         }
         if (rc != EF_OK)
@@ -1624,7 +1719,7 @@ int ef_smooth_push(ef_smooth_t *s, const ef_prim_t *pr)
      * decided later sets it in sm_job_decided(). */
     const ef_smooth_prim_t *prev = s->pn ? sm_held(s, s->pn - 1) : (const ef_smooth_prim_t *)0;
     h->start_stop = !prev || prev->end_kind == EF_V_STOP || prev->fin_stop;
-    h->zline = prev && prev->pr.kind == EF_PRIM_LINE && !prev->amove && !prev->aux_only &&
+    h->zline = prev && prev->pr.kind == EF_PRIM_LINE && !prev->aux_only &&
                prev->piece_max <= s->cfg.micro_len;
     h->zstart = prev ? prev->start : h->start;
     h->nmerged = 0;

@@ -112,10 +112,13 @@
  *   rate (units per unit of X Y Z length) at the vertex, so the axis deviates from its
  *   programmed value at the same share of the corner by at most aux_tol (a quintic over a
  *   kink of dk across trims d1 + d2 deviates by at most 0.192 dk (d1 + d2));
+ * - a smooth section (G2 quintic sections only): the quintic from the value and rate where
+ *   it starts to those where it ends, zero second derivative by arc length at both ends; at
+ *   a smooth vertex both sections take the three-point rate (ra lb + rb la) / (la + lb), so
+ *   the axis is G2 across it; a section whose axis leaves its programmed value (linear
+ *   along the chord) by more than aux_tol does not fit (the vertex is a corner);
  * - an exact stop where an axis changes rate and aux_tol is 0 or the vertex is straight
- *   (no blend to carry it); no decimation across, and no smooth vertex beside, a primitive
- *   that moves an auxiliary axis (a CAM 5-axis micro-segment program is blended corner by
- *   corner);
+ *   (no blend to carry it); no decimation across a primitive that moves an auxiliary axis;
  * - an auxiliary move (X Y Z still) is one degree-1 move between exact stops
  *   (::EF_MOVE_AUX_ONLY), its feed in the axes' units per second.
  * The planner limits each axis's speed, acceleration and jerk (ef_limits_t) from the
@@ -290,13 +293,21 @@ typedef struct {
     uint8_t aux_only;       /**< an auxiliary move: X Y Z still, len the axes' distance */
     ef_vec3_t zstart;       /**< where the primitive before it started (rule 3's fit takes
                                  it as one more point of the run, when zline) */
-    uint8_t zline;          /**< the primitive before it is a line of X Y Z alone whose input
-                                 pieces are micro-segments (micro_len) */
-    float sec_len;          /**< its measured length (ef_move_measure()) */
-    float sec_kmax;         /**< its curvature bound (likewise) */
-    ef_vec3_t sec_tabs;     /**< its axis tangent bounds (likewise) */
-    ef_vec3_t sec_kabs;     /**< its axis curvature-vector bounds (likewise) */
-    ef_vec3_t sec_kjerk;    /**< its axis third-derivative bounds (likewise) */
+    uint8_t zline;          /**< the primitive before it is a line (not an auxiliary move)
+                                 whose input pieces are micro-segments (micro_len) */
+    float ar_s[EF_AUX_N];   /**< auxiliary axes' rates (units per unit of X Y Z length) at its
+                                 start when that is a smooth vertex: the rates the sections
+                                 on both sides share there */
+    float ar_e[EF_AUX_N];   /**< likewise at its end */
+    float sec_ab[EF_AUX_N][6]; /**< its section's auxiliary control values (when sec == 1) */
+    float sec_atabs[EF_AUX_N]; /**< and their bounds (ef_move_measure_aux()) */
+    float sec_akabs[EF_AUX_N];
+    float sec_akjerk[EF_AUX_N];
+    float sec_len;       /**< its measured length (ef_move_measure()) */
+    float sec_kmax;      /**< its curvature bound (likewise) */
+    ef_vec3_t sec_tabs;  /**< its axis tangent bounds (likewise) */
+    ef_vec3_t sec_kabs;  /**< its axis curvature-vector bounds (likewise) */
+    ef_vec3_t sec_kjerk; /**< its axis third-derivative bounds (likewise) */
 } ef_smooth_prim_t;
 
 /** Run slots: the vertices merged into a held line are needed until its end vertex is
@@ -319,18 +330,19 @@ typedef struct {
     float apos[EF_AUX_N];     /**< the auxiliary axes at the end of the last accepted one */
     float aout_end[EF_AUX_N]; /**< ... where the last emitted move ends */
     ef_move_t stage[EF_SMOOTH_STAGE];
-    uint32_t sh, sn;   /**< staged moves waiting for planner room */
-    uint32_t arc_next; /**< arc emission cursor: next piece of the oldest primitive */
-    uint32_t arc_n;    /**< pieces the oldest primitive's arc is split into */
-    uint8_t arc_sized; /**< arc_n is final (the sizing trials are done) */
-    uint32_t arc_k;    /**< sizing: doublings tried so far */
-    uint32_t arc_try;  /**< sizing: the piece count of the next trial */
-    float arc_dev;     /**< sizing: the last trial's deviation */
-    uint8_t job;       /**< phase of the oldest open vertex's decision ("Work units") */
-    ef_frame_t jf;     /**< that decision's frame (the gate's, or an arc frame) */
-    ef_frame_t jkeep;  /**< the start frame an arc frame trial replaced */
-    ef_move_t jtrial;  /**< the curve between its two phases (or the blend probe) */
-    int emitting;      /**< the oldest primitive is partly emitted */
+    uint32_t sh, sn;     /**< staged moves waiting for planner room */
+    uint32_t arc_next;   /**< arc emission cursor: next piece of the oldest primitive */
+    uint32_t arc_n;      /**< pieces the oldest primitive's arc is split into */
+    uint8_t arc_sized;   /**< arc_n is final (the sizing trials are done) */
+    uint32_t arc_k;      /**< sizing: doublings tried so far */
+    uint32_t arc_try;    /**< sizing: the piece count of the next trial */
+    float arc_dev;       /**< sizing: the last trial's deviation */
+    uint8_t job;         /**< phase of the oldest open vertex's decision ("Work units") */
+    ef_frame_t jf;       /**< that decision's frame (the gate's, or an arc frame) */
+    ef_frame_t jkeep;    /**< the start frame an arc frame trial replaced */
+    float jar[EF_AUX_N]; /**< the auxiliary axes' rates at that vertex when smooth */
+    ef_move_t jtrial;    /**< the curve between its two phases (or the blend probe) */
+    int emitting;        /**< the oldest primitive is partly emitted */
     ef_smooth_stats_t st;
 } ef_smooth_t;
 
