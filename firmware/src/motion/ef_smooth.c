@@ -202,6 +202,39 @@ static int sm_aux_span(const ef_smooth_t *s, const ef_smooth_prim_t *h, float d0
     return sm_aux_set_linear(s, m, a0, a1);
 }
 
+/* A quintic move's parametric speed sp and its rate s1 = <f', f''> / |f'| at both ends. */
+typedef struct {
+    float sp0, sp1, s10, s11;
+} sm_aux_ends_t;
+
+static sm_aux_ends_t sm_aux_ends(const ef_vec3_t *b)
+{
+    ef_vec3_t d10 = ef_v3_scale(ef_v3_sub(b[1], b[0]), 5.0f);
+    ef_vec3_t d11 = ef_v3_scale(ef_v3_sub(b[5], b[4]), 5.0f);
+    ef_vec3_t d20 = ef_v3_scale(ef_v3_add(ef_v3_sub(b[2], ef_v3_scale(b[1], 2.0f)), b[0]), 20.0f);
+    ef_vec3_t d21 = ef_v3_scale(ef_v3_add(ef_v3_sub(b[5], ef_v3_scale(b[4], 2.0f)), b[3]), 20.0f);
+    sm_aux_ends_t e;
+    e.sp0 = ef_v3_norm(d10);
+    e.sp1 = ef_v3_norm(d11);
+    e.s10 = ef_v3_dot(d10, d20) / ef_maxf(e.sp0, 1e-30f);
+    e.s11 = ef_v3_dot(d11, d21) / ef_maxf(e.sp1, 1e-30f);
+    return e;
+}
+
+/* An auxiliary axis's quintic control values c[0..5] on a move with end data e: value p0,
+ * rate k0 (units per unit of X Y Z length) and zero second derivative by arc length at its
+ * start, p1, k1 and zero at its end (tau-derivatives a' = k sp, a'' = k s1). */
+static void sm_aux_hermite(const sm_aux_ends_t *e, float p0, float k0, float p1, float k1, float *c)
+{
+    float v0 = k0 * e->sp0, v1 = k1 * e->sp1, w0 = k0 * e->s10, w1 = k1 * e->s11;
+    c[0] = p0;
+    c[1] = p0 + v0 * 0.2f;
+    c[2] = p0 + v0 * 0.4f + w0 * 0.05f;
+    c[3] = p1 - v1 * 0.4f + w1 * 0.05f;
+    c[4] = p1 - v1 * 0.2f;
+    c[5] = p1;
+}
+
 /* The blend m at the vertex between h and nx: per axis the quintic with the value, the rate
  * (units per unit of X Y Z length) and zero second derivative by X Y Z arc length of the
  * line or arc it leaves and joins, at the blend's own ends (its parametric speed sp and
@@ -215,27 +248,13 @@ static int sm_aux_blend(ef_smooth_t *s, const ef_smooth_prim_t *h, const ef_smoo
     for (int k = 0; k < EF_AUX_N; k++)
         for (int i = 0; i < 6; i++)
             m->ab[k][i] = 0.0f;
-    const ef_vec3_t *b = m->b;
-    ef_vec3_t d10 = ef_v3_scale(ef_v3_sub(b[1], b[0]), 5.0f);
-    ef_vec3_t d11 = ef_v3_scale(ef_v3_sub(b[5], b[4]), 5.0f);
-    ef_vec3_t d20 = ef_v3_scale(ef_v3_add(ef_v3_sub(b[2], ef_v3_scale(b[1], 2.0f)), b[0]), 20.0f);
-    ef_vec3_t d21 = ef_v3_scale(ef_v3_add(ef_v3_sub(b[5], ef_v3_scale(b[4], 2.0f)), b[3]), 20.0f);
-    float sp0 = ef_v3_norm(d10), sp1 = ef_v3_norm(d11);
-    float s10 = ef_v3_dot(d10, d20) / ef_maxf(sp0, 1e-30f);
-    float s11 = ef_v3_dot(d11, d21) / ef_maxf(sp1, 1e-30f);
+    sm_aux_ends_t e = sm_aux_ends(m->b);
     float te = h->trim_end, ts = nx->trim_start, D = te + ts;
     for (int k = 0; k < s->cfg.naux; k++) {
         float p0 = sm_aux_at(h, k, h->len - te), p1 = sm_aux_at(nx, k, ts);
         float k0 = sm_aux_rate(h, k), k1 = sm_aux_rate(nx, k);
-        /* tau-derivatives: a' = k sp, a'' = k s1 (d2a/ds2 = 0) */
-        float v0 = k0 * sp0, v1 = k1 * sp1, w0 = k0 * s10, w1 = k1 * s11;
         float *c = m->ab[k];
-        c[0] = p0;
-        c[1] = p0 + v0 * 0.2f;
-        c[2] = p0 + v0 * 0.4f + w0 * 0.05f;
-        c[3] = p1 - v1 * 0.4f + w1 * 0.05f;
-        c[4] = p1 - v1 * 0.2f;
-        c[5] = p1;
+        sm_aux_hermite(&e, p0, k0, p1, k1, c);
         /* deviation at EF_MOVE_SAMPLES shares of the corner: the programmed value there is
          * on h up to the vertex (te of D), then on nx */
         float dev = 0.0f;
@@ -278,35 +297,22 @@ static int sm_aux_section(ef_smooth_t *s, const ef_smooth_prim_t *h, const float
     }
     if (m->degree != 5)
         return 0;
-    const ef_vec3_t *b = m->b;
-    ef_vec3_t d10 = ef_v3_scale(ef_v3_sub(b[1], b[0]), 5.0f);
-    ef_vec3_t d11 = ef_v3_scale(ef_v3_sub(b[5], b[4]), 5.0f);
-    ef_vec3_t d20 = ef_v3_scale(ef_v3_add(ef_v3_sub(b[2], ef_v3_scale(b[1], 2.0f)), b[0]), 20.0f);
-    ef_vec3_t d21 = ef_v3_scale(ef_v3_add(ef_v3_sub(b[5], ef_v3_scale(b[4], 2.0f)), b[3]), 20.0f);
-    float sp0 = ef_v3_norm(d10), sp1 = ef_v3_norm(d11);
-    float s10 = ef_v3_dot(d10, d20) / ef_maxf(sp0, 1e-30f);
-    float s11 = ef_v3_dot(d11, d21) / ef_maxf(sp1, 1e-30f);
+    sm_aux_ends_t e = sm_aux_ends(m->b);
     int smooth_start = h->start_smooth && !h->start_stop;
     ef_vec3_t dir = sm_dir(h);
     for (int k = 0; k < s->cfg.naux; k++) {
         float own = sm_aux_rate(h, k);
         float p0 = sm_aux_at(h, k, h->trim_start), p1 = sm_aux_at(h, k, d1);
         float k0 = smooth_start ? h->ar_s[k] : own, k1 = ar_e ? ar_e[k] : own;
-        float v0 = k0 * sp0, v1 = k1 * sp1, w0 = k0 * s10, w1 = k1 * s11;
         float *c = m->ab[k];
-        c[0] = p0;
-        c[1] = p0 + v0 * 0.2f;
-        c[2] = p0 + v0 * 0.4f + w0 * 0.05f;
-        c[3] = p1 - v1 * 0.4f + w1 * 0.05f;
-        c[4] = p1 - v1 * 0.2f;
-        c[5] = p1;
+        sm_aux_hermite(&e, p0, k0, p1, k1, c);
         /* float32 rounding of the values themselves is not a deviation */
         float slack = 1e-6f * (ef_fabsf(p0) + ef_fabsf(p1)) + 1e-9f;
         float dev = 0.0f;
         for (int i = 1; i < EF_MOVE_SAMPLES; i++) {
             float t = (float)i / (float)EF_MOVE_SAMPLES;
             ef_vec3_t q;
-            (void)ef_bezier_eval(b, 5, t, 0, &q);
+            (void)ef_bezier_eval(m->b, 5, t, 0, &q);
             float u = ef_minf(ef_maxf(ef_v3_dot(ef_v3_sub(q, h->start), dir), 0.0f), h->len);
             dev = ef_maxf(dev, ef_fabsf(ef_bezier_eval_scalar(c, 5, t) - sm_aux_at(h, k, u)));
         }
